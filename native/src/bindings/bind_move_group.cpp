@@ -1,0 +1,154 @@
+// Python binding of MoveGroup (wrapped by native.MoveGroup).
+#include <pybind11/pybind11.h>
+
+#include <memory>
+
+#include "../errors.hpp"
+#include "../move_group.hpp"
+#include "py_api.hpp"
+
+namespace rrosfuzz {
+namespace py = pybind11;
+
+namespace {
+
+// moveit_commander's accepted forms of set_joint_value_target (docs/api.md).
+void set_joint_value_target(MoveGroup& g, py::handle arg1, py::handle arg2) {
+  const char* what = "joint value target";
+  if (arg2.is_none()) {
+    if (PyDict_Check(arg1.ptr())) {
+      std::vector<std::string> names;
+      std::vector<double> values;
+      for (auto item : py::reinterpret_borrow<py::dict>(arg1)) {
+        names.push_back(py_api::to_string(item.first, what));
+        values.push_back(py_api::to_real(item.second, what));
+      }
+      g.set_target(names, values);
+    } else if (py_api::is_sequence(arg1)) {
+      g.set_target(py_api::to_vector(arg1, what));
+    } else if (py_api::is_string(arg1)) {
+      fail(ErrorCode::kInvalidArgument, "joint value target: joint name '" + py_api::to_string(arg1, what) +
+                                            "' given without a value");
+    } else {
+      fail(ErrorCode::kInvalidArgument, std::string("joint value target: unsupported argument of type ") +
+                                            Py_TYPE(arg1.ptr())->tp_name);
+    }
+  } else if (py_api::is_string(arg1)) {
+    const std::string name = py_api::to_string(arg1, what);
+    g.set_target(std::vector<std::string>{name}, std::vector<double>{py_api::to_real(arg2, what)});
+  } else if (PyList_Check(arg1.ptr()) || PyTuple_Check(arg1.ptr())) {
+    const auto names = py_api::to_strings(arg1, what);
+    g.set_target(names, py_api::to_vector(arg2, what));
+  } else {
+    fail(ErrorCode::kInvalidArgument, std::string("joint value target: unsupported argument of type ") +
+                                          Py_TYPE(arg1.ptr())->tp_name);
+  }
+}
+
+void check_wait(py::handle wait) {
+  if (!PyBool_Check(wait.ptr())) fail(ErrorCode::kInvalidArgument, "wait: expected a bool");
+}
+
+Trajectory to_trajectory(const MoveGroup& g, py::handle plan, std::vector<std::string>& names) {
+  if (!py_api::is_trajectory(plan)) {
+    fail(ErrorCode::kInvalidArgument, std::string("plan: expected a robot_api.RobotTrajectory, got ") +
+                                          Py_TYPE(plan.ptr())->tp_name);
+  }
+  Trajectory t;
+  t.dof = g.model().dof();
+  try {
+    names = py_api::to_strings(plan.attr("joint_names"), "trajectory joint names");
+    t.time = py_api::to_vector(plan.attr("time_from_start"), "trajectory times");
+  } catch (const ApiError& e) {
+    fail(ErrorCode::kInvalidTrajectory, e.what());
+  }
+  py::object positions = plan.attr("positions");
+  if (!py::isinstance<py::array>(positions)) fail(ErrorCode::kInvalidTrajectory, "trajectory positions: not an array");
+  py::array a = py::reinterpret_borrow<py::array>(positions);
+  const char kind = a.dtype().kind();
+  if (a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != t.time.size() ||
+      static_cast<std::size_t>(a.shape(1)) != t.dof || (kind != 'f' && kind != 'i' && kind != 'u')) {
+    fail(ErrorCode::kInvalidTrajectory, "trajectory positions: expected a real array of shape (M, dof) matching "
+                                        "the times");
+  }
+  auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  t.positions.assign(d.data(), d.data() + d.size());
+  return t;
+}
+
+}  // namespace
+
+void bind_move_group(py::module_& m) {
+  py::class_<MoveGroup>(m, "MoveGroup")
+      .def(py::init([](std::shared_ptr<Model> model) { return std::make_unique<MoveGroup>(std::move(model)); }))
+      .def("get_active_joints",
+           [](const MoveGroup& g) {
+             py::list out;
+             for (const auto& v : g.model().variables()) out.append(v.name);
+             return out;
+           })
+      .def("get_end_effector_link", [](const MoveGroup& g) { return g.model().tip_link(); })
+      .def("get_planning_frame", [](const MoveGroup& g) { return g.model().root_link(); })
+      .def("get_current_joint_values", [](const MoveGroup& g) { return py_api::to_list(g.current()); })
+      .def("get_joint_value_target", [](const MoveGroup& g) { return py_api::to_list(g.target()); })
+      .def("get_current_pose",
+           [](const MoveGroup& g, py::handle link) {
+             const int index = g.model().link_index(py_api::to_optional_string(link, "link"));
+             return py_api::pose(g.model().fk(g.current(), index));
+           })
+      .def("set_joint_value_target", &set_joint_value_target)
+      .def("set_named_target",
+           [](MoveGroup& g, py::handle name) { g.set_named_target(py_api::to_string(name, "named target")); })
+      .def("get_named_targets",
+           [](const MoveGroup& g) {
+             py::list out;
+             for (const auto& name : g.named_targets()) out.append(py::str(name));
+             return out;
+           })
+      .def("get_named_target_values",
+           [](const MoveGroup& g, py::handle name) {
+             const auto& values = g.named_target(py_api::to_string(name, "named target"));
+             py::dict out;
+             const auto& vars = g.model().variables();
+             for (std::size_t i = 0; i < vars.size(); ++i) out[py::str(vars[i].name)] = py::float_(values[i]);
+             return out;
+           })
+      .def("remember_joint_values",
+           [](MoveGroup& g, py::handle name, py::handle values) {
+             const std::string key = py_api::to_string(name, "named target");
+             if (values.is_none()) {
+               g.remember(key, std::nullopt);
+             } else {
+               g.remember(key, py_api::to_vector(values, "remembered joint values"));
+             }
+           })
+      .def("set_goal_joint_tolerance",
+           [](MoveGroup& g, py::handle v) { g.set_goal_tolerance(py_api::to_real(v, "goal joint tolerance")); })
+      .def("get_goal_joint_tolerance", &MoveGroup::goal_tolerance)
+      .def("set_max_velocity_scaling_factor",
+           [](MoveGroup& g, py::handle v) { g.set_velocity_scaling(py_api::to_real(v, "max velocity scaling factor")); })
+      .def("set_max_acceleration_scaling_factor",
+           [](MoveGroup& g, py::handle v) {
+             g.set_acceleration_scaling(py_api::to_real(v, "max acceleration scaling factor"));
+           })
+      .def("plan",
+           [](MoveGroup& g, py::handle joints) {
+             if (!joints.is_none()) set_joint_value_target(g, joints, py::none());
+             return py_api::trajectory(g.model(), g.plan());
+           })
+      .def("execute",
+           [](MoveGroup& g, py::handle plan, py::handle wait) {
+             std::vector<std::string> names;
+             Trajectory t = to_trajectory(g, plan, names);
+             check_wait(wait);
+             g.execute(names, t);
+             return true;
+           })
+      .def("go", [](MoveGroup& g, py::handle joints, py::handle wait) {
+        if (!joints.is_none()) set_joint_value_target(g, joints, py::none());
+        check_wait(wait);
+        return g.go();
+      });
+}
+
+}  // namespace rrosfuzz

@@ -1,0 +1,204 @@
+#include "py_api.hpp"
+
+#include <cmath>
+
+#include "../constants.hpp"
+#include "../errors.hpp"
+
+namespace rrosfuzz::py_api {
+namespace {
+
+// Handles into robot_api, created once and deliberately never freed (they must
+// outlive module teardown at interpreter exit).
+struct Handles {
+  py::object pose, ik_result, ik_success, ik_no_solution, joint_limit, mimic_joint, trajectory, make_error;
+  py::object joint_type_revolute, joint_type_continuous, joint_type_prismatic;
+  py::object ndarray;
+};
+Handles* handles = nullptr;
+
+[[noreturn]] void bad(const char* what, const std::string& why) {
+  fail(ErrorCode::kInvalidArgument, std::string(what) + ": " + why);
+}
+
+std::string type_of(py::handle h) { return Py_TYPE(h.ptr())->tp_name; }
+
+}  // namespace
+
+void init() {
+  if (handles) return;
+  auto records = py::module_::import("robot_api.records");
+  auto errors = py::module_::import("robot_api.errors");
+  handles = new Handles();
+  handles->pose = records.attr("Pose");
+  handles->ik_result = records.attr("IKResult");
+  handles->ik_success = records.attr("IKStatus").attr("SUCCESS");
+  handles->ik_no_solution = records.attr("IKStatus").attr("NO_SOLUTION");
+  handles->joint_limit = records.attr("JointLimit");
+  handles->mimic_joint = records.attr("MimicJoint");
+  handles->trajectory = records.attr("RobotTrajectory");
+  handles->joint_type_revolute = records.attr("JointType").attr("REVOLUTE");
+  handles->joint_type_continuous = records.attr("JointType").attr("CONTINUOUS");
+  handles->joint_type_prismatic = records.attr("JointType").attr("PRISMATIC");
+  handles->make_error = errors.attr("make_error");
+  handles->ndarray = py::module_::import("numpy").attr("ndarray");
+}
+
+bool is_string(py::handle h) { return PyUnicode_Check(h.ptr()); }
+
+bool is_real(py::handle h) {
+  PyObject* o = h.ptr();
+  if (PyBool_Check(o) || PyUnicode_Check(o) || PyBytes_Check(o) || PyByteArray_Check(o)) return false;
+  if (PyFloat_Check(o) || PyLong_Check(o)) return true;
+  return Py_TYPE(o)->tp_as_number != nullptr && Py_TYPE(o)->tp_as_number->nb_float != nullptr;
+}
+
+double to_real(py::handle h, const char* what) {
+  if (!is_real(h)) bad(what, "expected a real number, got " + type_of(h));
+  const double v = PyFloat_AsDouble(h.ptr());
+  if (v == -1.0 && PyErr_Occurred()) {
+    PyErr_Clear();
+    bad(what, "cannot convert " + type_of(h) + " to a float");
+  }
+  return v;
+}
+
+bool is_sequence(py::handle h) {
+  return PyList_Check(h.ptr()) || PyTuple_Check(h.ptr()) || py::isinstance(h, handles->ndarray);
+}
+
+std::vector<double> to_vector(py::handle h, const char* what) {
+  if (PyList_Check(h.ptr()) || PyTuple_Check(h.ptr())) {
+    py::sequence seq = py::reinterpret_borrow<py::sequence>(h);
+    const std::size_t n = seq.size();
+    std::vector<double> out(n);
+    for (std::size_t i = 0; i < n; ++i) out[i] = to_real(seq[i], what);
+    return out;
+  }
+  if (py::isinstance(h, handles->ndarray)) {
+    py::array a = py::reinterpret_borrow<py::array>(h);
+    const char kind = a.dtype().kind();
+    if (a.ndim() != 1) bad(what, "expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
+    if (kind != 'f' && kind != 'i' && kind != 'u') bad(what, std::string("array of kind '") + kind + "' is not real");
+    auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    if (!d) {
+      PyErr_Clear();
+      bad(what, "cannot convert the array to float64");
+    }
+    return std::vector<double>(d.data(), d.data() + d.size());
+  }
+  bad(what, "expected a list, tuple or 1-D array of numbers, got " + type_of(h));
+}
+
+std::vector<std::string> to_strings(py::handle h, const char* what) {
+  if (!PyList_Check(h.ptr()) && !PyTuple_Check(h.ptr())) bad(what, "expected a list or tuple of names, got " + type_of(h));
+  std::vector<std::string> out;
+  for (py::handle item : py::reinterpret_borrow<py::sequence>(h)) out.push_back(to_string(item, what));
+  return out;
+}
+
+std::string to_string(py::handle h, const char* what) {
+  if (!PyUnicode_Check(h.ptr())) bad(what, "expected a str, got " + type_of(h));
+  Py_ssize_t size = 0;
+  const char* data = PyUnicode_AsUTF8AndSize(h.ptr(), &size);
+  if (!data) {
+    PyErr_Clear();
+    bad(what, "string is not valid UTF-8");
+  }
+  return std::string(data, static_cast<std::size_t>(size));
+}
+
+std::optional<std::string> to_optional_string(py::handle h, const char* what) {
+  if (h.is_none()) return std::nullopt;
+  return to_string(h, what);
+}
+
+KDL::Frame to_frame(py::handle pose) {
+  if (!PyTuple_Check(pose.ptr()) && !PyList_Check(pose.ptr())) {
+    bad("pose", "expected a robot_api.Pose or a (position, orientation) pair, got " + type_of(pose));
+  }
+  py::sequence pair = py::reinterpret_borrow<py::sequence>(pose);
+  if (pair.size() != 2) bad("pose", "expected a (position, orientation) pair");
+  const auto p = to_vector(pair[0], "pose position");
+  const auto q = to_vector(pair[1], "pose orientation");
+  if (p.size() != 3) bad("pose position", "expected 3 values, got " + std::to_string(p.size()));
+  if (q.size() != 4) bad("pose orientation", "expected 4 values (x, y, z, w), got " + std::to_string(q.size()));
+  for (double v : p) {
+    if (!std::isfinite(v)) fail(ErrorCode::kNonFinite, "pose position is not finite");
+  }
+  for (double v : q) {
+    if (!std::isfinite(v)) fail(ErrorCode::kNonFinite, "pose orientation is not finite");
+  }
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(norm >= kQuaternionNormEps)) bad("pose orientation", "quaternion has (near) zero norm");
+  return KDL::Frame(KDL::Rotation::Quaternion(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm),
+                    KDL::Vector(p[0], p[1], p[2]));
+}
+
+py::object pose(const KDL::Frame& f) {
+  double q[4];
+  canonical_quaternion(f.M, q);
+  return handles->pose(py::make_tuple(f.p.x(), f.p.y(), f.p.z()), py::make_tuple(q[0], q[1], q[2], q[3]));
+}
+
+py::object ik_result(const IkAnswer& a) {
+  return handles->ik_result(a.status == IkStatus::kSuccess ? handles->ik_success : handles->ik_no_solution,
+                            to_tuple(a.joint_values), a.position_error, a.orientation_error);
+}
+
+py::object joint_limits(const Model& m) {
+  py::list out;
+  for (const auto& v : m.variables()) {
+    py::object type = v.kind == JointKind::kRevolute     ? handles->joint_type_revolute
+                      : v.kind == JointKind::kContinuous ? handles->joint_type_continuous
+                                                         : handles->joint_type_prismatic;
+    out.append(handles->joint_limit(v.name, type, v.lower, v.upper, v.velocity));
+  }
+  return py::tuple(out);
+}
+
+py::object mimic_joints(const Model& m) {
+  py::list out;
+  for (const auto& mi : m.mimics()) out.append(handles->mimic_joint(mi.name, mi.master, mi.multiplier, mi.offset));
+  return py::tuple(out);
+}
+
+py::object trajectory(const Model& m, const Trajectory& t) {
+  const py::ssize_t rows = static_cast<py::ssize_t>(t.size());
+  const py::ssize_t cols = static_cast<py::ssize_t>(t.dof);
+  auto matrix = [&](const std::vector<double>& v) {
+    py::array_t<double> a({rows, cols});
+    std::copy(v.begin(), v.end(), a.mutable_data());
+    return a;
+  };
+  py::array_t<double> times(rows);
+  std::copy(t.time.begin(), t.time.end(), times.mutable_data());
+  std::vector<std::string> names;
+  for (const auto& v : m.variables()) names.push_back(v.name);
+  return handles->trajectory(to_tuple(names), times, matrix(t.positions), matrix(t.velocities),
+                             matrix(t.accelerations));
+}
+
+bool is_trajectory(py::handle h) { return py::isinstance(h, handles->trajectory); }
+
+py::list to_list(const std::vector<double>& v) {
+  py::list out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = py::float_(v[i]);
+  return out;
+}
+
+py::tuple to_tuple(const std::vector<double>& v) {
+  py::tuple out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = py::float_(v[i]);
+  return out;
+}
+
+py::tuple to_tuple(const std::vector<std::string>& v) {
+  py::tuple out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = py::str(v[i]);
+  return out;
+}
+
+py::object make_error(int code, const std::string& message) { return handles->make_error(code, message); }
+
+}  // namespace rrosfuzz::py_api

@@ -1,0 +1,104 @@
+"""Argument checking at the twin's boundary (docs/api.md, "Arguments").
+
+A real number is an ``int`` (not ``bool``), a ``float``, or any object whose type
+defines ``__float__`` and is not ``str``/``bytes``/``bytearray`` (numpy scalars,
+``Decimal``, ``Fraction``). A joint vector is a ``list``/``tuple`` of real
+numbers or a 1-D integer/float ndarray. Anything else is INVALID_ARGUMENT.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from robot_api.constants import QUATERNION_NORM_EPS
+from robot_api.errors import ErrorCode, InvalidInputError
+
+_REAL_KINDS = ("f", "i", "u")
+
+
+def bad(what: str, why: str) -> InvalidInputError:
+    return InvalidInputError(f"{what}: {why}", ErrorCode.INVALID_ARGUMENT)
+
+
+def is_real(value: Any) -> bool:
+    t = type(value)
+    if t is float or t is int:
+        return True
+    if isinstance(value, bool | str | bytes | bytearray):
+        return False
+    return isinstance(value, int | float) or hasattr(t, "__float__")
+
+
+def to_real(value: Any, what: str) -> float:
+    if type(value) is float:
+        return value
+    if not is_real(value):
+        raise bad(what, f"expected a real number, got {type(value).__name__}")
+    try:
+        return float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise bad(what, f"cannot convert {type(value).__name__} to a float") from None
+
+
+def is_sequence(value: Any) -> bool:
+    return isinstance(value, list | tuple | np.ndarray)
+
+
+def to_vector(values: Any, what: str) -> list[float]:
+    """A joint vector as a list of floats (no length or finiteness check)."""
+    if isinstance(values, list | tuple):
+        return [to_real(v, what) for v in values]
+    if isinstance(values, np.ndarray):
+        if values.ndim != 1:
+            raise bad(what, f"expected a 1-D array, got {values.ndim}-D")
+        if values.dtype.kind not in _REAL_KINDS:
+            raise bad(what, f"array of kind '{values.dtype.kind}' is not real")
+        return values.astype(np.float64).tolist()  # type: ignore[no-any-return]
+    raise bad(what, f"expected a list, tuple or 1-D array of numbers, got {type(values).__name__}")
+
+
+def to_string(value: Any, what: str) -> str:
+    if not isinstance(value, str):
+        raise bad(what, f"expected a str, got {type(value).__name__}")
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise bad(what, "string is not valid UTF-8") from None
+    return value
+
+
+def to_optional_string(value: Any, what: str) -> str | None:
+    return None if value is None else to_string(value, what)
+
+
+def to_strings(values: Any, what: str) -> list[str]:
+    if not isinstance(values, list | tuple):
+        raise bad(what, f"expected a list or tuple of names, got {type(values).__name__}")
+    return [to_string(v, what) for v in values]
+
+
+def to_pose(pose: Any) -> tuple[list[float], list[float]]:
+    """Position (3,) and unit quaternion (x, y, z, w) of a Pose or (position, orientation) pair."""
+    if not isinstance(pose, tuple | list):
+        raise bad(
+            "pose", f"expected a robot_api.Pose or a (position, orientation) pair, got {type(pose).__name__}"
+        )
+    if len(pose) != 2:
+        raise bad("pose", "expected a (position, orientation) pair")
+    p = to_vector(pose[0], "pose position")
+    q = to_vector(pose[1], "pose orientation")
+    if len(p) != 3:
+        raise bad("pose position", f"expected 3 values, got {len(p)}")
+    if len(q) != 4:
+        raise bad("pose orientation", f"expected 4 values (x, y, z, w), got {len(q)}")
+    if not all(math.isfinite(v) for v in p):
+        raise InvalidInputError("pose position is not finite", ErrorCode.NON_FINITE)
+    if not all(math.isfinite(v) for v in q):
+        raise InvalidInputError("pose orientation is not finite", ErrorCode.NON_FINITE)
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if not norm >= QUATERNION_NORM_EPS:
+        raise bad("pose orientation", "quaternion has (near) zero norm")
+    return p, [v / norm for v in q]

@@ -1,0 +1,135 @@
+"""Forward and inverse kinematics of the twin (numpy; no kinematics library).
+
+FK multiplies the segment transforms ``A0 + u1 A1 + u2 A2`` (see
+:mod:`python_impl.chain`). IK is Newton-Raphson on the error twist with a
+truncated-SVD pseudo-inverse of the geometric Jacobian and joint limits
+enforced by clamping after every step (docs/api.md, "Inverse kinematics").
+"""
+
+from __future__ import annotations
+
+import math
+from functools import reduce
+
+import numpy as np
+from numpy.typing import NDArray
+
+from python_impl.angles import normalize_angle
+from python_impl.chain import REVOLUTE, Chain
+from python_impl.transforms import rotation_angle, rotation_vector
+from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS, IK_PINV_EPS
+
+Array = NDArray[np.float64]
+
+
+def segment_values(chain: Chain, q: Array) -> Array:
+    """Joint value of every segment, shape (S,) or (N, S) for q of shape (dof,) or (N, dof)."""
+    return q[..., chain.value_index] * chain.multiplier + chain.offset
+
+
+def _coefficients(chain: Chain, values: Array) -> tuple[Array, Array]:
+    """(u1, u2) of every segment: (sin q, 1 - cos q) revolute, (q, 0) prismatic, (0, 0) fixed."""
+    u1 = np.sin(values) * chain.revolute + values * chain.prismatic
+    u2 = (1.0 - np.cos(values)) * chain.revolute
+    return u1, u2
+
+
+def fk(chain: Chain, q: Array, link: int) -> Array:
+    """Transform (4, 4) of link ``link`` (index into ``chain.link_names``) for q of shape (dof,)."""
+    if link == 0:
+        return np.eye(4)
+    u1, u2 = _coefficients(chain, segment_values(chain, q))
+    m = chain.a0[:link] + u1[:link, None, None] * chain.a1[:link] + u2[:link, None, None] * chain.a2[:link]
+    return reduce(np.matmul, m)
+
+
+def fk_batch(chain: Chain, q: Array, link: int) -> Array:
+    """Transforms (N, 4, 4) of link ``link`` for q of shape (N, dof)."""
+    n = q.shape[0]
+    out = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    if link == 0 or n == 0:
+        return out
+    u1, u2 = _coefficients(chain, segment_values(chain, q))
+    for s in range(link):
+        m = chain.a0[s] + u1[:, s, None, None] * chain.a1[s] + u2[:, s, None, None] * chain.a2[s]
+        out = np.matmul(out, m)
+    return out
+
+
+def jacobian(chain: Chain, q: Array, link: int, nvars: int) -> Array:
+    """Geometric Jacobian (6, nvars) of link ``link`` at its origin, in the root frame.
+
+    Rows are (linear velocity, angular velocity); columns the first ``nvars``
+    variables, which drive the first ``nvars`` movable segments (no mimics).
+    """
+    u1, u2 = _coefficients(chain, segment_values(chain, q))
+    frames = []
+    t = np.eye(4)
+    for s in range(link):
+        joint_frame = t @ chain.origin[s]
+        frames.append(joint_frame)
+        t = t @ (chain.a0[s] + u1[s] * chain.a1[s] + u2[s] * chain.a2[s])
+    tip = t[:3, 3]
+    jac = np.zeros((6, nvars))
+    for s in range(link):
+        v = chain.variable[s]
+        if v < 0:
+            continue
+        z = frames[s][:3, :3] @ chain.axis[s]
+        if chain.kind[s] == REVOLUTE:
+            jac[:3, v] = np.cross(z, tip - frames[s][:3, 3])
+            jac[3:, v] = z
+        else:
+            jac[:3, v] = z
+    return jac
+
+
+def error_twist(current: Array, target: Array) -> Array:
+    """(target position - position, rotation vector of ``R^T R_target`` in the root frame)."""
+    rot = current[:3, :3]
+    return np.concatenate([target[:3, 3] - current[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
+
+
+def is_small(twist: Array) -> bool:
+    """Every component within ``[-IK_EPS, IK_EPS]``."""
+    return all(x <= IK_EPS and x + IK_EPS >= 0.0 for x in twist.tolist())
+
+
+def pinv_step(jac: Array, twist: Array) -> Array:
+    """``J^+ twist`` with singular values below ``IK_PINV_EPS`` treated as zero."""
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)
+    ut_twist = u.T @ twist
+    inv = np.where(np.abs(s) < IK_PINV_EPS, 0.0, ut_twist / np.where(s == 0.0, 1.0, s))
+    return vt.T @ inv
+
+
+def ik(
+    chain: Chain, target: Array, seed: list[float], link: int, nvars: int
+) -> tuple[bool, list[float], float, float]:
+    """Newton-Raphson IK of link ``link``; returns (converged, q, position error, orientation error).
+
+    ``seed`` is already clamped into the limits; variables from ``nvars`` on keep their seed values.
+    """
+    lower = np.array([lim.lower for lim in chain.limits[:nvars]])
+    upper = np.array([lim.upper for lim in chain.limits[:nvars]])
+    q = np.array(seed, dtype=np.float64)
+    converged = False
+    if nvars == 0:
+        converged = is_small(error_twist(fk(chain, q, link), target))
+    else:
+        for _ in range(IK_MAX_ITERATIONS):
+            twist = error_twist(fk(chain, q, link), target)
+            if is_small(twist):
+                converged = True
+                break
+            q[:nvars] += pinv_step(jacobian(chain, q, link, nvars), twist)
+            q[:nvars] = np.minimum(np.maximum(q[:nvars], lower), upper)
+    values = q.tolist()
+    for i, lim in enumerate(chain.limits[:nvars]):
+        if lim.type == "continuous":
+            values[i] = normalize_angle(values[i])
+    reached = fk(chain, np.array(values), link)
+    d = reached[:3, 3] - target[:3, 3]
+    position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+    orientation_error = rotation_angle(reached[:3, :3].T @ target[:3, :3])
+    return converged, values, position_error, orientation_error

@@ -1,0 +1,313 @@
+"""The twin's MoveGroup: moveit_commander's MoveGroupCommander over a simulated arm."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from python_impl import convert
+from python_impl.angles import normalize_angle
+from python_impl.model import RobotModel
+from python_impl.trajectory import plan_trajectory
+from robot_api.constants import EXECUTE_START_TOLERANCE, GOAL_JOINT_TOLERANCE
+from robot_api.errors import (
+    ErrorCode,
+    InvalidInputError,
+    OutOfBoundsError,
+    PlanningError,
+    UnknownNameError,
+)
+from robot_api.protocol import JointTarget, JointValues
+from robot_api.records import JointType, Pose, RobotTrajectory
+
+_WHAT = "joint value target"
+
+
+class MoveGroup:
+    """moveit_commander's ``MoveGroupCommander`` over a simulated arm.
+
+    The arm starts at "home". ``go()`` plans a straight joint-space move with a
+    trapezoidal profile and executes it: the state follows the trajectory.
+
+    Parameters
+    ----------
+    model : RobotModel
+        A model of this package.
+    """
+
+    def __init__(self, model: RobotModel) -> None:
+        if not isinstance(model, RobotModel):
+            raise InvalidInputError(
+                f"model: expected a python_impl.RobotModel, got {type(model).__name__}",
+                ErrorCode.INVALID_ARGUMENT,
+            )
+        self._model = model
+        self._limits = model.joint_limits
+        self._index = {lim.name: i for i, lim in enumerate(self._limits)}
+        self._current = list(model.home_values)
+        self._target = list(self._current)
+        self._named: dict[str, list[float]] = {"home": list(self._current)}
+        self._tolerance = GOAL_JOINT_TOLERANCE
+        self._velocity_scaling = 1.0
+        self._acceleration_scaling = 1.0
+
+    # -- state -------------------------------------------------------------------------------
+
+    def get_active_joints(self) -> list[str]:
+        """Names of the joint variables."""
+        return list(self._model.joint_names)
+
+    def get_end_effector_link(self) -> str:
+        """The model's tip link."""
+        return self._model.tip_link
+
+    def get_planning_frame(self) -> str:
+        """The model's root link."""
+        return self._model.root_link
+
+    def get_current_joint_values(self) -> list[float]:
+        """Current joint values (rad, m), length dof."""
+        return list(self._current)
+
+    def get_current_pose(self, link: str | None = None) -> Pose:
+        """Pose of ``link`` (the end effector by default) in the current state."""
+        return self._model.pose_of(self._current, self._model.link_index(link))
+
+    def get_joint_value_target(self) -> list[float]:
+        """The joint value target, length dof."""
+        return list(self._target)
+
+    # -- targets -----------------------------------------------------------------------------
+
+    def _accept(self, i: int, value: float) -> float:
+        lim = self._limits[i]
+        if lim.type == JointType.CONTINUOUS:
+            return normalize_angle(value)
+        if value < lim.lower - self._tolerance or value > lim.upper + self._tolerance:
+            raise OutOfBoundsError(
+                f"target {value!r} of joint '{lim.name}' is outside its limits [{lim.lower!r}, {lim.upper!r}]"
+            )
+        return min(max(value, lim.lower), lim.upper)
+
+    def _set_values(self, values: list[float]) -> None:
+        self._model.check_vector(values, _WHAT)
+        self._target = [self._accept(i, v) for i, v in enumerate(values)]
+
+    def _set_named(self, names: list[str], values: list[float]) -> None:
+        if len(names) != len(values):
+            raise InvalidInputError(
+                f"{_WHAT}: {len(names)} names but {len(values)} values", ErrorCode.WRONG_LENGTH
+            )
+        index = []
+        for name in names:
+            if name not in self._index:
+                raise UnknownNameError(
+                    f"joint '{name}' is not an active joint of the group", ErrorCode.UNKNOWN_JOINT
+                )
+            index.append(self._index[name])
+        seen: set[int] = set()
+        for name, i in zip(names, index, strict=True):
+            if i in seen:
+                raise InvalidInputError(f"joint '{name}' is given twice", ErrorCode.DUPLICATE_NAME)
+            seen.add(i)
+        for name, v in zip(names, values, strict=True):
+            if not math.isfinite(v):
+                raise InvalidInputError(f"value of joint '{name}' is not finite", ErrorCode.NON_FINITE)
+        target = list(self._target)
+        for i, v in zip(index, values, strict=True):
+            target[i] = self._accept(i, v)
+        self._target = target
+
+    def set_joint_value_target(self, arg1: JointTarget, arg2: Any = None) -> None:
+        """Set the joint value target (moveit_commander's forms).
+
+        Parameters
+        ----------
+        arg1 : sequence of float, dict of str to float, str, or sequence of str
+            All values in order; some values by name; one joint's name (with
+            ``arg2`` its value); or names (with ``arg2`` their values).
+        arg2 : float or sequence of float, optional
+            Value(s) for the name(s) in ``arg1``.
+
+        Raises
+        ------
+        InvalidInputError, UnknownNameError, OutOfBoundsError
+            See docs/api.md; on error the target is unchanged.
+        """
+        if arg2 is None:
+            if isinstance(arg1, dict):
+                names, values = [], []
+                for key, value in arg1.items():
+                    names.append(convert.to_string(key, _WHAT))
+                    values.append(convert.to_real(value, _WHAT))
+                self._set_named(names, values)
+            elif convert.is_sequence(arg1):
+                self._set_values(convert.to_vector(arg1, _WHAT))
+            elif isinstance(arg1, str):
+                raise convert.bad(
+                    _WHAT, f"joint name '{convert.to_string(arg1, _WHAT)}' given without a value"
+                )
+            else:
+                raise convert.bad(_WHAT, f"unsupported argument of type {type(arg1).__name__}")
+        elif isinstance(arg1, str):
+            name = convert.to_string(arg1, _WHAT)
+            self._set_named([name], [convert.to_real(arg2, _WHAT)])
+        elif isinstance(arg1, list | tuple):
+            names = convert.to_strings(arg1, _WHAT)
+            self._set_named(names, convert.to_vector(arg2, _WHAT))
+        else:
+            raise convert.bad(_WHAT, f"unsupported argument of type {type(arg1).__name__}")
+
+    def set_named_target(self, name: str) -> None:
+        """Set the target to a named state ("home" or a remembered one)."""
+        self._set_values(list(self._named_values(convert.to_string(name, "named target"))))
+
+    def _named_values(self, name: str) -> list[float]:
+        if name not in self._named:
+            raise UnknownNameError(f"no named target '{name}'", ErrorCode.UNKNOWN_NAMED_TARGET)
+        return self._named[name]
+
+    def get_named_targets(self) -> list[str]:
+        """Names of the named states, sorted."""
+        return sorted(self._named, key=lambda s: s.encode("utf-8"))
+
+    def get_named_target_values(self, name: str) -> dict[str, float]:
+        """Joint values of a named state, by joint name."""
+        values = self._named_values(convert.to_string(name, "named target"))
+        return dict(zip(self._model.joint_names, values, strict=True))
+
+    def remember_joint_values(self, name: str, values: JointValues | None = None) -> None:
+        """Store ``values`` (the current state by default) as a named state."""
+        key = convert.to_string(name, "named target")
+        if values is None:
+            self._named[key] = list(self._current)
+            return
+        vector = convert.to_vector(values, "remembered joint values")
+        self._model.check_vector(vector, "remembered joint values")
+        self._named[key] = vector
+
+    # -- settings ----------------------------------------------------------------------------
+
+    def set_goal_joint_tolerance(self, value: float) -> None:
+        """Set how far beyond a limit (rad, m) a target may lie and still be accepted."""
+        v = convert.to_real(value, "goal joint tolerance")
+        if not (math.isfinite(v) and v >= 0.0):
+            raise convert.bad("goal joint tolerance", f"must be finite and >= 0, got {v!r}")
+        self._tolerance = v
+
+    def get_goal_joint_tolerance(self) -> float:
+        """The goal joint tolerance (rad, m)."""
+        return self._tolerance
+
+    @staticmethod
+    def _scaling(value: Any, what: str) -> float:
+        v = convert.to_real(value, what)
+        if not (math.isfinite(v) and 0.0 < v <= 1.0):
+            raise convert.bad(what, f"must be in (0, 1], got {v!r}")
+        return v
+
+    def set_max_velocity_scaling_factor(self, value: float) -> None:
+        """Scale every velocity limit by ``value`` in (0, 1]."""
+        self._velocity_scaling = self._scaling(value, "max velocity scaling factor")
+
+    def set_max_acceleration_scaling_factor(self, value: float) -> None:
+        """Scale the acceleration limit by ``value`` in (0, 1]."""
+        self._acceleration_scaling = self._scaling(value, "max acceleration scaling factor")
+
+    # -- motion ------------------------------------------------------------------------------
+
+    def _plan(self) -> RobotTrajectory:
+        return plan_trajectory(
+            self._limits, self._current, self._target, self._velocity_scaling, self._acceleration_scaling
+        )
+
+    def plan(self, joints: JointTarget | None = None) -> RobotTrajectory:
+        """Plan from the current state to the target (set first from ``joints`` if given)."""
+        if joints is not None:
+            self.set_joint_value_target(joints)
+        return self._plan()
+
+    def execute(self, plan: RobotTrajectory, wait: bool = True) -> bool:
+        """Execute a trajectory; the state ends at its last point. Returns True."""
+        if not isinstance(plan, RobotTrajectory):
+            raise convert.bad("plan", f"expected a robot_api.RobotTrajectory, got {type(plan).__name__}")
+        try:
+            names = convert.to_strings(plan.joint_names, "trajectory joint names")
+            times = convert.to_vector(plan.time_from_start, "trajectory times")
+        except InvalidInputError as exc:
+            raise InvalidInputError(str(exc), ErrorCode.INVALID_TRAJECTORY) from None
+        positions = plan.positions
+        if (
+            not isinstance(positions, np.ndarray)
+            or positions.ndim != 2
+            or positions.shape != (len(times), self._model.dof)
+            or positions.dtype.kind not in ("f", "i", "u")
+        ):
+            raise InvalidInputError(
+                "trajectory positions: expected a real array of shape (M, dof) matching the times",
+                ErrorCode.INVALID_TRAJECTORY,
+            )
+        if not isinstance(wait, bool):
+            raise convert.bad("wait", "expected a bool")
+        self._execute(names, times, np.asarray(positions, dtype=np.float64))
+        return True
+
+    def _execute(self, names: list[str], times: list[float], positions: np.ndarray) -> None:
+        def invalid(message: str) -> InvalidInputError:
+            return InvalidInputError(message, ErrorCode.INVALID_TRAJECTORY)
+
+        own = self._model.joint_names
+        if len(names) != len(own):
+            raise invalid("trajectory joints do not match the group's joints")
+        for j, (theirs, ours) in enumerate(zip(names, own, strict=True)):
+            if theirs != ours:
+                raise invalid(f"trajectory joint #{j} is '{theirs}', the group's is '{ours}'")
+        if not times:
+            raise invalid("trajectory has no points")
+        for i, t in enumerate(times):
+            if not math.isfinite(t) or (t < 0.0 if i == 0 else not t > times[i - 1]):
+                raise invalid("trajectory times must be finite, >= 0 and strictly increasing")
+        if not np.isfinite(positions).all():
+            raise invalid("trajectory has a non-finite position")
+        first = positions[0].tolist()
+        for j, lim in enumerate(self._limits):
+            dev = first[j] - self._current[j]
+            if lim.type == JointType.CONTINUOUS:
+                dev = normalize_angle(dev)
+            if abs(dev) > EXECUTE_START_TOLERANCE:
+                raise invalid(
+                    f"trajectory starts {abs(dev)!r} away from the current value of joint '{lim.name}'"
+                )
+        bounded = [j for j, lim in enumerate(self._limits) if lim.type != JointType.CONTINUOUS]
+        if bounded:
+            lower = np.array([self._limits[j].lower for j in bounded]) - self._tolerance
+            upper = np.array([self._limits[j].upper for j in bounded]) + self._tolerance
+            p = positions[:, bounded]
+            bad = (p < lower) | (p > upper)
+            if bad.any():
+                i, k = (int(x) for x in np.argwhere(bad)[0])
+                lim = self._limits[bounded[k]]
+                raise OutOfBoundsError(
+                    f"trajectory point {i} puts joint '{lim.name}' at {p[i, k]!r}, outside "
+                    f"[{lim.lower!r}, {lim.upper!r}]"
+                )
+        last = positions[-1].tolist()
+        self._current = [
+            normalize_angle(v) if lim.type == JointType.CONTINUOUS else min(max(v, lim.lower), lim.upper)
+            for v, lim in zip(last, self._limits, strict=True)
+        ]
+
+    def go(self, joints: JointTarget | None = None, wait: bool = True) -> bool:
+        """Plan and execute a move to the target (set first from ``joints`` if given)."""
+        if joints is not None:
+            self.set_joint_value_target(joints)
+        if not isinstance(wait, bool):
+            raise convert.bad("wait", "expected a bool")
+        try:
+            trajectory = self._plan()
+        except PlanningError:
+            return False  # moveit_commander's go() returns False when planning fails
+        self._execute(list(trajectory.joint_names), trajectory.time_from_start.tolist(), trajectory.positions)
+        return True

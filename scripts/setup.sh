@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs what RROSFuzz needs, idempotently: Debian packages that are missing,
+# a virtual environment in .venv, and the project (with its native build) in it.
+#   scripts/setup.sh            core + test dependencies
+# Environment: PYTHON (default: python3.11, else python3; must be 3.11),
+#              VENV (default: .venv), RROSFUZZ_EXTRAS (default: test).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+APT_PACKAGES=(
+  cmake g++ make                      # native build
+  libeigen3-dev liborocos-kdl-dev     # Eigen, Orocos KDL
+  liburdfdom-dev libconsole-bridge-dev libexpat1-dev  # URDF parsing (urdfdom), XML guard
+)
+
+missing=()
+for pkg in "${APT_PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$pkg")
+  fi
+done
+if ((${#missing[@]})); then
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "setup: installing Debian packages: ${missing[*]}"
+  apt_install() { $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"; }
+  if ! apt_install; then
+    $SUDO apt-get update -q
+    apt_install
+  fi
+fi
+
+VENV=${VENV:-.venv}
+PYTHON=${PYTHON:-$(command -v python3.11 || command -v python3)}
+if ! "$PYTHON" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+  echo "setup: $PYTHON is $("$PYTHON" --version 2>&1); RROSFuzz needs Python 3.11 (atheris 3.0.0 wheels)" >&2
+  exit 1
+fi
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "setup: creating $VENV"
+  "$PYTHON" -m venv "$VENV"
+fi
+echo "setup: installing the project into $VENV (native build in build/)"
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[${RROSFUZZ_EXTRAS:-test}]" 2>&1 \
+  | grep -v "is ignored: it is neither a file nor a directory" || true
+"$VENV/bin/python" -c "import native, python_impl" \
+  || { echo "setup: the install did not produce an importable native module" >&2; exit 1; }

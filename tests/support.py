@@ -1,0 +1,104 @@
+"""Shared helpers of the test suite: implementations, robots, sampling, references."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import native
+import python_impl
+from robot_api import robots
+from robot_api.records import JointType
+
+IMPLEMENTATIONS = {"native": native, "python": python_impl}
+
+# (robot name, tip link or None for the default tip)
+AGREEMENT_ROBOTS = [
+    ("probot_anno", None),
+    ("ur5", None),
+    ("ur5", "tool0"),
+    ("panda", None),
+    ("panda", "panda_leftfinger"),
+    ("panda", "panda_rightfinger"),  # mimic joint whose master is off the chain
+    ("kinova", None),  # continuous joints
+    ("xarm7", None),
+    ("z1", None),
+    ("so100", None),
+]
+
+
+def robot_path(name: str) -> Path:
+    return robots.resolve(name)
+
+
+def robot_id(case: tuple[str, str | None]) -> str:
+    return case[0] if case[1] is None else f"{case[0]}:{case[1]}"
+
+
+def sample_configurations(model: Any, n: int, seed: int, margin: float = 0.0) -> np.ndarray:
+    """n configurations, uniform within limits widened by ``margin`` (continuous: [-2pi, 2pi])."""
+    rng = np.random.default_rng(seed)
+    lows, highs = [], []
+    for lim in model.joint_limits:
+        if lim.type == JointType.CONTINUOUS:
+            lows.append(-2 * math.pi)
+            highs.append(2 * math.pi)
+        else:
+            lows.append(lim.lower - margin)
+            highs.append(lim.upper + margin)
+    return rng.uniform(lows, highs, size=(n, len(lows)))
+
+
+def outcome(call: Any) -> tuple[str, Any]:
+    """('ok', value) or (exception class name, error code) of a call."""
+    try:
+        return ("ok", call())
+    except Exception as exc:
+        return (type(exc).__name__, getattr(exc, "code", None))
+
+
+@dataclass
+class PinocchioReference:
+    """Forward kinematics of pinocchio on the same URDF, fed our joint vectors."""
+
+    model: Any
+    data: Any
+    columns: list[tuple[int, int, int]]  # (our variable, idx_q, nq)
+
+    @classmethod
+    def load(cls, path: Path, joint_names: tuple[str, ...]) -> PinocchioReference:
+        import pinocchio as pin
+
+        model = pin.buildModelFromUrdf(str(path), mimic=True)
+        columns = []
+        for i, name in enumerate(joint_names):
+            jid = model.getJointId(name)
+            joint = model.joints[jid]
+            columns.append((i, joint.idx_q, joint.nq))
+        return cls(model, model.createData(), columns)
+
+    def q(self, values: np.ndarray) -> np.ndarray:
+        import pinocchio as pin
+
+        q = pin.neutral(self.model)
+        for i, idx, nq in self.columns:
+            if nq == 2:  # continuous joint: (cos, sin)
+                q[idx], q[idx + 1] = math.cos(values[i]), math.sin(values[i])
+            else:
+                q[idx] = values[i]
+        return q
+
+    def transform(self, values: np.ndarray, link: str) -> np.ndarray:
+        import pinocchio as pin
+
+        pin.framesForwardKinematics(self.model, self.data, self.q(values))
+        return np.array(self.data.oMf[self.model.getFrameId(link)].homogeneous)
+
+
+def pose_matrices(poses: Iterator[Any]) -> np.ndarray:
+    return np.array([p.matrix for p in poses])

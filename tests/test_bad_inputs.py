@@ -1,0 +1,148 @@
+"""One table of bad inputs: both implementations raise the same class with the same code,
+and it is the class and code the contract (docs/api.md) assigns."""
+
+from __future__ import annotations
+
+import math
+from decimal import Decimal
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import native
+import python_impl
+from robot_api import ErrorCode as E
+from robot_api.records import Pose, RobotTrajectory
+from tests.support import outcome, robot_path
+
+ROBOT = robot_path("probot_anno")
+KINOVA = robot_path("kinova")
+GOOD_POSE = Pose((0.2, 0.0, 0.4), (0.0, 0.0, 0.0, 1.0))
+NAN, INF = math.nan, math.inf
+Q6 = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+
+
+def traj(**changes):  # type: ignore[no-untyped-def]
+    base = dict(
+        joint_names=("joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6"),
+        time_from_start=np.array([0.0, 1.0]),
+        positions=np.zeros((2, 6)),
+        velocities=np.zeros((2, 6)),
+        accelerations=np.zeros((2, 6)),
+    )
+    base.update(changes)
+    return RobotTrajectory(**base)
+
+
+# (id, call(impl) -> anything, expected exception class name, expected code)
+TABLE = [
+    # -- RobotModel construction
+    ("urdf-not-a-str", lambda i: i.RobotModel(b"<robot/>"), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("urdf-missing-file", lambda i: i.RobotModel("/nonexistent/robot.urdf"), "URDFError", E.URDF_INVALID),
+    ("urdf-a-directory", lambda i: i.RobotModel(Path("/tmp")), "URDFError", E.URDF_INVALID),
+    ("urdf-empty-xml", lambda i: i.RobotModel("<"), "URDFError", E.URDF_INVALID),
+    ("urdf-not-robot", lambda i: i.RobotModel("<model/>"), "URDFError", E.URDF_INVALID),
+    ("urdf-no-links", lambda i: i.RobotModel('<robot name="r"/>'), "URDFError", E.URDF_INVALID),
+    ("urdf-nul-byte", lambda i: i.RobotModel('<robot name="r">\0</robot>'), "URDFError", E.URDF_INVALID),
+    ("tip-unknown", lambda i: i.RobotModel(ROBOT, "nope"), "UnknownNameError", E.UNKNOWN_LINK),
+    ("tip-not-a-str", lambda i: i.RobotModel(ROBOT, 3), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("tip-surrogate", lambda i: i.RobotModel(ROBOT, "\udc80"), "InvalidInputError", E.INVALID_ARGUMENT),
+    # -- forward kinematics
+    ("fk-short", lambda i: i.RobotModel(ROBOT).forward_kinematics([0.0] * 5), "InvalidInputError", E.WRONG_LENGTH),
+    ("fk-long", lambda i: i.RobotModel(ROBOT).forward_kinematics([0.0] * 7), "InvalidInputError", E.WRONG_LENGTH),
+    ("fk-nan", lambda i: i.RobotModel(ROBOT).forward_kinematics([NAN] + [0.0] * 5), "InvalidInputError", E.NON_FINITE),
+    ("fk-inf", lambda i: i.RobotModel(ROBOT).forward_kinematics([0.0] * 5 + [-INF]), "InvalidInputError", E.NON_FINITE),
+    ("fk-str-value", lambda i: i.RobotModel(ROBOT).forward_kinematics(["0"] * 6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-bool-value", lambda i: i.RobotModel(ROBOT).forward_kinematics([True] * 6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-none-value", lambda i: i.RobotModel(ROBOT).forward_kinematics([None] * 6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-complex", lambda i: i.RobotModel(ROBOT).forward_kinematics([1j] * 6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-huge-int", lambda i: i.RobotModel(ROBOT).forward_kinematics([10**400] * 6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-a-set", lambda i: i.RobotModel(ROBOT).forward_kinematics({0.0}), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-a-generator", lambda i: i.RobotModel(ROBOT).forward_kinematics(x for x in Q6), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-2d-array", lambda i: i.RobotModel(ROBOT).forward_kinematics(np.zeros((1, 6))), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-bool-array", lambda i: i.RobotModel(ROBOT).forward_kinematics(np.ones(6, bool)), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-str-array", lambda i: i.RobotModel(ROBOT).forward_kinematics(np.array(["1"] * 6)), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-unknown-link", lambda i: i.RobotModel(ROBOT).forward_kinematics(Q6, "nope"), "UnknownNameError", E.UNKNOWN_LINK),
+    ("fk-link-not-str", lambda i: i.RobotModel(ROBOT).forward_kinematics(Q6, 1), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("fk-length-before-link", lambda i: i.RobotModel(ROBOT).forward_kinematics([0.0], "nope"), "InvalidInputError", E.WRONG_LENGTH),
+    ("batch-1d", lambda i: i.RobotModel(ROBOT).forward_kinematics_batch(np.zeros(6)), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("batch-cols", lambda i: i.RobotModel(ROBOT).forward_kinematics_batch(np.zeros((3, 5))), "InvalidInputError", E.WRONG_LENGTH),
+    ("batch-ragged", lambda i: i.RobotModel(ROBOT).forward_kinematics_batch([Q6, Q6[:5]]), "InvalidInputError", E.WRONG_LENGTH),
+    ("batch-nan", lambda i: i.RobotModel(ROBOT).forward_kinematics_batch(np.full((2, 6), NAN)), "InvalidInputError", E.NON_FINITE),
+    ("batch-a-str", lambda i: i.RobotModel(ROBOT).forward_kinematics_batch("q"), "InvalidInputError", E.INVALID_ARGUMENT),
+    # -- inverse kinematics
+    ("ik-not-a-pose", lambda i: i.RobotModel(ROBOT).inverse_kinematics("pose"), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("ik-pose-3-items", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((0, 0, 0), (0, 0, 0, 1), 1)), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("ik-position-2", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((0, 0), (0, 0, 0, 1))), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("ik-quat-3", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((0, 0, 0), (0, 0, 1))), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("ik-zero-quat", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((0, 0, 0), (0, 0, 0, 0))), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("ik-nan-position", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((NAN, 0, 0), (0, 0, 0, 1))), "InvalidInputError", E.NON_FINITE),
+    ("ik-inf-quat", lambda i: i.RobotModel(ROBOT).inverse_kinematics(((0, 0, 0), (INF, 0, 0, 1))), "InvalidInputError", E.NON_FINITE),
+    ("ik-seed-short", lambda i: i.RobotModel(ROBOT).inverse_kinematics(GOOD_POSE, [0.0]), "InvalidInputError", E.WRONG_LENGTH),
+    ("ik-seed-nan", lambda i: i.RobotModel(ROBOT).inverse_kinematics(GOOD_POSE, [NAN] * 6), "InvalidInputError", E.NON_FINITE),
+    ("ik-unknown-link", lambda i: i.RobotModel(ROBOT).inverse_kinematics(GOOD_POSE, None, "nope"), "UnknownNameError", E.UNKNOWN_LINK),
+    # -- MoveGroup
+    ("group-foreign-model", lambda i: i.MoveGroup(object()), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-short", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([0.0] * 5), "InvalidInputError", E.WRONG_LENGTH),
+    ("target-empty", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([]), "InvalidInputError", E.WRONG_LENGTH),
+    ("target-nan", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([NAN] * 6), "InvalidInputError", E.NON_FINITE),
+    ("target-oob", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([4.0] + [0.0] * 5), "OutOfBoundsError", E.OUT_OF_BOUNDS),
+    ("target-oob-low", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([0.0, 0.0, -0.7, 0.0, 0.0, 0.0]), "OutOfBoundsError", E.OUT_OF_BOUNDS),
+    ("target-nan-before-oob", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([9.0, NAN, 0, 0, 0, 0]), "InvalidInputError", E.NON_FINITE),
+    ("target-unknown-name", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target({"joint_9": 0.0}), "UnknownNameError", E.UNKNOWN_JOINT),
+    ("target-name-not-str", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target({1: 0.0}), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-value-not-real", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target({"joint_1": "0"}), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-name-without-value", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target("joint_1"), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-an-int", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target(3), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-names-values-mismatch", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target(["joint_1"], [0.0, 1.0]), "InvalidInputError", E.WRONG_LENGTH),
+    ("target-duplicate-name", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target(["joint_1", "joint_1"], [0.0, 1.0]), "InvalidInputError", E.DUPLICATE_NAME),
+    ("target-unknown-before-duplicate", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target(["joint_1", "joint_1", "x"], [0, 0, 0]), "UnknownNameError", E.UNKNOWN_JOINT),
+    ("target-names-not-strings", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target([1, 2], [0.0, 0.0]), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("target-single-nan", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target("joint_1", NAN), "InvalidInputError", E.NON_FINITE),
+    ("target-single-unknown", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_joint_value_target("nope", 0.0), "UnknownNameError", E.UNKNOWN_JOINT),
+    ("target-continuous-inf", lambda i: i.MoveGroup(i.RobotModel(KINOVA)).set_joint_value_target("j2s6s200_joint_1", INF), "InvalidInputError", E.NON_FINITE),
+    ("go-bad-target", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).go([9.0] * 6), "OutOfBoundsError", E.OUT_OF_BOUNDS),
+    ("go-wait-not-bool", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).go(None, "yes"), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("plan-bad-target", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).plan({"nope": 1.0}), "UnknownNameError", E.UNKNOWN_JOINT),
+    ("named-unknown", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_named_target("ready"), "UnknownNameError", E.UNKNOWN_NAMED_TARGET),
+    ("named-not-str", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_named_target(None), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("named-values-unknown", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).get_named_target_values("x"), "UnknownNameError", E.UNKNOWN_NAMED_TARGET),
+    ("remember-short", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).remember_joint_values("x", [0.0]), "InvalidInputError", E.WRONG_LENGTH),
+    ("remember-nan", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).remember_joint_values("x", [NAN] * 6), "InvalidInputError", E.NON_FINITE),
+    ("velocity-scaling-zero", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_max_velocity_scaling_factor(0.0), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("velocity-scaling-above-1", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_max_velocity_scaling_factor(1.5), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("velocity-scaling-nan", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_max_velocity_scaling_factor(NAN), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("velocity-scaling-str", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_max_velocity_scaling_factor("1"), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("acceleration-scaling-negative", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_max_acceleration_scaling_factor(-0.5), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("tolerance-negative", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_goal_joint_tolerance(-1e-3), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("tolerance-inf", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).set_goal_joint_tolerance(INF), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("pose-unknown-link", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).get_current_pose("nope"), "UnknownNameError", E.UNKNOWN_LINK),
+    ("execute-not-a-plan", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute([[0.0] * 6]), "InvalidInputError", E.INVALID_ARGUMENT),
+    ("execute-wrong-names", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(joint_names=("a",) * 6)), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-names-not-str", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(joint_names=(1,) * 6)), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-shape", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(positions=np.zeros((3, 6)))), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-times-decrease", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(time_from_start=np.array([1.0, 0.5]))), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-nan-position", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(positions=np.array([[0.0] * 6, [NAN] * 6]))), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-far-start", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(positions=np.full((2, 6), 0.5))), "InvalidInputError", E.INVALID_TRAJECTORY),
+    ("execute-out-of-bounds", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(positions=np.array([[0.0] * 6, [9.0] + [0.0] * 5]))), "OutOfBoundsError", E.OUT_OF_BOUNDS),
+    ("execute-wait-not-bool", lambda i: i.MoveGroup(i.RobotModel(ROBOT)).execute(traj(), 1), "InvalidInputError", E.INVALID_ARGUMENT),
+]
+
+
+@pytest.mark.parametrize(("case", "call", "cls", "code"), TABLE, ids=[row[0] for row in TABLE])
+def test_bad_input(case: str, call, cls: str, code: E) -> None:  # type: ignore[no-untyped-def]
+    got_native = outcome(lambda: call(native))
+    got_twin = outcome(lambda: call(python_impl))
+    assert got_native == got_twin == (cls, code)
+
+
+GOOD_REALS = [0.5, 1, np.float32(0.5), np.float64(0.5), np.int64(1), Decimal("0.5"), Fraction(1, 2), np.True_]
+
+
+@pytest.mark.parametrize("value", GOOD_REALS, ids=[type(v).__name__ for v in GOOD_REALS])
+def test_real_numbers_of_every_kind_are_accepted(value) -> None:  # type: ignore[no-untyped-def]
+    for impl in (native, python_impl):
+        pose = impl.RobotModel(ROBOT).forward_kinematics([value] * 6)
+        assert pose == impl.RobotModel(ROBOT).forward_kinematics([float(value)] * 6)
