@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.rrosfuzz-installed
 BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh
 
-.PHONY: setup run test lint
+.PHONY: setup run test lint native-cov fuzz-native
 
 setup: $(STAMP)
 
@@ -23,3 +23,22 @@ test: setup
 
 lint: setup
 	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer
+
+## Native coverage: the C++ module built by clang with libFuzzer's edge counters and
+## AddressSanitizer, run under Atheris' preload (docs/engine.md, "Instrumentation").
+COV_BUILD := build/coverage
+ATHERIS_PRELOAD = $$($(PY) -c "import atheris, os; print(os.path.join(atheris.path(), 'asan_with_fuzzer.so'))")
+COV_MODULE = $$(ls $(CURDIR)/$(COV_BUILD)/_native*.so)
+FUZZ_ARGS ?= corpus/ -max_total_time=60
+
+native-cov: setup
+	scripts/apt-ensure.sh clang libclang-rt-14-dev
+	$(PY) -m pip install -q "pybind11>=2.12"
+	cmake -S . -B $(COV_BUILD) -DRROSFUZZ_COVERAGE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_COMPILER=clang++ -DPython_EXECUTABLE=$(CURDIR)/$(PY) \
+	  -Dpybind11_DIR=$$($(PY) -m pybind11 --cmakedir) > /dev/null
+	cmake --build $(COV_BUILD) -j2
+
+fuzz-native: native-cov
+	LD_PRELOAD=$(ATHERIS_PRELOAD) ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
+	  $(PY) fuzz_diff.py $(FUZZ_ARGS)

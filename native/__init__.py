@@ -8,13 +8,28 @@ The contract is ``docs/api.md``; errors are :mod:`robot_api.errors` classes.
 
 from __future__ import annotations
 
+import importlib.machinery
+import importlib.util
 import os
+import sys
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-import native._native as _native
+if os.environ.get("RROSFUZZ_NATIVE_MODULE"):
+    # The fuzzing build (clang -fsanitize=fuzzer-no-link,address; `make fuzz-native`)
+    # replaces the regular module. It needs Atheris' asan_with_fuzzer.so preloaded.
+    _path = os.environ["RROSFUZZ_NATIVE_MODULE"]
+    _loader = importlib.machinery.ExtensionFileLoader("native._native", _path)
+    _spec = importlib.util.spec_from_file_location("native._native", _path, loader=_loader)
+    if _spec is None:
+        raise ImportError(f"RROSFUZZ_NATIVE_MODULE={_path} is not an extension module")
+    _native = importlib.util.module_from_spec(_spec)
+    sys.modules["native._native"] = _native
+    _loader.exec_module(_native)
+else:
+    import native._native as _native
 from robot_api.errors import ErrorCode, InvalidInputError
 from robot_api.protocol import JointTarget, JointValues
 from robot_api.records import IKResult, JointLimit, MimicJoint, Pose, RobotTrajectory

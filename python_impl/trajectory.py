@@ -47,6 +47,10 @@ def plan_trajectory(
         zero = np.zeros((1, n))
         return RobotTrajectory(names, np.zeros(1), goal_row, zero, zero.copy())
 
+    if vs == 0.0 or accel == 0.0:
+        # a scaling factor so small that the bound underflows (e.g. 5e-324 / 2.0 == 0.0):
+        # the move would take forever. C++ gets there through 1/0 = inf; Python would raise.
+        raise PlanningError(f"the move would never end (velocity bound {vs!r}, acceleration bound {accel!r})")
     if vs * vs < accel:  # reaches cruise speed
         ta = vs / accel
         total = 1.0 / vs + ta

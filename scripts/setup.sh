@@ -11,24 +11,10 @@ APT_PACKAGES=(
   cmake g++ make                      # native build
   libeigen3-dev liborocos-kdl-dev     # Eigen, Orocos KDL
   liburdfdom-dev libconsole-bridge-dev libexpat1-dev  # URDF parsing (urdfdom), XML guard
+  ros-sensor-msgs ros-geometry-msgs   # real ROS .msg definitions (--msg-path, tests)
 )
 
-missing=()
-for pkg in "${APT_PACKAGES[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
-    missing+=("$pkg")
-  fi
-done
-if ((${#missing[@]})); then
-  SUDO=""
-  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-  echo "setup: installing Debian packages: ${missing[*]}"
-  apt_install() { $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"; }
-  if ! apt_install; then
-    $SUDO apt-get update -q
-    apt_install
-  fi
-fi
+scripts/apt-ensure.sh "${APT_PACKAGES[@]}"
 
 VENV=${VENV:-.venv}
 PYTHON=${PYTHON:-$(command -v python3.11 || command -v python3)}

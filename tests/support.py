@@ -58,7 +58,7 @@ def outcome(call: Any) -> tuple[str, Any]:
     """('ok', value) or (exception class name, error code) of a call."""
     try:
         return ("ok", call())
-    except Exception as exc:
+    except Exception as exc:  # noqa: BLE001 - recording any failure is the point
         return (type(exc).__name__, getattr(exc, "code", None))
 
 

@@ -173,6 +173,17 @@ def test_tiny_scaling_fails_planning(impl) -> None:
     assert g.get_current_joint_values() == before
 
 
+@pytest.mark.parametrize("setter", ["set_max_velocity_scaling_factor", "set_max_acceleration_scaling_factor"])
+def test_scaling_that_underflows_fails_planning_cleanly(impl, setter: str) -> None:
+    """Found by the fuzzer: 5e-324 / distance underflows to 0; the twin divided by it."""
+    g = group(impl)
+    getattr(g, setter)(5e-324)  # the smallest subnormal: a valid factor in (0, 1]
+    g.set_joint_value_target([0.5, 0.0, 0.7, 0.0, 0.0, -1.0])
+    with pytest.raises(PlanningError):
+        g.plan()
+    assert g.go() is False
+
+
 def test_execute_rejects_foreign_trajectories(impl) -> None:
     g = group(impl)
     traj = g.plan([0.5, 0.5, 0.5, 0.5, 0.5, 0.5])

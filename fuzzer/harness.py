@@ -1,0 +1,222 @@
+"""The libFuzzer side of a campaign: TestOneInput, the custom mutator and crossover.
+
+Per input (``test_one_input``): decode the test case, evaluate it on both
+targets, feed its behaviour to libFuzzer as coverage features, keep
+high-difference inputs as preferred parents (Algorithm 3), and record the first
+input of every new divergence signature as a crash file with a sidecar. By
+default the campaign goes on past divergences. With ``stop_on_divergence`` the
+first one raises, libFuzzer writes ``crash-<sha1>`` and exits.
+
+The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
+a high-difference one), applies one registered mutator (``fuzzer.mutators``)
+with an RNG seeded by libFuzzer, records it in the lineage, and encodes. It
+never raises: an exception there would hang Atheris.
+"""
+
+from __future__ import annotations
+
+import bisect
+import random
+import time
+from collections import Counter, OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from fuzzer import mutators
+from fuzzer.artifacts import ArtifactStore
+from fuzzer.evaluate import Evaluation, Evaluator, Verdict
+from fuzzer.guidance import Features, input_features
+from fuzzer.mapping import FkCall, MoveCall
+from fuzzer.testcase import TestCase, TestCaseError, decode
+
+POOL_SIZE = 64
+POOL_PARENT_CHANCE = 0.2
+DECODE_CACHE = 4096
+
+
+class DivergenceFound(Exception):
+    """Raised from TestOneInput with --stop-on-divergence: libFuzzer turns it into a crash."""
+
+
+@dataclass
+class Stats:
+    """Counts of a campaign (one process)."""
+
+    started: float = field(default_factory=time.monotonic)
+    execs: int = 0
+    filtered: int = 0
+    malformed: int = 0
+    divergent: Counter[str] = field(default_factory=Counter)
+    by_strategy: Counter[str] = field(default_factory=Counter)
+    executed_by_strategy: Counter[str] = field(default_factory=Counter)
+    signatures: dict[str, str] = field(default_factory=dict)
+    max_difference: float = 0.0
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+    @property
+    def divergences(self) -> int:
+        return sum(self.divergent.values())
+
+
+@dataclass
+class Pool:
+    """Candidate seeds sorted by difference priority (Algorithm 3)."""
+
+    size: int = POOL_SIZE
+    entries: list[tuple[float, bytes]] = field(default_factory=list)
+
+    def offer(self, difference: float, data: bytes) -> None:
+        if difference <= 0.0 or (len(self.entries) >= self.size and difference <= self.entries[0][0]):
+            return
+        bisect.insort(self.entries, (difference, data))
+        del self.entries[: max(0, len(self.entries) - self.size)]
+
+    def pick(self, rng: random.Random) -> bytes | None:
+        """Higher difference, higher chance (rank-weighted)."""
+        if not self.entries:
+            return None
+        weights = range(1, len(self.entries) + 1)
+        return rng.choices(self.entries, weights=weights)[0][1]
+
+
+@dataclass
+class Harness:
+    """Glue between libFuzzer and the evaluator."""
+
+    evaluator: Evaluator
+    store: ArtifactStore
+    features: Features
+    context: mutators.MutationContext
+    """Reused for every mutation; its ``rng`` is replaced each time."""
+    sidecar: Callable[[TestCase, bytes, Evaluation], dict[str, Any]]
+    seeds: list[TestCase]
+    lower: tuple[float, ...] = ()
+    upper: tuple[float, ...] = ()
+    stop_on_divergence: bool = False
+    on_exec: Callable[[], None] = lambda: None
+    stats: Stats = field(default_factory=Stats)
+    pool: Pool = field(default_factory=Pool)
+    _last: tuple[bytes, TestCase] | None = None
+    _decoded: OrderedDict[bytes, TestCase] = field(default_factory=OrderedDict)
+
+    # -- TestOneInput ------------------------------------------------------------------------
+
+    def test_one_input(self, data: bytes) -> None:
+        self.stats.execs += 1
+        case, trusted = self._decode(data)
+        if case is None:
+            self.stats.malformed += 1
+            self.on_exec()
+            return
+        evaluation = self.evaluator.evaluate(case, validated=trusted)
+        if evaluation.verdict != Verdict.MALFORMED:
+            self._remember(data, case)
+        if evaluation.verdict == Verdict.FILTERED:
+            self.stats.filtered += 1
+        elif evaluation.verdict == Verdict.MALFORMED:
+            self.stats.malformed += 1
+        else:
+            self._record(case, data, evaluation)
+        self.on_exec()
+
+    def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:
+        """(test case or None, whether it is known valid). Parents repeat: recent ones are cached."""
+        if self._last is not None and self._last[0] == data:
+            return self._last[1], True  # made by our mutator: valid by construction
+        cached = self._decoded.get(data)
+        if cached is not None:
+            self._decoded.move_to_end(data)
+            return cached, True
+        try:
+            case = decode(data)
+        except TestCaseError:
+            return None, False
+        if case.msg_type != self.seeds[0].msg_type:
+            return None, False
+        return case, False
+
+    def _remember(self, data: bytes, case: TestCase) -> None:
+        """Cache a test case that passed validation."""
+        self._decoded[data] = case
+        if len(self._decoded) > DECODE_CACHE:
+            self._decoded.popitem(last=False)
+
+    def _record(self, case: TestCase, data: bytes, ev: Evaluation) -> None:
+        stats = self.stats
+        stats.executed_by_strategy[case.strategy] += 1
+        stats.max_difference = max(stats.max_difference, ev.difference)
+        a, b = ev.outcomes
+        cmp = ev.comparison
+        self.features.hit(f"o:{a.label}|{b.label}")
+        self.features.hit(f"d:{cmp.kind}:{cmp.field}:{cmp.bucket}:{int(cmp.sign_flip)}")
+        if cmp.joints:
+            self.features.hit(f"j:{cmp.kind}:{cmp.field}:{','.join(map(str, cmp.joints))}")
+        if isinstance(ev.call, MoveCall | FkCall):
+            values = ev.call.positions if isinstance(ev.call, MoveCall) else ev.call.joint_values
+            self.features.hit_ids(input_features(values, self.lower, self.upper))
+        self.pool.offer(ev.difference, data)
+        if not cmp.divergent or ev.signature is None:
+            return
+        stats.divergent[str(cmp.kind)] += 1
+        stats.by_strategy[case.strategy] += 1
+        key = ev.signature.key
+        first = key not in stats.signatures and self.store.claim(key)
+        if key not in stats.signatures:
+            stats.signatures[key] = ""
+        if self.stop_on_divergence:
+            # every divergence is a crash here (libFuzzer's -minimize_crash relies on it); libFuzzer
+            # writes crash-<sha1> itself, into the same folder, when this raises
+            if first:
+                stats.signatures[key] = str(self.store.write_sidecar(data, self.sidecar(case, data, ev)))
+            raise DivergenceFound(f"{cmp.kind} divergence on {cmp.field or 'status'}: signature {key}")
+        if first:
+            stats.signatures[key] = str(self.store.write(data, self.sidecar(case, data, ev)))
+
+    # -- custom mutator / crossover ------------------------------------------------------------
+
+    def mutate(self, data: bytes, max_size: int, seed: int) -> bytes:
+        try:
+            rng = random.Random(seed)
+            parent = self._parent(data, rng)
+            ctx = self.context
+            ctx.rng = rng
+            message, name = mutators.mutate(parent.message, ctx)
+            return self._emit(parent.child(message, name), parent, max_size, data)
+        except Exception:  # noqa: BLE001 - must never raise into libFuzzer
+            return data[:max_size]
+
+    def crossover(self, data1: bytes, data2: bytes, max_size: int, seed: int) -> bytes:
+        try:
+            rng = random.Random(seed)
+            a, b = self._parent(data1, rng, pool=False), self._parent(data2, rng, pool=False)
+            ctx = self.context
+            ctx.rng = rng
+            message = mutators.crossover(a.message, b.message, ctx)
+            return self._emit(a.child(message, "splice"), a, max_size, data1)
+        except Exception:  # noqa: BLE001 - must never raise into libFuzzer
+            return data1[:max_size]
+
+    def _parent(self, data: bytes, rng: random.Random, pool: bool = True) -> TestCase:
+        if pool and rng.random() < POOL_PARENT_CHANCE:
+            preferred = self.pool.pick(rng)
+            if preferred is not None:
+                data = preferred
+        case, _ = self._decode(data)
+        if case is None:
+            # not a test case (a foreign or damaged file): restart from a generated seed
+            base = rng.choice(self.seeds)
+            return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
+        return case
+
+    def _emit(self, case: TestCase, parent: TestCase, max_size: int, fallback: bytes) -> bytes:
+        """The child's bytes; if too large, the (valid) parent's; if still too large, the input cut."""
+        for candidate in (case, parent):
+            out = candidate.encode()
+            if len(out) <= max_size:
+                self._last = (out, candidate)
+                return out
+        return fallback[:max_size]

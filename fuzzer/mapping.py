@@ -1,0 +1,158 @@
+"""How a ROS message becomes a call on a target (documented in docs/engine.md).
+
+=======  ==========================  ==============================================================
+op       message type                call
+=======  ==========================  ==============================================================
+move     sensor_msgs/JointState      ``velocity[0]`` (if any) -> ``set_max_velocity_scaling_factor``;
+                                     ``effort[0]`` (if any) -> ``set_max_acceleration_scaling_factor``;
+                                     ``name`` empty: ``set_joint_value_target(position)``, else
+                                     ``set_joint_value_target(name, position)``; then ``go()``
+move     std_msgs/Float64MultiArray  ``set_joint_value_target(data)``; ``go()``
+fk       sensor_msgs/JointState      ``forward_kinematics(position, header.frame_id or None)``
+fk       std_msgs/Float64MultiArray  ``forward_kinematics(data)``
+ik       geometry_msgs/PoseStamped   ``inverse_kinematics(pose, None, header.frame_id or None)``
+ik       geometry_msgs/Pose          ``inverse_kinematics(pose)``
+=======  ==========================  ==============================================================
+
+Names that do not match the robot's joints are valid inputs: both targets must
+reject them the same way. The mapping itself never validates anything.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from hypothesis import strategies as st
+from hypothesis.strategies import SearchStrategy
+
+OPS = ("move", "fk", "ik")
+DEFAULT_MSG_TYPE = {
+    "move": "sensor_msgs/JointState",
+    "fk": "sensor_msgs/JointState",
+    "ik": "geometry_msgs/PoseStamped",
+}
+
+
+@dataclass(frozen=True)
+class MoveCall:
+    names: tuple[str, ...] | None
+    positions: tuple[float, ...]
+    velocity_scaling: float | None = None
+    acceleration_scaling: float | None = None
+
+
+@dataclass(frozen=True)
+class FkCall:
+    joint_values: tuple[float, ...]
+    link: str | None = None
+
+
+@dataclass(frozen=True)
+class IkCall:
+    position: tuple[float, ...]
+    orientation: tuple[float, ...]
+    link: str | None = None
+
+
+Call = MoveCall | FkCall | IkCall
+
+
+def _joint_state_move(m: dict[str, Any]) -> MoveCall:
+    names = tuple(m["name"])
+    return MoveCall(
+        names or None,
+        tuple(m["position"]),
+        m["velocity"][0] if m["velocity"] else None,
+        m["effort"][0] if m["effort"] else None,
+    )
+
+
+def _pose(m: dict[str, Any]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    p, q = m["position"], m["orientation"]
+    return (p["x"], p["y"], p["z"]), (q["x"], q["y"], q["z"], q["w"])
+
+
+MAPPINGS: dict[tuple[str, str], Callable[[dict[str, Any]], Call]] = {
+    ("move", "sensor_msgs/JointState"): _joint_state_move,
+    ("move", "std_msgs/Float64MultiArray"): lambda m: MoveCall(None, tuple(m["data"])),
+    ("fk", "sensor_msgs/JointState"): lambda m: FkCall(tuple(m["position"]), m["header"]["frame_id"] or None),
+    ("fk", "std_msgs/Float64MultiArray"): lambda m: FkCall(tuple(m["data"])),
+    ("ik", "geometry_msgs/PoseStamped"): lambda m: IkCall(*_pose(m["pose"]), m["header"]["frame_id"] or None),
+    ("ik", "geometry_msgs/Pose"): lambda m: IkCall(*_pose(m)),
+}
+
+# The fields mutators should prefer, per message type (dotted paths).
+FOCUS = {
+    "sensor_msgs/JointState": ("position", "name"),
+    "std_msgs/Float64MultiArray": ("data",),
+    "geometry_msgs/PoseStamped": ("pose.position", "pose.orientation"),
+    "geometry_msgs/Pose": ("position", "orientation"),
+}
+
+
+class MappingError(ValueError):
+    """No mapping for this (op, message type)."""
+
+
+def mapping_for(op: str, msg_type: str) -> Callable[[dict[str, Any]], Call]:
+    try:
+        return MAPPINGS[(op, msg_type)]
+    except KeyError:
+        supported = ", ".join(t for o, t in MAPPINGS if o == op)
+        raise MappingError(f"--op {op} cannot use {msg_type}; supported: {supported}") from None
+
+
+@dataclass(frozen=True)
+class RobotFacts:
+    """What seed hints need to know about the robot."""
+
+    joint_names: tuple[str, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    link_names: tuple[str, ...]
+    reachable: Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
+    """FK of a configuration (position, orientation), for reachable IK seeds."""
+
+
+def _joint_value(lo: float, hi: float) -> SearchStrategy[float]:
+    lo = -2 * math.pi if math.isinf(lo) else lo
+    hi = 2 * math.pi if math.isinf(hi) else hi
+    return st.one_of(st.floats(lo, hi), st.sampled_from([lo, hi, 0.0, min(max(0.0, lo), hi)]))
+
+
+def _configuration(facts: RobotFacts) -> SearchStrategy[tuple[float, ...]]:
+    return st.tuples(*(_joint_value(lo, hi) for lo, hi in zip(facts.lower, facts.upper, strict=True)))
+
+
+def seed_hints(msg_type: str, facts: RobotFacts) -> dict[str, SearchStrategy[Any]]:
+    """Robot-aware strategies for the fields that matter (Table I's generic strategies
+    would almost never produce a joint name or a reachable pose)."""
+    configuration = _configuration(facts)
+    if msg_type == "sensor_msgs/JointState":
+        return {
+            "name": st.one_of(st.just(list(facts.joint_names)), st.just([])),
+            "position": configuration.map(list),
+            "velocity": st.one_of(st.just([]), st.lists(st.floats(0.05, 1.0), min_size=1, max_size=1)),
+            "effort": st.one_of(st.just([]), st.lists(st.floats(0.05, 1.0), min_size=1, max_size=1)),
+            "header.frame_id": st.sampled_from(["", *facts.link_names]),
+        }
+    if msg_type == "std_msgs/Float64MultiArray":
+        return {"data": configuration.map(list)}
+    poses = configuration.map(facts.reachable).map(
+        lambda p: {
+            "position": dict(zip("xyz", p[0], strict=True)),
+            "orientation": dict(zip("xyzw", p[1], strict=True)),
+        }
+    )
+    if msg_type == "geometry_msgs/PoseStamped":
+        # one configuration gives both halves, so the pose is reachable
+        return {"pose": poses, "header.frame_id": st.just("")}
+    if msg_type == "geometry_msgs/Pose":
+        return {
+            "position": poses.map(lambda p: p["position"]),
+            "orientation": poses.map(lambda p: p["orientation"]),
+        }
+    return {}

@@ -1,0 +1,184 @@
+"""A run configuration and everything built from it: targets, messages, evaluator.
+
+Shared by campaigns and by replay, so a crash file replays under exactly the
+configuration its sidecar records.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import platform
+import subprocess
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from fuzzer.mapping import DEFAULT_MSG_TYPE, RobotFacts, mapping_for
+from fuzzer.msgdef import MessageRegistry
+from fuzzer.records import Outcome
+from fuzzer.targets import Runner
+from fuzzer.tolerance import Tolerance
+from robot_api import robots
+from robot_api.records import JointType
+
+DEBIAN_PACKAGES = ("liborocos-kdl-dev", "liburdfdom-dev", "libeigen3-dev")
+
+
+class ConfigError(ValueError):
+    """A configuration that cannot run (the CLI reports it and exits with 2)."""
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """What a campaign or a replay runs."""
+
+    op: str = "move"
+    robot: str = robots.DEFAULT_ROBOT
+    tip_link: str | None = None
+    targets: tuple[str, str] = ("native", "python")
+    tolerance: Tolerance = field(default_factory=Tolerance)
+    msg_type: str = ""
+    msg_path: tuple[str, ...] = ()
+    filtering: bool = True
+
+    @property
+    def message_type(self) -> str:
+        return self.msg_type or DEFAULT_MSG_TYPE[self.op]
+
+    def to_json(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["targets"] = list(self.targets)
+        data["msg_path"] = list(self.msg_path)
+        data["msg_type"] = self.message_type
+        data["tolerance"] = {"m": self.tolerance.metres, "rad": self.tolerance.radians}
+        return data
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RunConfig:
+        tol = data.get("tolerance", {})
+        targets = tuple(data.get("targets", ("native", "python")))
+        if len(targets) != 2:
+            raise ConfigError(f"a sidecar names {len(targets)} targets, expected 2")
+        return cls(
+            op=data.get("op", "move"),
+            robot=data.get("robot", robots.DEFAULT_ROBOT),
+            tip_link=data.get("tip_link"),
+            targets=(targets[0], targets[1]),
+            tolerance=Tolerance(float(tol.get("m", 1e-6)), float(tol.get("rad", 1e-6))),
+            msg_type=data.get("msg_type", ""),
+            msg_path=tuple(data.get("msg_path", ())),
+            filtering=bool(data.get("filtering", True)),
+        )
+
+
+@dataclass
+class Session:
+    """Everything needed to evaluate test cases under one configuration."""
+
+    config: RunConfig
+    urdf: Path
+    runners: tuple[Runner, Runner]
+    registry: MessageRegistry
+
+    @classmethod
+    def open(cls, config: RunConfig) -> Session:
+        from fuzzer.msgdef import MsgError
+        from fuzzer.targets import TargetError
+        from robot_api.errors import RobotAPIError
+
+        try:
+            urdf = robots.resolve(config.robot)
+        except RobotAPIError as exc:
+            raise ConfigError(f"--robot: {exc}") from None
+        try:
+            mapping_for(config.op, config.message_type)
+            registry = MessageRegistry(config.msg_path)
+            registry.get(config.message_type)
+        except (ValueError, MsgError) as exc:
+            raise ConfigError(f"--msg-type: {exc}") from None
+        runners = []
+        for spec in config.targets:
+            try:
+                runners.append(Runner.create(spec, urdf, config.tip_link))
+            except TargetError as exc:
+                raise ConfigError(f"--targets: {exc}") from None
+            except RobotAPIError as exc:
+                raise ConfigError(
+                    f"target {spec!r} cannot load {urdf}: {type(exc).__name__}: {exc}"
+                ) from None
+        return cls(config, urdf, (runners[0], runners[1]), registry)
+
+    @property
+    def reference(self) -> Any:
+        """The first target's model (joint names and limits come from it)."""
+        return self.runners[0].model
+
+    @property
+    def prismatic(self) -> tuple[bool, ...]:
+        return tuple(lim.type == JointType.PRISMATIC for lim in self.reference.joint_limits)
+
+    def evaluator(self) -> Any:
+        from fuzzer.evaluate import Evaluator
+
+        msg_type = self.config.message_type
+
+        def validate(message: dict[str, Any]) -> None:
+            self.registry.validate(msg_type, message)
+
+        return Evaluator(
+            op=self.config.op,
+            runners=self.runners,
+            mapping=mapping_for(self.config.op, msg_type),
+            tolerance=self.config.tolerance,
+            validate=validate,
+            filtering=self.config.filtering,
+            prismatic=self.prismatic,
+        )
+
+    def facts(self) -> RobotFacts:
+        model = self.reference
+
+        def reachable(q: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+            pose = model.forward_kinematics(list(q))
+            return tuple(pose.position), tuple(pose.orientation)
+
+        limits = model.joint_limits
+        return RobotFacts(
+            joint_names=tuple(model.joint_names),
+            lower=tuple(lim.lower for lim in limits),
+            upper=tuple(lim.upper for lim in limits),
+            link_names=tuple(model.link_names),
+            reachable=reachable,
+        )
+
+    def robot_digest(self) -> str:
+        return hashlib.sha256(self.urdf.read_bytes()).hexdigest()
+
+
+def versions() -> dict[str, str]:
+    """Versions worth recording with an artifact."""
+    out = {"python": platform.python_version()}
+    for dist in ("rrosfuzz", "numpy", "atheris", "hypothesis"):
+        try:
+            out[dist] = importlib.metadata.version(dist)
+        except importlib.metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    try:
+        listing = subprocess.run(
+            ["dpkg-query", "-W", "-f", "${Package} ${Version}\n", *DEBIAN_PACKAGES],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=False,
+        ).stdout
+        for line in listing.splitlines():
+            name, _, version = line.partition(" ")
+            out[name] = version
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return out
+
+
+def outcome_json(runner: Runner, outcome: Outcome) -> dict[str, Any]:
+    return {"target": runner.name, **outcome.to_json()}

@@ -1,0 +1,45 @@
+"""The reasonable-difference indicator (paper III.E): tolerances per quantity."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """Reasonable difference (paper III.E): per quantity, metres and radians."""
+
+    metres: float = 1e-6
+    radians: float = 1e-6
+
+    @classmethod
+    def parse(cls, text: str) -> Tolerance:
+        """``1e-5`` (both) or ``m=1e-5,rad=1e-6``.
+
+        Raises
+        ------
+        ValueError
+            With a message naming the bad part.
+        """
+        parts = [p.strip() for p in text.split(",") if p.strip()]
+        if len(parts) == 1 and "=" not in parts[0]:
+            value = _positive(parts[0])
+            return cls(value, value)
+        values = {"m": cls.metres, "rad": cls.radians}
+        for part in parts:
+            key, sep, raw = part.partition("=")
+            if not sep or key.strip() not in values:
+                raise ValueError(f"tolerance {part!r}: expected m=<value> or rad=<value>")
+            values[key.strip()] = _positive(raw)
+        return cls(values["m"], values["rad"])
+
+
+def _positive(raw: str) -> float:
+    try:
+        value = float(raw)
+    except ValueError:
+        raise ValueError(f"tolerance {raw!r} is not a number") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"tolerance {raw!r} must be a positive finite number")
+    return value

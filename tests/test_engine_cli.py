@@ -1,0 +1,259 @@
+"""The engine end to end, as a user runs it: fuzz_diff.py in a subprocess."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import python_impl
+from fuzzer.testcase import decode
+from robot_api.robots import default_robot_path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = str(ROOT / "fuzz_diff.py")
+TIGHT = "tests.plugins.faults:tight_tolerance"
+
+
+def fuzz(*args: str, timeout: float = 180) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run(
+        [sys.executable, SCRIPT, *args, "--no-progress"],
+        cwd=ROOT,
+        env=env,
+        text=True,
+        capture_output=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
+def sidecars(artifacts: Path) -> list[dict]:  # type: ignore[type-arg]
+    return [json.loads(p.read_text()) for p in sorted(artifacts.glob("crash-*.json"))]
+
+
+def test_finds_a_planted_divergence_within_a_bounded_budget(tmp_path: Path) -> None:
+    """Tolerance 1e-5 instead of 1e-4: only values within 1e-4 of a limit show it,
+    which the seeds never contain, so mutation has to find them."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    run = fuzz(str(corpus), "-runs=5000", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "campaign summary" in run.stderr
+    found = sidecars(artifacts)
+    assert found, run.stderr[-2000:]
+    for sidecar in found:
+        assert sidecar["signature"]["kind"] == "status"
+        assert sidecar["signature"]["outcome_b"] == "rejected:OutOfBoundsError:30"
+        assert sidecar["lineage"], "found by mutation, not by a seed"
+    limits = python_impl.RobotModel(default_robot_path()).joint_limits
+    for seed in corpus.glob("seed-*"):  # seeds stay within the limits, where the fault cannot show
+        values = decode(seed.read_bytes()).message["position"]
+        assert all(lim.lower <= v <= lim.upper for v, lim in zip(values, limits, strict=True))
+
+
+def test_crash_files_replay_their_verdict(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=5000",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{TIGHT}",
+    )
+    crash = sorted(p for p in artifacts.glob("crash-*") if not p.name.endswith(".json"))[0]
+    again = fuzz(str(crash))
+    assert again.returncode == 1 and "still diverges (same signature)" in again.stdout
+    fixed = fuzz(str(crash), "--targets=native,python")
+    assert fixed.returncode == 0 and "now agrees" in fixed.stdout
+    folder = fuzz("replay", str(artifacts))
+    assert folder.returncode == 1 and folder.stdout.count("still diverges") == len(sidecars(artifacts))
+    assert run.returncode == 0
+
+
+def test_a_third_implementation_plugs_in_as_module_attribute(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=3000",
+        "-seed=2",
+        "--robot=kinova",
+        f"--artifacts={artifacts}",
+        "--targets=native,tests.plugins.faults:wrap_continuous",
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    found = sidecars(artifacts)
+    assert found
+    continuous = {0, 3, 5}  # Kinova's continuous joints
+    for sidecar in found:  # the paper's "positive and negative" class
+        sig = sidecar["signature"]
+        assert (sig["kind"], sig["field"], sig["sign_flip"]) == ("representation", "joint_values", True)
+        assert set(sig["joints"]) <= continuous
+
+
+def test_stop_on_divergence_is_a_libfuzzer_crash(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=5000",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{TIGHT}",
+        "--stop-on-divergence",
+    )
+    assert run.returncode == 77
+    crashes = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+    assert len(crashes) == 1 and (artifacts / (crashes[0].name + ".json")).is_file()
+
+
+def test_agreeing_targets_run_clean(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(str(tmp_path / "corpus"), "-runs=1500", "-seed=3", f"--artifacts={artifacts}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "divergences: 0" in run.stderr and not sidecars(artifacts)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--robot=/nonexistent.urdf"], "--robot"),
+        (["--targets=native"], "exactly two targets"),
+        (["--targets=native,no_such_module:x"], "cannot import no_such_module"),
+        (["--targets=native,tests.plugins.faults:not_a_target"], "no callable MoveGroup"),
+        (["--targets=native,tests.plugins.faults:nothing"], "has no attribute"),
+        (["--tolerance=-1"], "--tolerance"),
+        (["--msg-type=sensor_msgs/Nope"], "--msg-type"),
+        (["--op=ik", "--msg-type=sensor_msgs/JointState"], "supported: geometry_msgs/PoseStamped"),
+        (["--op=jump"], "invalid choice"),
+        (["--seeds=-1"], "--seeds"),
+        (["-dict=/nonexistent.dict"], "-dict"),
+        (["--msg-path=/nonexistent"], "--msg-path"),
+        (["--robot=ur5", "--tip-link=nope"], "tip link 'nope'"),
+    ],
+)
+def test_bad_arguments_exit_2_with_a_clear_message(tmp_path: Path, args: list[str], message: str) -> None:
+    run = fuzz(str(tmp_path / "corpus"), "-runs=10", *args, timeout=60)
+    assert run.returncode == 2, (run.returncode, run.stderr[-1000:])
+    assert message in run.stderr
+    assert "Traceback" not in run.stderr
+
+
+def test_malformed_corpus_files_are_skipped_with_a_warning(tmp_path: Path) -> None:
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    (corpus / "broken.json").write_bytes(b'{"rrosfuzz": 1, "msg_type": ')
+    (corpus / "empty").write_bytes(b"")
+    (corpus / "other-type").write_bytes(b'{"rrosfuzz": 1, "msg_type": "geometry_msgs/Pose", "message": {}}')
+    run = fuzz(str(corpus), "-runs=300", "-seed=1", f"--artifacts={tmp_path / 'a'}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    for name in ("broken.json", "empty", "other-type"):
+        assert f"skipping corpus file {corpus / name}" in run.stderr
+    assert "wrote 32 seeds" in run.stderr  # no usable file: seeds are generated
+
+
+def test_a_hanging_target_hits_the_timeout(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=20000",
+        "-seed=1",
+        "-timeout=2",
+        f"--artifacts={artifacts}",
+        "--targets=native,tests.plugins.faults:hangs",
+        timeout=300,
+    )
+    assert run.returncode == 70, run.stderr[-2000:]
+    assert list(artifacts.glob("timeout-*"))
+
+
+def test_a_dying_target_leaves_a_crash_file(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=20000",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--targets=native,tests.plugins.faults:aborts",
+    )
+    assert run.returncode != 0 and "deadly signal" in run.stderr
+    crashes = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+    assert crashes
+    assert decode(crashes[0].read_bytes()).message["position"][0] > 3.0  # the input that killed it
+
+
+def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            SCRIPT,
+            str(corpus),
+            "-max_total_time=60",
+            "-seed=4",
+            f"--artifacts={artifacts}",
+            "--robot=kinova",
+            "--targets=native,tests.plugins.faults:wrap_continuous",
+            "--no-progress",
+        ],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(list(artifacts.glob("crash-*"))) < 4:
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    crashes = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+    assert crashes
+    for crash in crashes:  # every crash file is whole and has its whole sidecar
+        decode(crash.read_bytes())
+        json.loads((artifacts / (crash.name + ".json")).read_text())
+    # the next start removes leftovers of interrupted writes and runs on
+    run = fuzz(
+        str(corpus),
+        "-runs=200",
+        "-seed=5",
+        f"--artifacts={artifacts}",
+        "--robot=kinova",
+        "--targets=native,tests.plugins.faults:wrap_continuous",
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert not list(artifacts.glob(".tmp-*"))
+
+
+def test_real_ros_definitions_from_msg_path(tmp_path: Path) -> None:
+    if not Path("/usr/share/std_msgs/msg/Float64MultiArray.msg").is_file():
+        pytest.skip("Debian's ros-std-msgs is not installed")
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=500",
+        "-seed=1",
+        "--msg-path=/usr/share",
+        "--msg-type=std_msgs/Float64MultiArray",
+        f"--artifacts={tmp_path / 'a'}",
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "std_msgs/Float64MultiArray" in run.stderr and "divergences: 0" in run.stderr
+
+
+def test_fork_mode_reexecutes_the_script(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-fork=2",
+        "-max_total_time=20",
+        "-seed=3",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{TIGHT}",
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "-fork=2: fuzzing in separate process" in run.stderr
+    assert "job: " in run.stderr  # workers ran

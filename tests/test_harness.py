@@ -1,0 +1,128 @@
+"""The libFuzzer glue without libFuzzer: mutator, crossover, TestOneInput, artifacts."""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+from pathlib import Path
+
+import pytest
+
+from fuzzer import campaign, mutators
+from fuzzer.artifacts import ArtifactStore, load_sidecar
+from fuzzer.guidance import Features
+from fuzzer.harness import DivergenceFound, Harness, Pool
+from fuzzer.session import RunConfig, Session
+from fuzzer.testcase import TestCase, decode
+
+
+def make_harness(tmp_path: Path, targets: tuple[str, str] = ("native", "python"), **kw) -> Harness:  # type: ignore[no-untyped-def]
+    config = RunConfig(targets=targets, **kw)
+    session = Session.open(config)
+    seeds = campaign.make_seeds(session, 8, 0)
+    ctx = mutators.MutationContext(
+        rng=random.Random(0),
+        field_types=campaign.field_types(session, config.message_type),
+        interesting_floats=tuple(campaign.interesting_values(session)),
+    )
+    versions = {"python": "test"}
+    return Harness(
+        evaluator=session.evaluator(),
+        store=ArtifactStore(tmp_path / "artifacts"),
+        features=Features(enabled=False),
+        context=ctx,
+        sidecar=lambda case, data, ev: campaign.build_sidecar(session, case, data, ev, versions, "digest"),
+        seeds=seeds,
+    )
+
+
+def test_mutator_never_raises_and_respects_max_size(tmp_path: Path) -> None:
+    h = make_harness(tmp_path)
+    rng = random.Random(1)
+    inputs = [
+        h.seeds[0].encode(),
+        b"",
+        b"garbage",
+        bytes(rng.randrange(256) for _ in range(300)),
+        b'{"rrosfuzz":1}',
+    ]
+    for i in range(400):
+        data = inputs[i % len(inputs)]
+        out = h.mutate(data, 4096, i)
+        assert isinstance(out, bytes) and len(out) <= 4096
+        case = decode(out)  # garbage parents restart from a seed ("repair")
+        assert case.msg_type == "sensor_msgs/JointState"
+        assert len(h.mutate(data, 10, i)) <= 10
+
+
+def test_mutation_is_deterministic_for_a_seed(tmp_path: Path) -> None:
+    a, b = make_harness(tmp_path / "a"), make_harness(tmp_path / "b")
+    data = a.seeds[3].encode()
+    assert [a.mutate(data, 4096, s) for s in range(50)] == [b.mutate(data, 4096, s) for s in range(50)]
+
+
+def test_lineage_records_the_mutator(tmp_path: Path) -> None:
+    h = make_harness(tmp_path)
+    parent = h.seeds[0]
+    child = decode(h.mutate(parent.encode(), 4096, 7))
+    assert child.lineage[:-1] == parent.lineage and child.lineage[-1] in {*mutators.MUTATORS, "noop"}
+    spliced = decode(h.crossover(h.seeds[1].encode(), h.seeds[2].encode(), 4096, 3))
+    assert spliced.lineage[-1] == "splice"
+
+
+def test_inputs_are_counted_by_verdict(tmp_path: Path) -> None:
+    h = make_harness(tmp_path)
+    h.test_one_input(b"not a test case")
+    nan_case = TestCase("sensor_msgs/JointState", dict(h.seeds[0].message, position=[math.nan] * 6))
+    h.test_one_input(nan_case.encode())
+    wrong_type = TestCase("geometry_msgs/Pose", {"x": 1})
+    h.test_one_input(wrong_type.encode())
+    h.test_one_input(h.seeds[0].encode())
+    s = h.stats
+    assert (s.execs, s.malformed, s.filtered, s.divergences) == (4, 2, 1, 0)
+
+
+def test_no_filter_evaluates_non_finite_inputs(tmp_path: Path) -> None:
+    h = make_harness(tmp_path, filtering=False)
+    nan_case = TestCase("sensor_msgs/JointState", dict(h.seeds[0].message, position=[math.nan] * 6))
+    h.test_one_input(nan_case.encode())
+    assert h.stats.filtered == 0 and h.stats.divergences == 0  # both targets reject it the same way
+
+
+def test_a_divergence_writes_one_crash_file_per_signature(tmp_path: Path) -> None:
+    h = make_harness(tmp_path, targets=("native", "tests.plugins.faults:tight_tolerance"))
+    base = h.seeds[0].message
+    for delta in (5e-5, 6e-5, 7e-5):
+        message = dict(base, name=[], position=[3.1416 + delta, 0.0, 0.0, 0.0, 0.0, 0.0])
+        h.test_one_input(TestCase("sensor_msgs/JointState", message).encode())
+    assert h.stats.divergences == 3 and len(h.stats.signatures) == 1
+    files = h.store.crash_files()
+    assert len(files) == 1
+    sidecar = load_sidecar(files[0])
+    assert sidecar is not None
+    assert sidecar["signature"]["kind"] == "status"
+    assert sidecar["signature"]["outcome_b"] == "rejected:OutOfBoundsError:30"
+    assert sidecar["config"]["targets"] == ["native", "tests.plugins.faults:tight_tolerance"]
+    assert decode(files[0].read_bytes()).message["position"][0] == 3.1416 + 5e-5
+    assert [o["target"] for o in sidecar["outcomes"]] == ["native", "tests.plugins.faults:tight_tolerance"]
+    json.dumps(sidecar)  # JSON all the way down
+
+
+def test_stop_on_divergence_raises_after_writing_the_sidecar(tmp_path: Path) -> None:
+    h = make_harness(tmp_path, targets=("native", "tests.plugins.faults:tight_tolerance"))
+    h.stop_on_divergence = True
+    message = dict(h.seeds[0].message, name=[], position=[3.1416 + 5e-5, 0.0, 0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(DivergenceFound):
+        h.test_one_input(TestCase("sensor_msgs/JointState", message).encode())
+    assert list(h.store.directory.glob("crash-*.json"))
+
+
+def test_pool_prefers_larger_differences() -> None:
+    pool = Pool(size=3)
+    for d, data in [(0.0, b"zero"), (1e-9, b"a"), (1e-3, b"b"), (1e-6, b"c"), (1.0, b"d")]:
+        pool.offer(d, data)
+    assert [data for _, data in pool.entries] == [b"c", b"b", b"d"]
+    rng = random.Random(0)
+    picks = [pool.pick(rng) for _ in range(600)]
+    assert picks.count(b"d") > picks.count(b"b") > picks.count(b"c") > 0
