@@ -87,9 +87,12 @@ class ArtifactStore:
 
 
 def load_sidecar(crash: Path) -> dict[str, Any] | None:
-    """The sidecar of a crash file, if it has one (native crashes have none)."""
+    """The sidecar of a crash file, if it has a readable one (native crashes have none)."""
     path = sidecar_path(crash)
     if not path.is_file():
         return None
-    data = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        data = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+    except (OSError, json.JSONDecodeError):
+        return None  # a damaged sidecar is treated as none
     return data if isinstance(data, dict) else None

@@ -23,6 +23,7 @@ from typing import Any
 
 from fuzzer import reporting
 from fuzzer.artifacts import ArtifactStore, atomic_write, clean_temporaries
+from fuzzer.divlog import CampaignLog
 from fuzzer.session import RunConfig, Session, outcome_json, versions
 from fuzzer.targets import module_of
 from fuzzer.testcase import TestCase, TestCaseError, decode
@@ -228,6 +229,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         lower=lower,
         upper=upper,
         stop_on_divergence=options.stop_on_divergence,
+        log=CampaignLog(options.artifacts),
+        joint_names=tuple(session.reference.joint_names),
     )
     total = _flag_value(options.libfuzzer_flags, "-max_total_time")
     progress = reporting.Progress(
@@ -245,6 +248,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     def finish() -> None:
         progress.close()
+        if harness.stats.execs:
+            harness.maybe_snapshot(force=True)
         new_files = [str(p) for p in store.crash_files() if p.stat().st_mtime >= started]
         reporting.summary(
             harness.stats,

@@ -2,7 +2,12 @@
 
     fuzz_diff.py CORPUS_DIR [CORPUS_DIR...] [-libfuzzer_flag=value ...] [--options]
     fuzz_diff.py CRASH_FILE [--options]          replay one file
-    fuzz_diff.py replay PATH... [--options]      replay files or folders
+    fuzz_diff.py replay PATH... [--options]      replay files or folders (exit 1 if any diverges)
+    fuzz_diff.py triage DIR [--json]             buckets of an artifacts folder, most severe first
+    fuzz_diff.py minimize CRASH... [--budget N]  shrink to the simplest input with the same signature
+    fuzz_diff.py report DIR [-o OUT]             HTML report with the paper's tables and figures
+    fuzz_diff.py promote CRASH [--fixed]         add to the regression suite (tests/regressions/)
+    fuzz_diff.py coverage CORPUS... [--html DIR] line and branch coverage of python_impl
 
 Arguments starting with a single dash go to libFuzzer unchanged
 (``-max_total_time=60``, ``-runs=N``, ``-seed=N``, ``-jobs=N``, ``-fork=N``,
@@ -23,7 +28,7 @@ from fuzzer.session import ConfigError, RunConfig
 from fuzzer.tolerance import Tolerance
 from robot_api import robots
 
-SUBCOMMANDS = ("replay",)
+SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage")
 
 
 class UsageError(Exception):
@@ -189,6 +194,147 @@ def replay_main(argv: Sequence[str]) -> int:
     return 1 if diverging else 0
 
 
+def triage_main(argv: Sequence[str]) -> int:
+    from fuzzer import triage
+
+    parser = argparse.ArgumentParser(prog="fuzz_diff.py triage", description="List divergence buckets.")
+    parser.add_argument("directory", type=Path)
+    parser.add_argument("--json", action="store_true", help="machine-readable output")
+    args = parser.parse_args(argv)
+    if not args.directory.is_dir():
+        raise UsageError(f"{args.directory}: not a folder")
+    buckets = triage.collect(args.directory)
+    if args.json:
+        reporting.out(triage.dumps(buckets))
+    else:
+        for line in triage.table(buckets):
+            reporting.out(line)
+    return 0
+
+
+def minimize_main(argv: Sequence[str]) -> int:
+    from fuzzer.artifacts import ArtifactStore, load_sidecar
+    from fuzzer.minimize import Minimizer, joints_that_matter
+    from fuzzer.session import Session
+    from fuzzer.testcase import TestCaseError, decode
+
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py minimize",
+        description="Shrink crash files to the simplest input with the same signature.",
+    )
+    parser.add_argument("paths", nargs="+", type=Path, help="crash files (with sidecars)")
+    parser.add_argument("--budget", type=int, default=2000, help="evaluations per file (default 2000)")
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=None,
+        help="folder for minimized files (default: next to each crash file)",
+    )
+    args = parser.parse_args(argv)
+    if args.budget < 1:
+        raise UsageError("--budget must be >= 1")
+    sessions: dict[Any, Any] = {}
+    for path in args.paths:
+        sidecar = load_sidecar(path) if path.is_file() else None
+        if sidecar is None or "signature" not in sidecar:
+            raise UsageError(f"{path}: not a crash file with a sidecar")
+        config = RunConfig.from_json(sidecar["config"])
+        if config not in sessions:
+            sessions[config] = Session.open(config)
+        session = sessions[config]
+        try:
+            case = decode(path.read_bytes())
+        except TestCaseError as exc:
+            raise UsageError(f"{path}: {exc}") from None
+        try:
+            shrunk = Minimizer(session, args.budget).minimize(case, sidecar["signature"]["key"])
+        except ValueError as exc:
+            reporting.verdict(str(path), f"not minimized: {exc}")
+            continue
+        data = shrunk.case.encode()
+        store = ArtifactStore(args.output or path.parent)
+        out = dict(
+            sidecar,
+            testcase=shrunk.case.to_json(),
+            minimized_from=path.name,
+            joints_that_matter=joints_that_matter(shrunk.case, session.reference.joint_names),
+            shrink={
+                "evaluations": shrunk.evaluations,
+                "accepted": shrunk.accepted,
+                "complete": shrunk.complete,
+            },
+        )
+        written = store.write(data, out)
+        minimized = written.with_name("minimized-" + written.name.split("-", 1)[1])
+        written.replace(minimized)
+        written.with_name(written.name + ".json").replace(minimized.with_name(minimized.name + ".json"))
+        reporting.verdict(
+            str(path),
+            f"minimized to {minimized}",
+            f"{len(path.read_bytes())} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
+            f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
+            + ("" if shrunk.complete else ", budget exhausted"),
+        )
+    return 0
+
+
+def report_main(argv: Sequence[str]) -> int:
+    from fuzzer.report import write_report
+
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py report", description="Write a self-contained HTML report of an artifacts folder."
+    )
+    parser.add_argument("directory", type=Path)
+    parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default DIR/report)")
+    args = parser.parse_args(argv)
+    if not args.directory.is_dir():
+        raise UsageError(f"{args.directory}: not a folder")
+    page = write_report(args.directory, args.output)
+    reporting.out(f"report: {page}")
+    return 0
+
+
+def promote_main(argv: Sequence[str]) -> int:
+    from fuzzer.regressions import SUITE, PromoteError, promote
+
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py promote", description="Add a crash file to the regression suite."
+    )
+    parser.add_argument("crash", type=Path)
+    parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
+    parser.add_argument("--note", default="", help="why it is kept")
+    parser.add_argument("--suite", type=Path, default=SUITE, help=f"suite folder (default {SUITE})")
+    args = parser.parse_args(argv)
+    if not args.crash.is_file():
+        raise UsageError(f"{args.crash}: no such file")
+    try:
+        done = promote(args.crash, args.fixed, args.note, args.suite)
+    except PromoteError as exc:
+        reporting.out(f"not promoted: {exc}")
+        return 1
+    reporting.out(f"promoted {done.path} (expect: {done.expect})")
+    return 0
+
+
+def coverage_main(argv: Sequence[str]) -> int:
+    from fuzzer.coverage_report import measure
+
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py coverage", description="Line and branch coverage of python_impl over a corpus."
+    )
+    parser.add_argument("corpus", nargs="+", type=Path)
+    _config_options(parser)
+    parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
+    args = parser.parse_args(argv)
+    for path in args.corpus:
+        if not path.exists():
+            raise UsageError(f"{path}: no such file or folder")
+    config, _ = _config(args)
+    reporting.out(measure(list(args.corpus), config, args.html).line())
+    return 0
+
+
 def campaign_main(argv: Sequence[str]) -> int:
     from fuzzer.campaign import CampaignOptions, run
 
@@ -224,7 +370,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         if argv and argv[0] in SUBCOMMANDS:
-            return replay_main(argv[1:])
+            handler = {
+                "replay": replay_main,
+                "triage": triage_main,
+                "minimize": minimize_main,
+                "report": report_main,
+                "promote": promote_main,
+                "coverage": coverage_main,
+            }[argv[0]]
+            return handler(argv[1:])
         flags, rest = _split(argv)
         if not flags:
             known, _ = _parser().parse_known_args(rest)

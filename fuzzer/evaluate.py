@@ -3,8 +3,8 @@
 ``Evaluator.evaluate`` filters the input (III.E), maps the message onto a call,
 runs it on both targets, asks the oracle, and confirms a divergence before it
 counts: the input is run a second time (nondeterminism gives ``flaky``), and
-an IK status divergence is re-run from a seed moved by 1e-9, where a target
-that changes its own answer makes it ``ill_conditioned``.
+an IK status divergence is re-run from seeds moved by 1e-9 (both ways) and 1e-7,
+where a target that changes its own answer makes it ``ill_conditioned``.
 """
 
 from __future__ import annotations
@@ -24,7 +24,9 @@ from fuzzer.tolerance import Tolerance
 ABSURD = 1e6
 """Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
 
-IK_PERTURBATION = 1e-9
+IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
+"""Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
+moves by the shift, alternating in sign for the last one)."""
 
 
 class Verdict:
@@ -116,8 +118,12 @@ class Evaluator:
             and comparison.kind is Kind.STATUS
             and {o.status for o in outcomes} <= {Status.OK, Status.FAILED}
         ):
-            moved = tuple(tuple(v + IK_PERTURBATION for v in r.home) for r in self.runners)
-            for first, second in zip(outcomes, self.run_both(call, moved), strict=True):
-                if first.status is not second.status:
-                    return replace(comparison, kind=Kind.ILL_CONDITIONED), outcomes
+            for i, shift in enumerate(IK_PERTURBATIONS):
+                moved = tuple(
+                    tuple(v + (shift if i < 2 or j % 2 == 0 else -shift) for j, v in enumerate(r.home))
+                    for r in self.runners
+                )
+                for first, second in zip(outcomes, self.run_both(call, moved), strict=True):
+                    if first.status is not second.status:
+                        return replace(comparison, kind=Kind.ILL_CONDITIONED), outcomes
         return comparison, outcomes

@@ -16,6 +16,7 @@ never raises: an exception there would hang Atheris.
 from __future__ import annotations
 
 import bisect
+import hashlib
 import random
 import time
 from collections import Counter, OrderedDict
@@ -25,11 +26,13 @@ from typing import Any
 
 from fuzzer import mutators
 from fuzzer.artifacts import ArtifactStore
+from fuzzer.divlog import CampaignLog, closer_to_command, near_zero_count
 from fuzzer.evaluate import Evaluation, Evaluator, Verdict
 from fuzzer.guidance import Features, input_features
 from fuzzer.mapping import FkCall, MoveCall
 from fuzzer.testcase import TestCase, TestCaseError, decode
 
+SNAPSHOT_SECONDS = 5.0
 POOL_SIZE = 64
 POOL_PARENT_CHANCE = 0.2
 DECODE_CACHE = 4096
@@ -52,6 +55,22 @@ class Stats:
     executed_by_strategy: Counter[str] = field(default_factory=Counter)
     signatures: dict[str, str] = field(default_factory=dict)
     max_difference: float = 0.0
+    near_zero: Counter[int] = field(default_factory=Counter)
+    """Fig. 7: evaluated test cases by how many joint values are close to zero."""
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "elapsed": self.elapsed,
+            "execs": self.execs,
+            "filtered": self.filtered,
+            "malformed": self.malformed,
+            "divergent": dict(self.divergent),
+            "by_strategy": dict(self.by_strategy),
+            "executed_by_strategy": dict(self.executed_by_strategy),
+            "signatures": len(self.signatures),
+            "max_difference": self.max_difference,
+            "near_zero": {str(k): v for k, v in sorted(self.near_zero.items())},
+        }
 
     @property
     def elapsed(self) -> float:
@@ -98,10 +117,13 @@ class Harness:
     upper: tuple[float, ...] = ()
     stop_on_divergence: bool = False
     on_exec: Callable[[], None] = lambda: None
+    log: CampaignLog | None = None
+    joint_names: tuple[str, ...] = ()
     stats: Stats = field(default_factory=Stats)
     pool: Pool = field(default_factory=Pool)
     _last: tuple[bytes, TestCase] | None = None
     _decoded: OrderedDict[bytes, TestCase] = field(default_factory=OrderedDict)
+    _next_snapshot: float = 0.0
 
     # -- TestOneInput ------------------------------------------------------------------------
 
@@ -121,7 +143,16 @@ class Harness:
             self.stats.malformed += 1
         else:
             self._record(case, data, evaluation)
+        if self.log is not None and not self.stats.execs & 255:
+            self.maybe_snapshot()
         self.on_exec()
+
+    def maybe_snapshot(self, force: bool = False) -> None:
+        """Append this process's counters to stats.jsonl (at most every SNAPSHOT_SECONDS)."""
+        now = time.monotonic()
+        if self.log is not None and (force or now >= self._next_snapshot):
+            self._next_snapshot = now + SNAPSHOT_SECONDS
+            self.log.snapshot(self.stats.to_json())
 
     def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:
         """(test case or None, whether it is known valid). Parents repeat: recent ones are cached."""
@@ -155,15 +186,19 @@ class Harness:
         self.features.hit(f"d:{cmp.kind}:{cmp.field}:{cmp.bucket}:{int(cmp.sign_flip)}")
         if cmp.joints:
             self.features.hit(f"j:{cmp.kind}:{cmp.field}:{','.join(map(str, cmp.joints))}")
+        values: tuple[float, ...] = ()
         if isinstance(ev.call, MoveCall | FkCall):
             values = ev.call.positions if isinstance(ev.call, MoveCall) else ev.call.joint_values
             self.features.hit_ids(input_features(values, self.lower, self.upper))
+            stats.near_zero[near_zero_count(values)] += 1
         self.pool.offer(ev.difference, data)
         if not cmp.divergent or ev.signature is None:
             return
         stats.divergent[str(cmp.kind)] += 1
         stats.by_strategy[case.strategy] += 1
         key = ev.signature.key
+        if self.log is not None:
+            self._log_divergence(case, data, ev, values)
         first = key not in stats.signatures and self.store.claim(key)
         if key not in stats.signatures:
             stats.signatures[key] = ""
@@ -175,6 +210,33 @@ class Harness:
             raise DivergenceFound(f"{cmp.kind} divergence on {cmp.field or 'status'}: signature {key}")
         if first:
             stats.signatures[key] = str(self.store.write(data, self.sidecar(case, data, ev)))
+
+    def _log_divergence(self, case: TestCase, data: bytes, ev: Evaluation, values: tuple[float, ...]) -> None:
+        a, b = ev.outcomes
+        command = None
+        if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == self.joint_names):
+            command = ev.call.positions
+        cmp = ev.comparison
+        assert self.log is not None and ev.signature is not None
+        self.log.divergence(
+            {
+                "sig": ev.signature.key,
+                "kind": str(cmp.kind),
+                "field": cmp.field,
+                "bucket": cmp.bucket,
+                "sign_flip": cmp.sign_flip,
+                "difference": cmp.difference,
+                "joints": list(cmp.joints),
+                "outcome_a": a.label,
+                "outcome_b": b.label,
+                "strategy": case.strategy,
+                "near_zero": near_zero_count(values) if values else None,
+                "closer": closer_to_command(
+                    command, a.values.get("joint_values", ()), b.values.get("joint_values", ())
+                ),
+                "sha1": hashlib.sha1(data).hexdigest(),
+            }
+        )
 
     # -- custom mutator / crossover ------------------------------------------------------------
 

@@ -34,16 +34,18 @@ def plan_trajectory(
     delta = []
     vs = math.inf
     accel = math.inf
+    moving = False  # not vs == inf: a subnormal distance makes vmax / d overflow to inf legitimately
     for lim, a, b in zip(limits, start, goal, strict=True):
         d = b - a
         if lim.type == JointType.CONTINUOUS:
             d = normalize_angle(d)
         delta.append(d)
         if abs(d) > 0.0:
+            moving = True
             vs = min(vs, lim.velocity * velocity_scaling / abs(d))
             accel = min(accel, ACCELERATION_LIMIT * acceleration_scaling / abs(d))
     goal_row = np.array(goal, dtype=np.float64).reshape(1, n)
-    if math.isinf(vs):
+    if not moving:
         zero = np.zeros((1, n))
         return RobotTrajectory(names, np.zeros(1), goal_row, zero, zero.copy())
 

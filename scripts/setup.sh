@@ -12,6 +12,7 @@ APT_PACKAGES=(
   libeigen3-dev liborocos-kdl-dev     # Eigen, Orocos KDL
   liburdfdom-dev libconsole-bridge-dev libexpat1-dev  # URDF parsing (urdfdom), XML guard
   ros-sensor-msgs ros-geometry-msgs   # real ROS .msg definitions (--msg-path, tests)
+  chromium                            # renders the HTML report headless (tests)
 )
 
 scripts/apt-ensure.sh "${APT_PACKAGES[@]}"

@@ -184,6 +184,19 @@ def test_scaling_that_underflows_fails_planning_cleanly(impl, setter: str) -> No
     assert g.go() is False
 
 
+def test_a_subnormal_move_is_still_a_move(impl) -> None:
+    """Found by the fuzzer: 3.0 / 5e-319 overflows to inf; the twin took inf for 'nothing moves'."""
+    g = group(impl)
+    g.set_max_acceleration_scaling_factor(5e-324)
+    g.set_joint_value_target([0.0, 0.0, 0.0, 0.0, 0.0, 5e-319])
+    with pytest.raises(PlanningError):  # 636 s at the scaled acceleration: more than 600 s
+        g.plan()
+    g.set_max_acceleration_scaling_factor(1.0)
+    traj = g.plan()  # both bounds overflow to inf: a zero-length profile, one sample, at the goal
+    assert traj.time_from_start[0] == 0.0 and traj.positions[-1][5] == 5e-319
+    assert g.go() is True and g.get_current_joint_values()[5] == 5e-319
+
+
 def test_execute_rejects_foreign_trajectories(impl) -> None:
     g = group(impl)
     traj = g.plan([0.5, 0.5, 0.5, 0.5, 0.5, 0.5])

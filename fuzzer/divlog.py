@@ -1,0 +1,89 @@
+"""Campaign logs in the artifacts folder, for triage and reports.
+
+Two append-only JSON Lines files, written by every campaign process (``-fork``
+and ``-jobs`` workers included):
+
+``divergences.jsonl``
+    One line per divergent execution (not only the first of its signature), so
+    triage can count and the report can reproduce the paper's Tables III and IV
+    and Figs. 6 and 8.
+``stats.jsonl``
+    A cumulative snapshot of each process's counters every few seconds and at
+    exit: executions over time and Fig. 7 (joints near zero per test case).
+
+Each line is one ``write`` to a file opened with O_APPEND, so lines from
+concurrent processes do not interleave and ``kill -9`` cannot tear one. A reader
+skips a line it cannot parse.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+DIVERGENCES = "divergences.jsonl"
+STATS = "stats.jsonl"
+NEAR_ZERO = 0.05
+"""A joint value counts as "close to zero" (the paper's Fig. 7) below this (rad or m)."""
+
+
+def append_line(path: Path, record: dict[str, Any]) -> None:
+    data = (json.dumps(record, separators=(",", ":")) + "\n").encode()
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        os.write(fd, data)
+    finally:
+        os.close(fd)
+
+
+def read_lines(path: Path) -> Iterator[dict[str, Any]]:
+    """Records of a JSON Lines file; unparsable lines are skipped."""
+    if not path.is_file():
+        return
+    with open(path, encoding="utf-8", errors="replace") as handle:
+        for line in handle:
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(record, dict):
+                yield record
+
+
+def near_zero_count(values: Sequence[float]) -> int:
+    """How many joint values of a test case are close to zero."""
+    return sum(1 for v in values if math.isfinite(v) and abs(v) < NEAR_ZERO)
+
+
+def closer_to_command(command: Sequence[float] | None, a: Sequence[float], b: Sequence[float]) -> str:
+    """The paper's Table IV: which final state is nearer the commanded joint values.
+
+    'a', 'b' or 'tie' (equal to 1e-12); 'n/a' without a full command.
+    """
+    if command is None or len(command) != len(a) or len(a) != len(b):
+        return "n/a"
+    da = math.fsum(abs(x - c) for x, c in zip(a, command, strict=True))
+    db = math.fsum(abs(x - c) for x, c in zip(b, command, strict=True))
+    if not (math.isfinite(da) and math.isfinite(db)) or abs(da - db) <= 1e-12:
+        return "tie"
+    return "a" if da < db else "b"
+
+
+class CampaignLog:
+    """The two logs of one campaign folder."""
+
+    def __init__(self, directory: Path) -> None:
+        self.divergences = directory / DIVERGENCES
+        self.stats = directory / STATS
+        self.pid = os.getpid()
+
+    def divergence(self, record: dict[str, Any]) -> None:
+        append_line(self.divergences, {"t": time.time(), "pid": self.pid, **record})
+
+    def snapshot(self, record: dict[str, Any]) -> None:
+        append_line(self.stats, {"t": time.time(), "pid": self.pid, **record})

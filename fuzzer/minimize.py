@@ -1,0 +1,266 @@
+"""Shrinking a divergent input to the simplest one with the same signature.
+
+Like Hypothesis' shrinker: a fixed sequence of passes, each proposing simpler
+candidates, keeping a candidate only when it still reproduces the *same*
+signature, until a whole round changes nothing (or the budget of evaluations
+runs out). Simpler means, in this order of passes:
+
+1. shorter arrays (fewer names, positions, velocities...);
+2. leaves set to their zero: 0, 0.0, '', false, time zero;
+3. floats replaced by integers, then by the fewest significant digits
+   (``3.141617`` -> ``3.1416``... as long as it still diverges the same way);
+4. floats and ints moved toward zero by halving;
+5. strings cut to shorter prefixes.
+
+Deterministic: no randomness, leaves visited in message order. The non-zero
+joint values that remain are the joints that matter.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, replace
+from typing import Any
+
+from fuzzer.evaluate import Verdict
+from fuzzer.session import Session
+from fuzzer.testcase import TestCase
+
+Loc = tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Shrunk:
+    """The result of minimizing one test case."""
+
+    case: TestCase
+    evaluations: int
+    accepted: int
+    complete: bool
+    """False when the budget ran out before a round changed nothing."""
+
+
+def _leaves(node: Any, loc: Loc = ()) -> Iterator[tuple[Loc, Any]]:
+    if isinstance(node, dict):
+        if set(node) == {"secs", "nsecs"}:
+            yield loc, node
+            return
+        for key, value in node.items():
+            yield from _leaves(value, (*loc, key))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _leaves(value, (*loc, i))
+    else:
+        yield loc, node
+
+
+def _arrays(node: Any, loc: Loc = ()) -> Iterator[Loc]:
+    if isinstance(node, dict):
+        for key, value in node.items():
+            yield from _arrays(value, (*loc, key))
+    elif isinstance(node, list):
+        yield loc
+        for i, value in enumerate(node):
+            yield from _arrays(value, (*loc, i))
+
+
+def _get(message: Any, loc: Loc) -> Any:
+    for step in loc:
+        message = message[step]
+    return message
+
+
+def _with(message: dict[str, Any], loc: Loc, value: Any) -> dict[str, Any]:
+    out = copy.deepcopy(message)
+    _get(out, loc[:-1])[loc[-1]] = value
+    return out
+
+
+def _zero(value: Any) -> Any:
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, int):
+        return 0
+    if isinstance(value, float):
+        return 0.0
+    if isinstance(value, str):
+        return ""
+    if isinstance(value, dict):
+        return {"secs": 0, "nsecs": 0}
+    return value
+
+
+def _simpler_floats(x: float) -> Iterator[float]:
+    """Integer, then fewer significant digits, shortest first."""
+    if not math.isfinite(x):
+        return
+    if abs(x) < 2**53:
+        yield float(math.trunc(x))
+    for digits in range(1, 17):
+        candidate = float(f"{x:.{digits}g}")
+        if candidate != x:
+            yield candidate
+
+
+def _toward_zero(x: Any) -> Iterator[Any]:
+    if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+        return
+    y = x
+    for _ in range(64):
+        y = y / 2 if isinstance(y, float) else int(y / 2)
+        if y == 0:
+            return
+        yield y
+
+
+def _simplicity(value: Any) -> tuple[int, float]:
+    """Lower is simpler: (length of its shortest repr, magnitude)."""
+    if isinstance(value, float):
+        return (len(repr(value)), abs(value) if math.isfinite(value) else math.inf)
+    if isinstance(value, int) and not isinstance(value, bool):
+        return (len(str(value)), abs(value))
+    return (0, 0.0)
+
+
+class Minimizer:
+    """Shrinks test cases under one session (targets, robot, op)."""
+
+    def __init__(self, session: Session, budget: int = 2000) -> None:
+        self.evaluator = session.evaluator()
+        self.budget = budget
+
+    def _key(self, case: TestCase) -> str | None:
+        ev = self.evaluator.evaluate(case)
+        if ev.verdict != Verdict.EVALUATED or ev.signature is None:
+            return None
+        key: str = ev.signature.key
+        return key
+
+    def minimize(self, case: TestCase, key: str | None = None) -> Shrunk:
+        """Shrink ``case``, keeping the signature ``key`` (default: its current one)."""
+        target = key if key is not None else self._key(case)
+        if target is None:
+            raise ValueError("the input does not diverge: nothing to minimize")
+        message = copy.deepcopy(case.message)
+        evaluations = accepted = 0
+
+        def holds(candidate: dict[str, Any]) -> bool:
+            nonlocal evaluations
+            evaluations += 1
+            return self._key(replace(case, message=candidate)) == target
+
+        passes: list[Callable[[dict[str, Any]], Iterator[Edit]]] = [
+            _shorter_arrays,
+            _zeros,
+            _simpler_numbers,
+            _halved,
+            _shorter_strings,
+        ]
+        complete = False
+        while evaluations < self.budget:
+            changed = exhausted = False
+            for shrink_pass in passes:
+                for edit in shrink_pass(message):
+                    if evaluations >= self.budget:
+                        exhausted = True
+                        break
+                    candidate = edit(message)  # applied to the message as it is now
+                    if candidate is not None and candidate != message and holds(candidate):
+                        message, changed = candidate, True
+                        accepted += 1
+            if not changed and not exhausted:  # a whole round without progress: done
+                complete = True
+                break
+        shrunk = replace(
+            case,
+            message=message,
+            origin="minimized",
+            lineage=(*case.lineage, "minimize")[-64:],
+            lineage_length=case.lineage_length + 1,
+        )
+        return Shrunk(shrunk, evaluations, accepted, complete)
+
+
+# -- passes: each yields edits; an edit maps the current message to a candidate (or None when its
+#    location no longer exists), so an accepted change is never undone by a later edit --------------
+
+Edit = Callable[[dict[str, Any]], "dict[str, Any] | None"]
+
+
+def _exists(message: Any, loc: Loc) -> bool:
+    try:
+        _get(message, loc)
+    except (KeyError, IndexError, TypeError):
+        return False
+    return True
+
+
+def _set_edit(loc: Loc, make: Callable[[Any], Any]) -> Edit:
+    def edit(message: dict[str, Any]) -> dict[str, Any] | None:
+        if not _exists(message, loc):
+            return None
+        value = make(_get(message, loc))
+        return None if value is None else _with(message, loc, value)
+
+    return edit
+
+
+def _without(array: Any, i: int) -> list[Any] | None:
+    return array[:i] + array[i + 1 :] if isinstance(array, list) and i < len(array) else None
+
+
+def _shorter_arrays(message: dict[str, Any]) -> Iterator[Edit]:
+    for loc in list(_arrays(message)):
+        yield _set_edit(loc, lambda a: [] if isinstance(a, list) and a else None)
+        for i in reversed(range(len(_get(message, loc)))):
+            yield _set_edit(loc, functools.partial(_without, i=i))
+
+
+def _zeros(message: dict[str, Any]) -> Iterator[Edit]:
+    for loc, _ in list(_leaves(message)):
+
+        def make(v: Any) -> Any:
+            z = _zero(v)
+            changes = z != v or (isinstance(v, float) and math.copysign(1, v) < 0)
+            return z if changes else None
+
+        yield _set_edit(loc, make)
+
+
+def _simpler_numbers(message: dict[str, Any]) -> Iterator[Edit]:
+    for loc, value in list(_leaves(message)):
+        if isinstance(value, float):
+            for rank in range(17):  # the integer, then 1..16 significant digits
+
+                def make(v: Any, rank: int = rank) -> Any:
+                    if not isinstance(v, float):
+                        return None
+                    options = list(_simpler_floats(v))
+                    if rank >= len(options) or not _simplicity(options[rank]) < _simplicity(v):
+                        return None
+                    return options[rank]
+
+                yield _set_edit(loc, make)
+
+
+def _halved(message: dict[str, Any]) -> Iterator[Edit]:
+    for loc, _ in list(_leaves(message)):
+        yield _set_edit(loc, lambda v: next(_toward_zero(v), None))
+
+
+def _shorter_strings(message: dict[str, Any]) -> Iterator[Edit]:
+    for loc, value in list(_leaves(message)):
+        if isinstance(value, str) and value:
+            yield _set_edit(loc, lambda v: v[: len(v) // 2] if isinstance(v, str) and v else None)
+            yield _set_edit(loc, lambda v: v[:-1] if isinstance(v, str) and v else None)
+
+
+def joints_that_matter(case: TestCase, joint_names: tuple[str, ...]) -> list[str]:
+    """After minimization: the joints whose values stayed non-zero."""
+    message = case.message
+    values = message.get("position", message.get("data", []))
+    names = message.get("name") or list(joint_names)
+    return [str(n) for n, v in zip(names, values, strict=False) if isinstance(v, float | int) and v != 0]

@@ -1,0 +1,77 @@
+"""The regression suite: crash files kept under ``tests/regressions/``, replayed by pytest.
+
+``promote`` copies a crash file and its sidecar into the suite and records what
+it must do from now on: ``diverge`` (a known divergence that must still
+reproduce with the same signature) or ``agree`` (a fixed one that must stay
+fixed). The expectation lives in the sidecar's ``regression`` entry.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fuzzer.artifacts import atomic_write, load_sidecar, sidecar_path
+from fuzzer.replay import Result, replay_file
+from fuzzer.session import RunConfig
+
+SUITE = Path(__file__).resolve().parents[1] / "tests" / "regressions"
+
+
+class PromoteError(ValueError):
+    """A file that cannot be promoted as asked."""
+
+
+@dataclass(frozen=True)
+class Promoted:
+    path: Path
+    expect: str
+
+
+def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE) -> Promoted:
+    """Check the file's current verdict against what is asked, then add it to the suite.
+
+    Raises
+    ------
+    PromoteError
+        No sidecar, or the verdict contradicts the expectation (``--fixed`` on a
+        file that still diverges, or a known divergence that no longer diverges).
+    """
+    sidecar = load_sidecar(crash)
+    if sidecar is None or "signature" not in sidecar:
+        raise PromoteError(f"{crash}: no sidecar; only divergence crash files can be promoted")
+    result = replay_file(crash, RunConfig(), {})
+    if fixed and result.result is not Result.AGREES:
+        raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
+    if not fixed and result.result is not Result.SAME:
+        raise PromoteError(f"{crash}: {result.result}; promote it with --fixed if it is fixed")
+    suite.mkdir(parents=True, exist_ok=True)
+    target = suite / crash.name
+    shutil.copyfile(crash, target)
+    entry: dict[str, Any] = dict(sidecar)
+    entry["regression"] = {
+        "expect": "agree" if fixed else "diverge",
+        "signature": sidecar["signature"]["key"],
+        "note": note,
+        "promoted": datetime.date.today().isoformat(),
+    }
+    atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
+    return Promoted(target, entry["regression"]["expect"])
+
+
+def suite_files(suite: Path = SUITE) -> list[Path]:
+    """Crash files of the suite that carry an expectation."""
+    if not suite.is_dir():
+        return []
+    out = []
+    for path in sorted(suite.iterdir()):
+        if path.name.endswith(".json") or not path.name.startswith(("crash-", "minimized-")):
+            continue
+        sidecar = load_sidecar(path)
+        if sidecar is not None and "regression" in sidecar:
+            out.append(path)
+    return out

@@ -1,0 +1,51 @@
+"""The regression suite: every promoted crash file still does what its sidecar expects.
+
+``diverge``: a known divergence reproduces with the same signature.
+``agree``: a fixed divergence stays fixed. Add files with
+``python fuzz_diff.py promote CRASH [--fixed] --note "..."``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from fuzzer.artifacts import load_sidecar
+from fuzzer.regressions import PromoteError, promote, suite_files
+from fuzzer.replay import Result, replay_file
+from fuzzer.session import RunConfig
+
+FILES = suite_files()
+
+
+def test_the_suite_is_not_empty() -> None:
+    assert FILES, "tests/regressions/ holds no promoted crash files"
+    expectations = {load_sidecar(p)["regression"]["expect"] for p in FILES}  # type: ignore[index]
+    assert expectations == {"agree", "diverge"}
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.name[:24] for p in FILES])
+def test_regression(path: Path) -> None:
+    sidecar = load_sidecar(path)
+    assert sidecar is not None
+    expect = sidecar["regression"]["expect"]
+    result = replay_file(path, RunConfig(), {})
+    if expect == "agree":
+        assert result.result is Result.AGREES, f"{path.name} diverges again: {result.detail}"
+    else:
+        assert result.result is Result.SAME, f"{path.name}: {result.result} {result.detail}"
+        assert result.evaluation is not None and result.evaluation.signature is not None
+        assert result.evaluation.signature.key == sidecar["regression"]["signature"]
+
+
+def test_promote_refuses_contradicting_claims(tmp_path: Path) -> None:
+    fixed = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "agree")  # type: ignore[index]
+    with pytest.raises(PromoteError, match="promote it with --fixed"):
+        promote(fixed, fixed=False, suite=tmp_path)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+    with pytest.raises(PromoteError, match="not fixed yet"):
+        promote(known, fixed=True, suite=tmp_path)
+    done = promote(known, fixed=False, note="copy", suite=tmp_path)
+    assert done.expect == "diverge" and (tmp_path / known.name).is_file()
+    assert load_sidecar(tmp_path / known.name)["regression"]["note"] == "copy"  # type: ignore[index]

@@ -1,0 +1,134 @@
+"""Triage (buckets), minimization and coverage of the twin."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fuzzer import triage
+from fuzzer.divlog import append_line
+from fuzzer.minimize import Minimizer, joints_that_matter
+from fuzzer.records import Signature
+from fuzzer.session import RunConfig, Session
+from fuzzer.testcase import TestCase
+
+ROOT = Path(__file__).resolve().parents[1]
+TIGHT = ("native", "tests.plugins.faults:tight_tolerance")
+
+
+def fake_crash(directory: Path, name: str, kind: str, bucket: int = -99, count: int = 1) -> str:
+    sig = Signature("move", "ok", "ok", kind, "joint_values", False, bucket, (1,))
+    (directory / name).write_bytes(b"{}")
+    (directory / f"{name}.json").write_text(json.dumps({"signature": sig.to_json(), "config": {}}))
+    for _ in range(count):
+        append_line(directory / "divergences.jsonl", {"sig": sig.key})
+    return sig.key
+
+
+def test_buckets_are_counted_and_ordered_by_severity(tmp_path: Path) -> None:
+    rep = fake_crash(tmp_path, "crash-aa", "representation", 0, count=50)
+    small = fake_crash(tmp_path, "crash-bb", "value", -6, count=3)
+    big = fake_crash(tmp_path, "crash-cc", "value", -1, count=1)
+    status = fake_crash(tmp_path, "crash-dd", "status", count=7)
+    (tmp_path / "crash-ee").write_bytes(b"native crash, no sidecar")
+    (tmp_path / "divergences.jsonl").open("a").write("not json\n")
+    buckets = triage.collect(tmp_path)
+    assert [b.key for b in buckets] == ["crash-ee", status, big, small, rep]
+    assert [b.count for b in buckets] == [1, 7, 1, 3, 50]
+    lines = triage.table(buckets)
+    assert lines[0].startswith("5 bucket(s), 62 divergent execution(s)")
+    assert triage.table([]) == ["no divergences"]
+    assert json.loads(triage.dumps(buckets))[1]["key"] == status
+
+
+def test_a_minimized_file_becomes_the_representative(tmp_path: Path) -> None:
+    key = fake_crash(tmp_path, "crash-aa", "status")
+    (tmp_path / "minimized-bb").write_bytes(b"{}")
+    (tmp_path / "minimized-bb.json").write_text((tmp_path / "crash-aa.json").read_text())
+    [bucket] = triage.collect(tmp_path)
+    assert bucket.key == key and bucket.best == tmp_path / "minimized-bb"
+
+
+@pytest.fixture(scope="module")
+def tight() -> Session:
+    return Session.open(RunConfig(targets=TIGHT))
+
+
+def divergent_case() -> TestCase:
+    message = {
+        "header": {"seq": 912, "stamp": {"secs": 77, "nsecs": 123456}, "frame_id": "link_3"},
+        "name": [],
+        "position": [3.1416 + 5.123456789e-5, 0.3333333, 1.25, -0.75, 2.5, -1.125],
+        "velocity": [0.9],
+        "effort": [0.5],
+    }
+    return TestCase("sensor_msgs/JointState", message, lineage=("comb3",), lineage_length=1)
+
+
+def test_minimize_keeps_the_signature_and_simplifies(tight: Session) -> None:
+    case = divergent_case()
+    key = tight.evaluator().evaluate(case).signature.key  # type: ignore[union-attr]
+    shrunk = Minimizer(tight).minimize(case)
+    assert shrunk.complete and shrunk.accepted > 0
+    m = shrunk.case.message
+    assert tight.evaluator().evaluate(shrunk.case).signature.key == key  # type: ignore[union-attr]
+    assert m["position"][1:] == [0.0] * 5 and m["velocity"] == [] and m["effort"] == []
+    assert m["header"] == {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+    assert len(repr(m["position"][0])) < len(repr(case.message["position"][0]))
+    assert 3.1416 + 1e-5 < m["position"][0] <= 3.1416 + 1e-4  # still in the band the fault mishandles
+    assert joints_that_matter(shrunk.case, tight.reference.joint_names) == ["joint_1"]
+    assert shrunk.case.lineage[-1] == "minimize"
+    assert Minimizer(tight).minimize(case).case == shrunk.case  # deterministic
+
+
+def test_minimize_refuses_an_agreeing_input() -> None:
+    session = Session.open(RunConfig())
+    with pytest.raises(ValueError, match="does not diverge"):
+        Minimizer(session).minimize(divergent_case())
+
+
+def test_minimize_respects_its_budget(tight: Session) -> None:
+    shrunk = Minimizer(tight, budget=5).minimize(divergent_case())
+    assert shrunk.evaluations <= 5 and not shrunk.complete
+
+
+def test_cli_triage_minimize_and_coverage(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+
+    def run(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, str(ROOT / "fuzz_diff.py"), *args],
+            cwd=ROOT,
+            text=True,
+            capture_output=True,
+            timeout=180,
+            check=False,
+        )
+
+    fuzz = run(
+        str(tmp_path / "corpus"),
+        "-runs=4000",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--targets=" + ",".join(TIGHT),
+        "--no-progress",
+    )
+    assert fuzz.returncode == 0, fuzz.stderr[-2000:]
+    listed = run("triage", str(artifacts))
+    assert listed.returncode == 0 and "bucket(s)" in listed.stdout
+    crash = next(p for p in artifacts.glob("crash-*") if not p.name.endswith(".json"))
+    shrunk = run("minimize", str(crash))
+    assert shrunk.returncode == 0 and "minimized to" in shrunk.stdout, shrunk.stderr[-2000:]
+    minimized = next(artifacts.glob("minimized-*[0-9a-f]"))
+    assert run(str(minimized)).stdout.count("still diverges (same signature)") == 1
+    assert str(minimized) in run("triage", str(artifacts)).stdout
+    cov = run("coverage", str(tmp_path / "corpus"), "--html", str(tmp_path / "html"))
+    assert cov.returncode == 0, cov.stderr[-2000:]
+    assert "python_impl coverage over" in cov.stdout and "branches" in cov.stdout
+    assert (tmp_path / "html" / "index.html").is_file()
+    bad = run("triage", str(tmp_path / "missing"))
+    assert bad.returncode == 2 and "not a folder" in bad.stderr
