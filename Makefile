@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.rrosfuzz-installed
 BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh
 
-.PHONY: setup run test lint native-cov fuzz-native
+.PHONY: setup run test lint native-cov fuzz-native bench bench-quick
 
 setup: $(STAMP)
 
@@ -21,8 +21,15 @@ run: setup
 test: setup
 	$(PY) -m pytest -q
 
+## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds.
+bench: setup
+	$(PY) -m benchmarks.bench_zoo --mode full --write-md
+
+bench-quick: setup
+	$(PY) -m benchmarks.bench_zoo --mode quick
+
 lint: setup
-	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer
+	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer benchmarks
 
 ## Native coverage: the C++ module built by clang with libFuzzer's edge counters and
 ## AddressSanitizer, run under Atheris' preload (docs/engine.md, "Instrumentation").

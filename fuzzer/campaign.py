@@ -46,6 +46,7 @@ class CampaignOptions:
     progress: bool
     progress_interval: float
     dictionary_file: str | None
+    mutator: str = "rrosfuzz"
 
 
 def instrument(config: RunConfig) -> None:
@@ -268,9 +269,12 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     argv = libfuzzer_argv(options)
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
-    atheris.Setup(
-        argv, harness.test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover
-    )
+    if options.mutator == "libfuzzer":  # baseline: libFuzzer's own byte-level mutations of the JSON
+        atheris.Setup(argv, harness.test_one_input)
+    else:
+        atheris.Setup(
+            argv, harness.test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover
+        )
     atheris.Fuzz()
     return 0
 

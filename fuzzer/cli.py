@@ -19,13 +19,14 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
 from fuzzer.mapping import DEFAULT_MSG_TYPE, OPS
 from fuzzer.session import ConfigError, RunConfig
-from fuzzer.tolerance import Tolerance
+from fuzzer.tolerance import Tolerance, default_tolerance
 from robot_api import robots
 
 SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage")
@@ -112,6 +113,13 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the first divergence is a libFuzzer crash (exit 77)",
     )
+    parser.add_argument(
+        "--mutator",
+        choices=("rrosfuzz", "libfuzzer"),
+        default="rrosfuzz",
+        help="rrosfuzz: the structured mutators (default); libfuzzer: libFuzzer's own byte "
+        "mutator only (a baseline)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no live progress lines")
     parser.add_argument("--progress-interval", type=float, default=5.0, help="seconds between progress lines")
     return parser
@@ -155,13 +163,26 @@ def _config(args: argparse.Namespace, *, overrides_only: bool = False) -> tuple[
         given["msg_path"] = tuple(args.msg_path)
     if args.no_filter:
         given["filtering"] = False
-    return RunConfig(**given), given
+    config = RunConfig(**given)
+    if "tolerance" not in given:
+        config = replace(config, tolerance=default_tolerance(config.op))
+    return config, given
 
 
 def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
     """Our options as --name=value tokens, for libFuzzer's child processes."""
     out = []
-    for name in ("robot", "tip_link", "op", "targets", "tolerance", "msg_type", "seed", "progress_interval"):
+    for name in (
+        "robot",
+        "tip_link",
+        "op",
+        "targets",
+        "tolerance",
+        "msg_type",
+        "seed",
+        "progress_interval",
+        "mutator",
+    ):
         value = getattr(args, name)
         if value is not None:
             out.append(f"--{name.replace('_', '-')}={value}")
@@ -362,6 +383,7 @@ def campaign_main(argv: Sequence[str]) -> int:
         progress=not args.no_progress,
         progress_interval=args.progress_interval,
         dictionary_file=dictionary,
+        mutator=args.mutator,
     )
     return run(config, options)
 

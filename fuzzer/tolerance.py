@@ -43,3 +43,10 @@ def _positive(raw: str) -> float:
     if not (math.isfinite(value) and value > 0.0):
         raise ValueError(f"tolerance {raw!r} must be a positive finite number")
     return value
+
+
+def default_tolerance(op: str) -> Tolerance:
+    """1e-6 (m and rad), inside the paper's 1e-4..1e-6; 1e-5 for IK, whose converged
+    answers may each sit up to sqrt(3) * IK_EPS (1.7e-6) from the target, so two
+    correct answers can differ by 3.5e-6."""
+    return Tolerance(1e-5, 1e-5) if op == "ik" else Tolerance()

@@ -98,7 +98,11 @@ def to_pose(pose: Any) -> tuple[list[float], list[float]]:
         raise InvalidInputError("pose position is not finite", ErrorCode.NON_FINITE)
     if not all(math.isfinite(v) for v in q):
         raise InvalidInputError("pose orientation is not finite", ErrorCode.NON_FINITE)
-    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    if not norm >= QUATERNION_NORM_EPS:
+    scale = max(abs(v) for v in q)  # scaled first: squaring 1e154 would overflow the norm to inf
+    scaled = [v / scale for v in q] if scale > 0.0 else [0.0] * 4
+    unit = math.sqrt(
+        scaled[0] * scaled[0] + scaled[1] * scaled[1] + scaled[2] * scaled[2] + scaled[3] * scaled[3]
+    )
+    if not scale * unit >= QUATERNION_NORM_EPS:
         raise bad("pose orientation", "quaternion has (near) zero norm")
-    return p, [v / norm for v in q]
+    return p, [v / unit for v in scaled]

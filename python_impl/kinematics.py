@@ -109,7 +109,15 @@ def ik(
     """Newton-Raphson IK of link ``link``; returns (converged, q, position error, orientation error).
 
     ``seed`` is already clamped into the limits; variables from ``nvars`` on keep their seed values.
+    A non-finite iterate (an absurd target) ends as not converged, with the seed's values.
     """
+    with np.errstate(all="ignore"):  # absurd targets overflow; handled below, not warned about
+        return _ik(chain, target, seed, link, nvars)
+
+
+def _ik(
+    chain: Chain, target: Array, seed: list[float], link: int, nvars: int
+) -> tuple[bool, list[float], float, float]:
     lower = np.array([lim.lower for lim in chain.limits[:nvars]])
     upper = np.array([lim.upper for lim in chain.limits[:nvars]])
     q = np.array(seed, dtype=np.float64)
@@ -117,13 +125,20 @@ def ik(
     if nvars == 0:
         converged = is_small(error_twist(fk(chain, q, link), target))
     else:
+        start = q.copy()
         for _ in range(IK_MAX_ITERATIONS):
             twist = error_twist(fk(chain, q, link), target)
             if is_small(twist):
                 converged = True
                 break
-            q[:nvars] += pinv_step(jacobian(chain, q, link, nvars), twist)
+            jac = jacobian(chain, q, link, nvars)
+            if not (np.isfinite(twist).all() and np.isfinite(jac).all()):
+                q = start  # a non-finite iterate (absurd target): keep the clamped seed
+                break
+            q[:nvars] += pinv_step(jac, twist)
             q[:nvars] = np.minimum(np.maximum(q[:nvars], lower), upper)
+        if not np.isfinite(q).all():
+            q, converged = start, False
     values = q.tolist()
     for i, lim in enumerate(chain.limits[:nvars]):
         if lim.type == "continuous":

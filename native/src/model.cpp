@@ -408,8 +408,14 @@ IkAnswer Model::ik(const KDL::Frame& target, const std::vector<double>& seed, in
     for (unsigned j = 0; j < s.nvars; ++j) q_init(j) = q[j];
     const int rc = s.pos->CartToJnt(q_init, target, q_out);
     status = rc == KDL::SolverI::E_NOERROR ? IkStatus::kSuccess : IkStatus::kNoSolution;
-    for (unsigned j = 0; j < s.nvars; ++j) {
-      q[j] = variables_[j].kind == JointKind::kContinuous ? normalize_angle(q_out(j)) : q_out(j);
+    bool finite = true;
+    for (unsigned j = 0; j < s.nvars; ++j) finite = finite && std::isfinite(q_out(j));
+    if (!finite) {
+      status = IkStatus::kNoSolution;  // a non-finite iterate (absurd target): keep the clamped seed
+    } else {
+      for (unsigned j = 0; j < s.nvars; ++j) {
+        q[j] = variables_[j].kind == JointKind::kContinuous ? normalize_angle(q_out(j)) : q_out(j);
+      }
     }
   }
   const KDL::Frame reached = fk(q, link);

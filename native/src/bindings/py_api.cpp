@@ -1,5 +1,6 @@
 #include "py_api.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "../constants.hpp"
@@ -129,9 +130,13 @@ KDL::Frame to_frame(py::handle pose) {
   for (double v : q) {
     if (!std::isfinite(v)) fail(ErrorCode::kNonFinite, "pose orientation is not finite");
   }
-  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (!(norm >= kQuaternionNormEps)) bad("pose orientation", "quaternion has (near) zero norm");
-  return KDL::Frame(KDL::Rotation::Quaternion(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm),
+  // Scaled by the largest component first: squaring 1e154 would overflow the norm to inf.
+  const double scale = std::max({std::fabs(q[0]), std::fabs(q[1]), std::fabs(q[2]), std::fabs(q[3])});
+  const double x = scale > 0.0 ? q[0] / scale : 0.0, y = scale > 0.0 ? q[1] / scale : 0.0;
+  const double z = scale > 0.0 ? q[2] / scale : 0.0, w = scale > 0.0 ? q[3] / scale : 0.0;
+  const double unit = std::sqrt(x * x + y * y + z * z + w * w);
+  if (!(scale * unit >= kQuaternionNormEps)) bad("pose orientation", "quaternion has (near) zero norm");
+  return KDL::Frame(KDL::Rotation::Quaternion(x / unit, y / unit, z / unit, w / unit),
                     KDL::Vector(p[0], p[1], p[2]));
 }
 

@@ -1,0 +1,146 @@
+"""Baseline engines without libFuzzer, for the bug-finding comparison.
+
+    python -m benchmarks.baselines {paper,hypothesis,uniform} CORPUS --seconds S --seed N
+        [--robot R] [--tip-link L] [--op OP] [--targets A,B] --artifacts DIR
+
+* ``paper``: the paper's loop without coverage: Hypothesis seeds, the paper's
+  three mutation strategies and four combinations (Table II), parents chosen by
+  difference priority (Algorithm 3: the highest-difference inputs, rank
+  weighted) half of the time, else a seed.
+* ``hypothesis``: Hypothesis generation only (Table I strategies with the
+  engine's robot-aware hints), batch after batch, never mutating.
+* ``uniform``: uniform random joint values inside the limits (continuous joints
+  in (-pi, pi]); for IK, the pose of a uniform random configuration.
+
+Each evaluates inputs exactly like the engine (the same ``Harness.test_one_input``:
+filtering, oracle, confirmation, crash files, ``divergences.jsonl``/``stats.jsonl``),
+only without libFuzzer and without coverage features, and prints the same
+summary line, so ``benchmarks/bench_zoo.py`` reads every engine the same way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import random
+import time
+from pathlib import Path
+
+from fuzzer import campaign, mutators, reporting
+from fuzzer.artifacts import ArtifactStore
+from fuzzer.divlog import CampaignLog
+from fuzzer.guidance import Features
+from fuzzer.harness import Harness
+from fuzzer.session import RunConfig, Session, versions
+from fuzzer.testcase import TestCase
+from fuzzer.tolerance import default_tolerance
+
+ENGINES = ("paper", "hypothesis", "uniform")
+
+
+def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int) -> Harness:
+    ctx = mutators.MutationContext(
+        rng=random.Random(seed),
+        field_types=campaign.field_types(session, session.config.message_type),
+        interesting_floats=tuple(campaign.interesting_values(session)),
+    )
+    recorded, digest = versions(), session.robot_digest()
+    return Harness(
+        evaluator=session.evaluator(),
+        store=ArtifactStore(artifacts),
+        features=Features(enabled=False),
+        context=ctx,
+        sidecar=lambda c, d, e: campaign.build_sidecar(session, c, d, e, recorded, digest),
+        seeds=seeds,
+        log=CampaignLog(artifacts),
+        joint_names=tuple(session.reference.joint_names),
+    )
+
+
+def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
+    q = []
+    for lim in session.reference.joint_limits:
+        lo = -math.pi if math.isinf(lim.lower) else lim.lower
+        hi = math.pi if math.isinf(lim.upper) else lim.upper
+        q.append(rng.uniform(lo, hi))
+    header = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+    if session.config.op == "ik":
+        pose = session.reference.forward_kinematics(q)
+        message = {
+            "header": header,
+            "pose": {
+                "position": dict(zip("xyz", pose.position, strict=True)),
+                "orientation": dict(zip("xyzw", pose.orientation, strict=True)),
+            },
+        }
+    else:
+        message = {"header": header, "name": [], "position": q, "velocity": [], "effort": []}
+    return TestCase(session.config.message_type, message, sequence, "uniform")
+
+
+def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: int) -> Harness:
+    session = Session.open(config)
+    rng = random.Random(seed)
+    seeds = campaign.make_seeds(session, 32, seed)
+    harness = _harness(session, artifacts, seeds, seed)
+    deadline = time.monotonic() + seconds
+    if engine == "paper":
+        for case in seeds:
+            harness.test_one_input(case.encode())
+        while time.monotonic() < deadline:
+            preferred = harness.pool.pick(rng) if rng.random() < 0.5 else None
+            parent = harness._decode(preferred)[0] if preferred else None
+            parent = parent or rng.choice(seeds)
+            harness.context.rng = rng
+            message, name = mutators.mutate(
+                parent.message, harness.context, rng.choice(mutators.PAPER_STRATEGIES)
+            )
+            if name in mutators.PAPER_STRATEGIES:
+                harness.test_one_input(parent.child(message, name).encode())
+    elif engine == "hypothesis":
+        batch = 0
+        while time.monotonic() < deadline:
+            for case in campaign.make_seeds(session, 128, seed * 100_003 + batch):
+                harness.test_one_input(case.encode())
+                if time.monotonic() >= deadline:
+                    break
+            batch += 1
+    elif engine == "uniform":
+        n = 0
+        while time.monotonic() < deadline:
+            harness.test_one_input(_uniform(session, rng, n).encode())
+            n += 1
+    else:
+        raise ValueError(f"unknown engine {engine!r}")
+    harness.maybe_snapshot(force=True)
+    return harness
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("engine", choices=ENGINES)
+    parser.add_argument("--seconds", type=float, required=True)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--artifacts", type=Path, required=True)
+    parser.add_argument("--robot", default="probot_anno")
+    parser.add_argument("--tip-link", default=None)
+    parser.add_argument("--op", default="move", choices=("move", "fk", "ik"))
+    parser.add_argument("--targets", default="native,python")
+    args = parser.parse_args()
+    a, b = args.targets.split(",")
+    config = RunConfig(
+        op=args.op,
+        robot=args.robot,
+        tip_link=args.tip_link,
+        targets=(a, b),
+        tolerance=default_tolerance(args.op),
+    )
+    args.artifacts.mkdir(parents=True, exist_ok=True)
+    harness = run(args.engine, config, args.artifacts, args.seconds, args.seed)
+    reporting.summary(harness.stats, 0, str(args.artifacts), [], [])
+
+
+if __name__ == "__main__":
+    main()

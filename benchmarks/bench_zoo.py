@@ -1,0 +1,336 @@
+"""Bug-finding power: every engine against every zoo bug, on the same budget.
+
+    .venv/bin/python -m benchmarks.bench_zoo --mode quick     # a few bugs, 1 seed, short budget
+    .venv/bin/python -m benchmarks.bench_zoo --mode full      # all bugs + control, 5 seeds
+
+Engines, each a subprocess started the same way (the clock starts at launch):
+
+* ``full``: ``fuzz_diff.py``, the whole engine;
+* ``libfuzzer``: ``fuzz_diff.py --mutator=libfuzzer`` (Atheris, libFuzzer's own mutator only);
+* ``paper``, ``hypothesis``, ``uniform``: ``benchmarks/baselines.py``.
+
+Per run: time to first detection (the first logged divergence that is not
+``ill_conditioned`` or ``flaky``), unique signatures, and exec/s. Results go to
+``benchmarks/results/zoo-<mode>.json`` and a plot ``zoo-<mode>.png``; with
+``--write-md`` the tables replace the marked section of BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from benchmarks.zoo import BY_NAME, CONTROL, ZOO, Bug
+from fuzzer.divlog import DIVERGENCES, STATS, read_lines
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+ENGINES = ("full", "libfuzzer", "paper", "hypothesis", "uniform")
+NOT_DETECTIONS = {"ill_conditioned", "flaky"}
+@dataclass(frozen=True)
+class Mode:
+    bugs: tuple[str, ...]
+    seeds: int
+    budget: float  # seconds per run
+
+
+MODES = {
+    "quick": Mode(bugs=("silent_clamp", "off_by_tolerance", "wrap_positive"), seeds=1, budget=8.0),
+    "full": Mode(bugs=tuple(b.name for b in (*ZOO, CONTROL)), seeds=5, budget=20.0),
+}
+MARK_BEGIN, MARK_END = "<!-- bench_zoo:begin -->", "<!-- bench_zoo:end -->"
+
+
+@dataclass(frozen=True)
+class Run:
+    bug: str
+    engine: str
+    seed: int
+    budget: float
+    detected_at: float | None
+    signatures: int
+    executions: int
+    elapsed: float
+    op: str
+    returncode: int
+
+
+def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
+    artifacts, corpus = workdir / "artifacts", workdir / "corpus"
+    common = [f"--robot={bug.robot}", f"--op={bug.op}", f"--targets=native,{bug.target}"]
+    if bug.tip_link:
+        common.append(f"--tip-link={bug.tip_link}")
+    if engine in ("full", "libfuzzer"):
+        cmd = [
+            sys.executable,
+            str(ROOT / "fuzz_diff.py"),
+            str(corpus),
+            f"-max_total_time={int(budget)}",
+            f"-seed={seed}",
+            f"--artifacts={artifacts}",
+            "--no-progress",
+            *common,
+        ]
+        return [*cmd, "--mutator=libfuzzer"] if engine == "libfuzzer" else cmd
+    return [
+        sys.executable,
+        "-m",
+        "benchmarks.baselines",
+        engine,
+        f"--seconds={budget}",
+        f"--seed={seed}",
+        f"--artifacts={artifacts}",
+        *common,
+    ]
+
+
+def run_one(bug: Bug, engine: str, seed: int, budget: float) -> Run:
+    with tempfile.TemporaryDirectory(prefix="rrosfuzz-bench-") as tmp:
+        workdir = Path(tmp)
+        started = time.time()
+        done = subprocess.run(
+            command(bug, engine, seed, budget, workdir),
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=budget + 180,
+            check=False,
+            env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        )
+        artifacts = workdir / "artifacts"
+        hits = [r for r in read_lines(artifacts / DIVERGENCES) if r.get("kind") not in NOT_DETECTIONS]
+        first = min((float(r["t"]) - started for r in hits), default=None)
+        last: dict[Any, dict[str, Any]] = {}
+        for record in read_lines(artifacts / STATS):
+            last[record.get("pid")] = record
+        executions = sum(int(r.get("execs", 0)) for r in last.values())
+        elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
+    return Run(
+        bug.name,
+        engine,
+        seed,
+        budget,
+        first,
+        len({r["sig"] for r in hits}),
+        executions,
+        elapsed or budget,
+        bug.op,
+        done.returncode,
+    )
+
+
+def summarize(runs: list[Run], engines: tuple[str, ...], bugs: tuple[str, ...]) -> dict[str, Any]:
+    cells: dict[str, dict[str, Any]] = {}
+    for bug in bugs:
+        for engine in engines:
+            mine = [r for r in runs if r.bug == bug and r.engine == engine]
+            if not mine:
+                continue
+            times = sorted(r.detected_at if r.detected_at is not None else float("inf") for r in mine)
+            median = statistics.median(times)
+            cells[f"{bug}/{engine}"] = {
+                "detected": sum(r.detected_at is not None for r in mine),
+                "runs": len(mine),
+                "median_ttd": None if median == float("inf") else median,
+                "median_signatures": statistics.median(r.signatures for r in mine),
+                "median_exec_per_s": statistics.median(r.executions / r.elapsed for r in mine),
+            }
+    return cells
+
+
+def _fmt_ttd(cell: dict[str, Any], budget: float) -> str:
+    ttd = "-" if cell["median_ttd"] is None else f"{cell['median_ttd']:.1f}"
+    if cell["median_ttd"] is None and cell["detected"]:
+        ttd = f">{budget:.0f}"
+    return f"{ttd} ({cell['detected']}/{cell['runs']})"
+
+
+MARGIN, MARGIN_S = 0.10, 0.25
+
+
+def compare_times(mine: float, other: float) -> str:
+    """'faster', 'slower' or 'tie' (not found by either, or within the margins)."""
+    if mine == other:
+        return "tie"
+    if other == float("inf"):
+        return "faster"
+    if mine == float("inf"):
+        return "slower"
+    if abs(mine - other) <= max(MARGIN * min(mine, other), MARGIN_S):
+        return "tie"
+    return "faster" if mine < other else "slower"
+
+
+def markdown(result: dict[str, Any]) -> str:
+    engines, bugs, budget = result["engines"], result["bugs"], result["budget"]
+    cells = result["cells"]
+    lines = [
+        f"Mode `{result['mode']}`: {len(bugs)} bugs x {len(engines)} engines x {result['seeds']} seed(s), "
+        f"{budget:.0f} s each, {result['jobs']} runs at a time on {result['cpus']} CPUs "
+        f"({result['machine']}). Command: `{result['command']}`.",
+        "",
+        "Median time to first detection in seconds from launch (startup included), and runs that detected it "
+        "(`-`: not detected within the budget by at least half the runs).",
+        "",
+        "| bug | op | " + " | ".join(engines) + " |",
+        "|---|---|" + "---|" * len(engines),
+    ]
+    verdicts = {e: {"faster": 0, "tie": 0, "slower": 0} for e in engines if e != "full"}
+    comparable = 0
+    for bug in bugs:
+        row = [cells.get(f"{bug}/{e}") for e in engines]
+        op = BY_NAME[bug].op
+        lines.append(f"| {bug} | {op} | " + " | ".join(_fmt_ttd(c, budget) if c else "" for c in row) + " |")
+        full = cells.get(f"{bug}/full")
+        if bug == CONTROL.name or not full:
+            continue
+        comparable += 1
+        full_t = full["median_ttd"] if full["median_ttd"] is not None else float("inf")
+        for e, tally in verdicts.items():
+            other = cells.get(f"{bug}/{e}")
+            other_t = other["median_ttd"] if other and other["median_ttd"] is not None else float("inf")
+            tally[compare_times(full_t, other_t)] += 1
+    lines += [
+        "",
+        f"The full engine against each baseline over the {comparable} bugs (faster / tie / slower; "
+        f"a difference counts when it is over {MARGIN:.0%} and over {MARGIN_S} s):",
+        "",
+    ]
+    lines += [
+        f"- vs {e}: {t['faster']} faster, {t['tie']} tie, {t['slower']} slower" for e, t in verdicts.items()
+    ]
+    lines.append("")
+    lines += [
+        "Median unique signatures found within the budget:",
+        "",
+        "| bug | " + " | ".join(engines) + " |",
+        "|---|" + "---|" * len(engines),
+    ]
+    for bug in bugs:
+        row = [cells.get(f"{bug}/{e}") for e in engines]
+        lines.append(
+            f"| {bug} | " + " | ".join(f"{c['median_signatures']:g}" if c else "" for c in row) + " |"
+        )
+    lines += [
+        "",
+        "Throughput (median exec/s over every run of that op):",
+        "",
+        "| op | " + " | ".join(engines) + " |",
+        "|---|" + "---|" * len(engines),
+    ]
+    for op in ("fk", "move", "ik"):
+        values = []
+        for e in engines:
+            rates = [
+                c["median_exec_per_s"]
+                for k, c in cells.items()
+                if k.endswith(f"/{e}") and BY_NAME[k.split("/")[0]].op == op
+            ]
+            values.append(f"{statistics.median(rates):,.0f}" if rates else "")
+        lines.append(f"| {op} | " + " | ".join(values) + " |")
+    return "\n".join(lines)
+
+
+def plot(result: dict[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    engines, bugs, budget, cells = result["engines"], result["bugs"], result["budget"], result["cells"]
+    bugs = [b for b in bugs if b != CONTROL.name]
+    fig = Figure(figsize=(10, 0.45 * len(bugs) + 1.8))
+    ax = fig.add_subplot()
+    height = 0.8 / len(engines)
+    for i, engine in enumerate(engines):
+        ys, xs = [], []
+        for j, bug in enumerate(bugs):
+            c = cells.get(f"{bug}/{engine}")
+            ttd = c["median_ttd"] if c and c["median_ttd"] is not None else budget * 1.5
+            ys.append(j + i * height)
+            xs.append(ttd)
+        ax.barh(ys, xs, height=height, label=engine)
+    ax.axvline(budget, color="black", linestyle="--", linewidth=1)
+    ax.set_yticks([j + 0.4 - height / 2 for j in range(len(bugs))], bugs)
+    ax.set_xscale("log")
+    ax.set_xlabel(
+        f"median time to first detection (s, log); bars past the dashed line: not found in {budget:.0f} s"
+    )
+    ax.invert_yaxis()
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def write_markdown(text: str, path: Path = ROOT / "BENCHMARKS.md") -> None:
+    content = path.read_text(encoding="utf-8")
+    block = f"{MARK_BEGIN}\n{text}\n{MARK_END}"
+    if MARK_BEGIN in content:
+        head, rest = content.split(MARK_BEGIN, 1)
+        content = head + block + rest.split(MARK_END, 1)[1]
+    else:
+        content = content.rstrip() + "\n\n## Bug-finding power (the bug zoo)\n\n" + block + "\n"
+    path.write_text(content, encoding="utf-8")
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--mode", choices=MODES, default="quick")
+    parser.add_argument("--bugs", nargs="+", default=None)
+    parser.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
+    parser.add_argument("--seeds", type=int, default=None)
+    parser.add_argument("--budget", type=float, default=None)
+    parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
+    parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
+    args = parser.parse_args(argv)
+    mode = MODES[args.mode]
+    bugs = tuple(args.bugs or mode.bugs)
+    unknown = [b for b in bugs if b not in BY_NAME]
+    if unknown:
+        parser.error(f"unknown bugs: {unknown}")
+    seeds = args.seeds or mode.seeds
+    budget = args.budget or mode.budget
+    engines = tuple(args.engines)
+    jobs = [(BY_NAME[b], e, s) for b in bugs for e in engines for s in range(1, seeds + 1)]
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], budget), jobs))
+    result = {
+        "mode": args.mode,
+        "bugs": list(bugs),
+        "engines": list(engines),
+        "seeds": seeds,
+        "budget": budget,
+        "jobs": args.jobs,
+        "cpus": os.cpu_count(),
+        "machine": platform.machine(),
+        "command": "python -m benchmarks.bench_zoo " + " ".join(argv if argv is not None else sys.argv[1:]),
+        "runs": [asdict(r) for r in runs],
+        "cells": summarize(runs, engines, bugs),
+    }
+    out = args.out or RESULTS / f"zoo-{args.mode}.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=1), encoding="utf-8")
+    plot(result, out.with_suffix(".png"))
+    text = markdown(result)
+    print(text)
+    if args.write_md:
+        write_markdown(text)
+    return result
+
+
+if __name__ == "__main__":
+    main()
