@@ -19,7 +19,7 @@ run: setup
 
 ## The test suite (what CI runs).
 test: setup
-	$(PY) -m pytest -q
+	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds.
 bench: setup
@@ -29,7 +29,7 @@ bench-quick: setup
 	$(PY) -m benchmarks.bench_zoo --mode quick
 
 lint: setup
-	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer benchmarks
+	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks
 
 ## Native coverage: the C++ module built by clang with libFuzzer's edge counters and
 ## AddressSanitizer, run under Atheris' preload (docs/engine.md, "Instrumentation").

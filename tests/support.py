@@ -102,3 +102,31 @@ class PinocchioReference:
 
 def pose_matrices(poses: Iterator[Any]) -> np.ndarray:
     return np.array([p.matrix for p in poses])
+
+
+REQUIRE_ADAPTERS = "RROSFUZZ_REQUIRE_ADAPTERS"
+
+
+def skip_or_fail(reason: str) -> None:
+    """Skip a test whose optional library is missing, or fail under ``RROSFUZZ_REQUIRE_ADAPTERS=1``.
+
+    ``make test`` (and so CI) installs the ``adapters`` extra and sets the
+    variable, so a missing library there is a failure, not a silent skip.
+    """
+    import os
+
+    import pytest
+
+    if os.environ.get(REQUIRE_ADAPTERS) == "1":
+        pytest.fail(f"{reason} ({REQUIRE_ADAPTERS}=1: optional libraries are required)")
+    pytest.skip(reason)
+
+
+def import_or_skip(module: str) -> Any:
+    """``pytest.importorskip``, but a failure under ``RROSFUZZ_REQUIRE_ADAPTERS=1``."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        skip_or_fail(f"{module} is not installed: {exc}")

@@ -1,0 +1,306 @@
+"""The API around IKPy (``ikpy``): FK and IK from IKPy, everything else from the contract.
+
+Use it as ``--targets native,adapters.ikpy_adapter:api``.
+
+What comes from where
+---------------------
+* **From IKPy**: URDF reading of the chain's joints (``ikpy.urdf.URDF.get_urdf_parameters``,
+  the parser behind ``ikpy.chain.Chain.from_urdf_file``), the ``ikpy.chain.Chain``,
+  forward kinematics (``Chain.forward_kinematics``) and inverse kinematics
+  (``Chain.inverse_kinematics_frame``, SciPy least squares within IKPy's bounds).
+* **From the contract** (the twin's non-kinematic code, ``python_impl``): URDF
+  validation and errors, chain selection (root, default tip), joint names and
+  order, limits, ``home_values``, ``link_names``, argument checks, and
+  ``MoveGroup`` (planning is in joint space; its poses come from IKPy's FK).
+
+Conventions normalized (and nothing else)
+-----------------------------------------
+============================ ================================================================
+IKPy convention              what the adapter does
+============================ ================================================================
+orientations are 4x4         the rotation block becomes the contract's quaternion (x, y, z, w),
+matrices, no quaternion      canonical sign (``w >= 0``), by the twin's matrix-to-quaternion
+                             conversion; IK targets go in as 4x4 matrices built from (x, y, z, w)
+full joint vector: one entry the adapter scatters the contract's variables into IKPy's active
+per IKPy "link" = per URDF   entries (``active_links_mask``: the movable joints) and puts 0 in
+joint on the path, plus the  the others (IKPy ignores the value of fixed links); IK answers are
+leading ``OriginLink``       read back from the same entries
+chain is walked from         ``base_elements`` is the full path ``[root, joint, link, ...,
+``base_elements``, first     tip]`` chosen by the contract's tip rule, so IKPy follows exactly
+child at branches, and keeps the contract's chain; IKPy's own continuation past the tip is cut
+going past the last element  off (the links after the tip are dropped before building the Chain)
+frame of link ``k``          ``forward_kinematics(..., full_kinematics=True)[k]``: frame 0 is the
+                             ``OriginLink`` (identity = the root link), frame ``k`` the child link
+                             of the ``k``-th joint of the path. Same root frame as the contract
+units                        metres and radians on both sides (nothing to convert)
+continuous joints            IKPy treats them as unbounded revolute joints, as the contract does;
+                             IK answers are normalized into (-pi, pi] (representation only)
+IK has no status             IKPy returns only a joint vector. The adapter reports ``SUCCESS``
+                             exactly when the contract's criterion holds for that vector,
+                             evaluated with IKPy's own FK: every component of the error twist
+                             ``(p_target - p, R log(R^T R_target))`` within ``IK_EPS`` (1e-6)
+IK seed                      the contract's step 1 (seed clamped into the limits, continuous
+                             joints normalized) then IKPy's ``initial_position``; IKPy itself
+                             then moves the start 1e-3 inside its bounds (its own behaviour)
+IK solver parameters         IKPy's defaults (``orientation_mode="all"``, least squares, SciPy's
+                             tolerances and budget); nothing tuned
+IK to a link with no         IKPy cannot optimize zero variables: no solver call, the status is
+variable before it           the contract's criterion at the seed (as in the contract)
+warnings                     IKPy's ``warnings`` (fixed joints with an axis, ...) are silenced
+============================ ================================================================
+
+Unsupported, by design
+----------------------
+* **Mimic joints**: IKPy has no mimic support (it would treat the mimic joint as
+  an independent joint). A chain with a mimic joint is rejected at load with
+  ``URDFError(URDF_UNSUPPORTED)``.
+* A URDF that IKPy's own parser cannot read along the chain (for instance a
+  floating or planar joint right after the tip, where IKPy keeps walking) is
+  rejected at load with ``URDFError(URDF_UNSUPPORTED)``.
+
+Known library semantics (left visible on purpose)
+-------------------------------------------------
+* IKPy does not normalize joint axes: an axis such as ``0 0 2`` scales the
+  rotation matrix (not a rotation any more); urdfdom and the contract normalize.
+* IK targets whose solution lies on a joint limit mostly fail: IKPy moves the
+  start 1e-3 inside its bounds and SciPy's bounded least squares stops (its
+  ``ftol``/``xtol``) about 1e-4 short of the bound. Kinova's own home pose (three
+  joints at their lower limits) is not found from the home seed.
+* IKPy's cost is position error plus the Frobenius distance of the rotation
+  matrices: a local optimizer, it can stop with the position reached and the
+  orientation half a turn away where the contract's Newton-Raphson succeeds.
+* IKPy reads numbers with Python's ``float`` and splits vectors on any
+  whitespace; the adapter only hands it URDFs the contract accepted, so this is
+  invisible here.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import types
+import warnings
+from typing import Any
+
+import ikpy.chain
+import ikpy.link
+import ikpy.urdf.URDF
+import numpy as np
+from numpy.typing import NDArray
+
+import python_impl
+from python_impl import convert
+from python_impl.angles import normalize_angle
+from python_impl.transforms import homogeneous, quaternion, quaternion_matrix, rotation_angle, rotation_vector
+from python_impl.urdf import is_path_source, load_urdf
+from robot_api.constants import IK_EPS
+from robot_api.errors import ErrorCode, InvalidInputError, URDFError
+from robot_api.protocol import JointValues
+from robot_api.records import IKResult, IKStatus, JointType, Pose
+
+Matrix = NDArray[np.float64]
+
+
+def _urdf_bytes(urdf: Any) -> bytes:
+    """The URDF document the contract just accepted, as bytes for the library's own parser."""
+    source, is_path = is_path_source(urdf)
+    assert isinstance(source, str)  # the contract's checks ran first
+    if not is_path:
+        return source.encode("utf-8")
+    try:
+        with open(source, "rb") as handle:
+            return handle.read()
+    except OSError as exc:  # the file went away between two reads
+        raise URDFError(f"cannot read URDF file '{source}': {exc}", ErrorCode.URDF_INVALID) from None
+
+
+def _pose(t: Matrix) -> Pose:
+    x, y, z = (float(v) for v in t[:3, 3])
+    return Pose((x, y, z), quaternion(t[:3, :3]))
+
+
+def _converged(reached: Matrix, target: Matrix) -> bool:
+    """The contract's convergence criterion: every error twist component within IK_EPS."""
+    rot = reached[:3, :3]
+    twist = np.concatenate([target[:3, 3] - reached[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
+    return bool(np.all(np.abs(twist) <= IK_EPS))
+
+
+def _errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
+    return (
+        float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
+        rotation_angle(reached[:3, :3].T @ target[:3, :3]),
+    )
+
+
+class RobotModel(python_impl.RobotModel):
+    """A chain loaded from URDF whose kinematics are IKPy's (see the module docstring).
+
+    Parameters
+    ----------
+    urdf : str or os.PathLike
+        A URDF file path, or URDF XML text (a string starting with ``<``).
+    tip_link : str, optional
+        Last link of the chain; by default the contract's tip rule picks it.
+
+    Raises
+    ------
+    URDFError
+        The URDF is unreadable, malformed, unsupported by the contract, has a
+        mimic joint on the chain, or cannot be read by IKPy (``URDF_UNSUPPORTED``).
+    UnknownNameError
+        ``tip_link`` is not a link of the URDF.
+    """
+
+    __slots__ = ("_chains", "_data", "_joints", "_masks")
+
+    def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
+        super().__init__(urdf, tip_link)
+        if self.mimic_joints:
+            raise URDFError(
+                f"IKPy has no mimic joints; the chain to '{self.tip_link}' has "
+                f"{', '.join(m.name for m in self.mimic_joints)}",
+                ErrorCode.URDF_UNSUPPORTED,
+            )
+        source, is_path = is_path_source(urdf)
+        assert isinstance(source, str)
+        tree = load_urdf(source, is_path)
+        self._joints = tuple(tree.parent_joint[link].name for link in self.link_names[1:])
+        self._data = _urdf_bytes(urdf)
+        self._chains: dict[int, Any] = {}
+        self._masks: dict[int, NDArray[np.bool_]] = {}
+        self._chain_to(len(self.link_names) - 1)
+
+    def _chain_to(self, index: int) -> Any:
+        """IKPy's Chain from the root to link ``index`` (built once, by IKPy's URDF parser)."""
+        if index in self._chains:
+            return self._chains[index]
+        elements = [self.root_link]
+        for joint, link in zip(self._joints[:index], self.link_names[1 : index + 1], strict=True):
+            elements += [joint, link]
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                links = ikpy.urdf.URDF.get_urdf_parameters(io.BytesIO(self._data), base_elements=elements)
+                links = links[:index]  # IKPy keeps walking past the last element: cut that off
+                mask = np.array([False] + [link.joint_type != "fixed" for link in links])
+                chain = ikpy.chain.Chain(
+                    [ikpy.link.OriginLink(), *links], active_links_mask=mask, name=self.name
+                )
+        except (ValueError, KeyError, AttributeError) as exc:
+            raise URDFError(f"IKPy cannot read the chain: {exc}", ErrorCode.URDF_UNSUPPORTED) from None
+        self._chains[index] = chain
+        self._masks[index] = mask
+        return chain
+
+    def _full(self, values: list[float] | NDArray[np.float64], index: int) -> NDArray[np.float64]:
+        """IKPy's full joint vector for the chain to link ``index``."""
+        mask = self._masks[index]
+        full = np.zeros(mask.shape[0])
+        full[mask] = np.asarray(values, dtype=np.float64)[: int(mask.sum())]
+        return full
+
+    def _matrix(self, values: list[float] | NDArray[np.float64], link: int) -> Matrix:
+        tip = len(self.link_names) - 1
+        frames = self._chains[tip].forward_kinematics(self._full(values, tip), full_kinematics=True)
+        return np.asarray(frames[link], dtype=np.float64)
+
+    def pose_of(self, values: list[float], link: int) -> Pose:
+        """Pose of link index ``link`` for checked values, by IKPy's FK."""
+        return _pose(self._matrix(values, link))
+
+    def forward_kinematics_batch(
+        self, joint_values: NDArray[np.float64], link: str | None = None
+    ) -> NDArray[np.float64]:
+        """Poses of a link for many configurations (IKPy's FK, one row at a time).
+
+        Parameters
+        ----------
+        joint_values : ndarray, shape (N, dof), or list of N rows
+            Joint values (rad, m).
+        link : str, optional
+            A link of the chain; the tip by default.
+
+        Returns
+        -------
+        ndarray, shape (N, 4, 4)
+            Homogeneous transforms in the root frame.
+        """
+        q = self._batch_input(joint_values)
+        index = self.link_index(link)
+        out = np.empty((q.shape[0], 4, 4))
+        for i, row in enumerate(q):
+            out[i] = self._matrix(row, index)
+        return out
+
+    def inverse_kinematics(
+        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
+    ) -> IKResult:
+        """Joint values that put ``link`` at ``pose``, by IKPy's ``inverse_kinematics_frame``.
+
+        Parameters
+        ----------
+        pose : Pose or (position, orientation)
+            Target; the quaternion (x, y, z, w) is normalized.
+        seed : sequence of float, shape (dof,), optional
+            Start of the search, clamped into the limits; ``home_values`` by default.
+        link : str, optional
+            A link of the chain; the tip by default.
+
+        Returns
+        -------
+        IKResult
+            ``SUCCESS`` when IKPy's answer meets the contract's criterion (by IKPy's FK).
+        """
+        position, orientation = convert.to_pose(pose)
+        q = list(self.home_values)
+        if seed is not None:
+            q = convert.to_vector(seed, "seed")
+            self.check_vector(q, "seed")
+        index = self.link_index(link)
+        nvars = self._ik_variables(index)
+        for i, lim in enumerate(self.joint_limits):
+            q[i] = (
+                normalize_angle(q[i])
+                if lim.type == JointType.CONTINUOUS
+                else min(max(q[i], lim.lower), lim.upper)
+            )
+        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
+        values = list(q)
+        if nvars > 0:
+            chain = self._chain_to(index)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                full = chain.inverse_kinematics_frame(
+                    target, initial_position=self._full(q, index), orientation_mode="all"
+                )
+            values[:nvars] = np.asarray(full, dtype=np.float64)[self._masks[index]].tolist()
+        for i, lim in enumerate(self.joint_limits[:nvars]):
+            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
+                values[i] = normalize_angle(values[i])
+        reached = self._matrix(values, index)
+        status = IKStatus.SUCCESS if _converged(reached, target) else IKStatus.NO_SOLUTION
+        return IKResult(status, tuple(values), *_errors(reached, target))
+
+
+class MoveGroup(python_impl.MoveGroup):
+    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from IKPy.
+
+    Parameters
+    ----------
+    model : RobotModel
+        A model of this adapter.
+    """
+
+    def __init__(self, model: RobotModel) -> None:
+        if not isinstance(model, RobotModel):
+            raise InvalidInputError(
+                f"model: expected an adapters.ikpy_adapter.RobotModel, got {type(model).__name__}",
+                ErrorCode.INVALID_ARGUMENT,
+            )
+        super().__init__(model)
+
+
+api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+"""The implementation to plug in: ``--targets native,adapters.ikpy_adapter:api``."""

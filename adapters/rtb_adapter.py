@@ -1,0 +1,333 @@
+"""The API around the Robotics Toolbox for Python (``roboticstoolbox``): FK and IK from it.
+
+Use it as ``--targets native,adapters.rtb_adapter:api``.
+
+What comes from where
+---------------------
+* **From the toolbox**: URDF reading (``roboticstoolbox.models.URDF.URDFRobot.URDF_file``,
+  which is what the deprecated ``Robot.URDF`` calls: xacro expansion, the
+  toolbox's URDF parser, each joint turned into an elementary transform
+  sequence), the ``Robot``, forward kinematics (``Robot.ets(start, end)`` evaluated
+  by the compiled ``ETS.eval``/``fkine``) and inverse kinematics (``ETS.ik_LM``,
+  the compiled Levenberg-Marquardt solver, Chan's damping; the same call as
+  ``Robot.ik_LM(Tep, end, start)``).
+* **From the contract** (the twin's non-kinematic code, ``python_impl``): URDF
+  validation and errors, chain selection, joint names and order, limits,
+  ``home_values``, ``link_names``, argument checks, and ``MoveGroup`` (planning is
+  in joint space; its poses come from the toolbox's FK).
+
+Conventions normalized (and nothing else)
+-----------------------------------------
+============================ ================================================================
+toolbox convention           what the adapter does
+============================ ================================================================
+poses are ``SE3`` / 4x4      the rotation block becomes the contract's quaternion (x, y, z, w),
+arrays (``UnitQuaternion``   canonical sign (``w >= 0``), by the twin's matrix-to-quaternion
+is (w, x, y, z))             conversion; IK targets go in as 4x4 arrays built from (x, y, z, w)
+global ``q`` (length         the adapter uses the *compact* form the toolbox documents for
+``robot.n``: every joint of  ``ets(start=root, end=link)``: the joints on the path, root to link,
+the tree, by ``jindex``)     which are the contract's first variables in the same order
+base and tool transforms     both identity (not set); ``start`` is the URDF root link, so the
+                             root frame is the contract's
+units                        metres and radians on both sides (nothing to convert)
+continuous joints            the toolbox makes them revolute joints; IK answers are normalized
+                             into (-pi, pi] (representation only)
+IK status                    ``IKSolution.success`` -> ``SUCCESS``, else ``NO_SOLUTION``
+IK tolerance                 the toolbox's ``tol`` bounds ``E = 1/2 e^T e`` (e: position and
+                             angle-axis error). ``tol = IK_EPS**2 / 2`` makes its success imply
+                             the contract's ``|e_i| <= IK_EPS`` (its default 1e-6 would accept
+                             errors up to 1.4 mm)
+IK iterations and restarts   ``ilimit = IK_MAX_ITERATIONS`` (100) and ``slimit = 1``: one search
+                             from the given seed, like the contract. The default (100 searches
+                             from random ``rand()`` restarts) ignores the seed after the first
+                             search and is not deterministic
+IK seed                      the contract's step 1 (clamped into the limits, continuous joints
+                             normalized) becomes ``q0``
+IK to a link with no         the toolbox cannot solve for zero variables: no solver call, the
+variable before it           status is the contract's criterion at the seed (as in the contract)
+zero joints (FK of the root  ``ETS.eval(np.zeros(0))`` raises ``TypeError`` (spatialmath's
+or of a link before the      ``getmatrix`` refuses an empty 1-D array) while ``eval([])`` works:
+first joint)                 single configurations are passed as lists (found by the fuzzer)
+batches of one-joint chains  ``ETS.eval(q)`` with ``q`` of shape (N, 1) returns *one* pose, that
+                             of ``q[0, 0]``: spatialmath's ``getmatrix`` turns the column into a
+                             row, which ``_resolve_q`` takes for a "global" joint vector. The
+                             adapter evaluates such batches row by row (found by the tests)
+URDF parts that are not      the toolbox loads meshes (``package://`` must resolve, a missing mesh
+kinematics                   is an error), checks inertias and transmissions, none of which
+                             urdfdom or the contract look at. The adapter hands it the
+                             document with only ``<joint>`` elements and *empty* ``<link>``
+                             elements (names kept): no visual, collision, inertial,
+                             transmission, material or gazebo data. Joints are passed untouched
+warnings                     the toolbox's ``warnings`` (deprecations, ...) are silenced
+============================ ================================================================
+
+Unsupported, by design
+----------------------
+* **Mimic joints**: the toolbox ignores ``<mimic>`` (the joint becomes an
+  independent variable). A chain with a mimic joint is rejected at load with
+  ``URDFError(URDF_UNSUPPORTED)``.
+* A URDF the toolbox cannot load (xacro or parser errors on something the
+  contract accepts, for instance ``${`` in an attribute, which xacro evaluates)
+  is rejected at load with ``URDFError(URDF_UNSUPPORTED)``.
+
+Known library semantics (left visible on purpose)
+-------------------------------------------------
+* **Joint axes that are not along x, y or z are wrong** (``URDFRobot._links_from_urdf``):
+  the toolbox rotates the joint frame by ``angvec2r(|axis|, axis)``, a rotation
+  of 1 rad about the axis, and makes the joint turn about the new z. This is not
+  a rotation that maps z onto the axis, and it also rotates the child frame: FK
+  is off even at q = 0 (by 0.73 on the matrix, axis ``0 0.6 0.8``, in
+  ``tests/test_adapters_py_libs.py``).
+* IK limits: the toolbox rejects answers outside its ``qlim``, which is the
+  URDF's ``lower``/``upper`` even for continuous joints (Kinova: +-2pi), and
+  ``[-pi, pi]`` when the URDF gives none (the contract: unbounded for
+  continuous joints, ``[0, 0]`` for a revolute joint without ``lower``/``upper``).
+  Levenberg-Marquardt does not clamp and does not wrap by 2 pi: PROBOT Anno's
+  pose at ``joint_3 = -0.6981`` (its lower limit) is reached as ``5.585085``
+  (``-0.6981 + 2 pi``), rejected, and the call fails where the contract succeeds.
+* After a rejected or failed search, ``IKSolution.q`` is the *random* start the
+  solver drew for the next search (``searches`` = ``slimit + 1``), different on
+  every call: failed answers are not reproducible (the status is).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import types
+import warnings
+import xml.etree.ElementTree as ET
+from typing import Any
+
+import defusedxml.ElementTree as SafeET
+import numpy as np
+import roboticstoolbox as rtb
+from numpy.typing import NDArray
+from roboticstoolbox.models.URDF.URDFRobot import URDF_file
+
+import python_impl
+from python_impl import convert
+from python_impl.angles import normalize_angle
+from python_impl.transforms import homogeneous, quaternion, quaternion_matrix, rotation_angle, rotation_vector
+from python_impl.urdf import is_path_source
+from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS
+from robot_api.errors import ErrorCode, InvalidInputError, URDFError
+from robot_api.protocol import JointValues
+from robot_api.records import IKResult, IKStatus, JointType, Pose
+
+Matrix = NDArray[np.float64]
+
+RTB_TOL = IK_EPS * IK_EPS / 2.0
+"""The toolbox's ``tol`` (on ``E = 1/2 |e|^2``) that makes its success imply ``|e_i| <= IK_EPS``."""
+
+
+def _urdf_bytes(urdf: Any) -> bytes:
+    """The URDF document the contract just accepted, as bytes for the library's own parser."""
+    source, is_path = is_path_source(urdf)
+    assert isinstance(source, str)  # the contract's checks ran first
+    if not is_path:
+        return source.encode("utf-8")
+    try:
+        with open(source, "rb") as handle:
+            return handle.read()
+    except OSError as exc:  # the file went away between two reads
+        raise URDFError(f"cannot read URDF file '{source}': {exc}", ErrorCode.URDF_INVALID) from None
+
+
+def _kinematic_document(data: bytes) -> str:
+    """The URDF with its joints and (emptied) links only: what the toolbox needs for kinematics."""
+    root = SafeET.fromstring(data)
+    for child in list(root):
+        if child.tag == "link":
+            for part in list(child):
+                child.remove(part)
+        elif child.tag != "joint":
+            root.remove(child)
+    return ET.tostring(root, encoding="unicode")
+
+
+def _pose(t: Matrix) -> Pose:
+    x, y, z = (float(v) for v in t[:3, 3])
+    return Pose((x, y, z), quaternion(t[:3, :3]))
+
+
+def _converged(reached: Matrix, target: Matrix) -> bool:
+    """The contract's convergence criterion: every error twist component within IK_EPS."""
+    rot = reached[:3, :3]
+    twist = np.concatenate([target[:3, 3] - reached[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
+    return bool(np.all(np.abs(twist) <= IK_EPS))
+
+
+def _errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
+    return (
+        float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
+        rotation_angle(reached[:3, :3].T @ target[:3, :3]),
+    )
+
+
+class RobotModel(python_impl.RobotModel):
+    """A chain loaded from URDF whose kinematics are the Robotics Toolbox's (see the module docstring).
+
+    Parameters
+    ----------
+    urdf : str or os.PathLike
+        A URDF file path, or URDF XML text (a string starting with ``<``).
+    tip_link : str, optional
+        Last link of the chain; by default the contract's tip rule picks it.
+
+    Raises
+    ------
+    URDFError
+        The URDF is unreadable, malformed, unsupported by the contract, has a
+        mimic joint on the chain, or cannot be loaded by the toolbox (``URDF_UNSUPPORTED``).
+    UnknownNameError
+        ``tip_link`` is not a link of the URDF.
+    """
+
+    __slots__ = ("_ets", "_nvars", "_robot")
+
+    def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
+        super().__init__(urdf, tip_link)
+        if self.mimic_joints:
+            raise URDFError(
+                f"the Robotics Toolbox ignores mimic joints; the chain to '{self.tip_link}' has "
+                f"{', '.join(m.name for m in self.mimic_joints)}",
+                ErrorCode.URDF_UNSUPPORTED,
+            )
+        document = _kinematic_document(_urdf_bytes(urdf))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                elinks, name, _ = URDF_file(io.StringIO(document))
+                self._robot = rtb.Robot(elinks, name=name)
+                ets = [self._robot.ets(start=self.root_link, end=link) for link in self.link_names]
+        except Exception as exc:  # noqa: BLE001 - whatever the toolbox raises, it cannot load this URDF
+            raise URDFError(
+                f"the Robotics Toolbox cannot load this URDF: {type(exc).__name__}: {exc}",
+                ErrorCode.URDF_UNSUPPORTED,
+            ) from None
+        self._ets: tuple[Any, ...] = tuple(ets)
+        self._nvars = tuple(self._ik_variables(k) for k in range(len(self.link_names)))
+        for k, e in enumerate(self._ets):
+            if int(e.n) != self._nvars[k]:
+                raise URDFError(
+                    f"the Robotics Toolbox sees {e.n} joints on the path to '{self.link_names[k]}', "
+                    f"the contract {self._nvars[k]}",
+                    ErrorCode.URDF_UNSUPPORTED,
+                )
+
+    def _matrix(self, values: list[float] | NDArray[np.float64], link: int) -> Matrix:
+        q = [
+            float(v) for v in values[: self._nvars[link]]
+        ]  # a list: see "zero joints" in the module docstring
+        return np.asarray(self._ets[link].eval(q), dtype=np.float64)
+
+    def pose_of(self, values: list[float], link: int) -> Pose:
+        """Pose of link index ``link`` for checked values, by the toolbox's FK."""
+        return _pose(self._matrix(values, link))
+
+    def forward_kinematics_batch(
+        self, joint_values: NDArray[np.float64], link: str | None = None
+    ) -> NDArray[np.float64]:
+        """Poses of a link for many configurations (the toolbox's FK on the whole batch).
+
+        Parameters
+        ----------
+        joint_values : ndarray, shape (N, dof), or list of N rows
+            Joint values (rad, m).
+        link : str, optional
+            A link of the chain; the tip by default.
+
+        Returns
+        -------
+        ndarray, shape (N, 4, 4)
+            Homogeneous transforms in the root frame.
+        """
+        q = self._batch_input(joint_values)
+        index = self.link_index(link)
+        if q.shape[0] == 0:
+            return np.zeros((0, 4, 4))
+        nvars = self._nvars[index]
+        if nvars == 1:  # an (N, 1) batch is misread as one configuration: see the module docstring
+            return np.array([self._matrix(row, index) for row in q], dtype=np.float64).reshape(-1, 4, 4)
+        out = np.asarray(self._ets[index].eval(q[:, :nvars]), dtype=np.float64)
+        return out.reshape(q.shape[0], 4, 4)
+
+    def inverse_kinematics(
+        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
+    ) -> IKResult:
+        """Joint values that put ``link`` at ``pose``, by the toolbox's ``ik_LM``.
+
+        Parameters
+        ----------
+        pose : Pose or (position, orientation)
+            Target; the quaternion (x, y, z, w) is normalized.
+        seed : sequence of float, shape (dof,), optional
+            Start of the search, clamped into the limits; ``home_values`` by default.
+        link : str, optional
+            A link of the chain; the tip by default.
+
+        Returns
+        -------
+        IKResult
+            ``SUCCESS`` when the toolbox reports success.
+        """
+        position, orientation = convert.to_pose(pose)
+        q = list(self.home_values)
+        if seed is not None:
+            q = convert.to_vector(seed, "seed")
+            self.check_vector(q, "seed")
+        index = self.link_index(link)
+        nvars = self._ik_variables(index)
+        for i, lim in enumerate(self.joint_limits):
+            q[i] = (
+                normalize_angle(q[i])
+                if lim.type == JointType.CONTINUOUS
+                else min(max(q[i], lim.lower), lim.upper)
+            )
+        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
+        values = list(q)
+        if nvars > 0:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                solution = self._ets[index].ik_LM(
+                    target,
+                    q0=np.array(q[:nvars]),
+                    ilimit=IK_MAX_ITERATIONS,
+                    slimit=1,
+                    tol=RTB_TOL,
+                    joint_limits=True,
+                )
+            values[:nvars] = np.asarray(solution.q, dtype=np.float64).tolist()
+            converged = bool(solution.success)
+        for i, lim in enumerate(self.joint_limits[:nvars]):
+            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
+                values[i] = normalize_angle(values[i])
+        reached = self._matrix(values, index)
+        if nvars == 0:
+            converged = _converged(reached, target)
+        status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
+        return IKResult(status, tuple(values), *_errors(reached, target))
+
+
+class MoveGroup(python_impl.MoveGroup):
+    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from the toolbox.
+
+    Parameters
+    ----------
+    model : RobotModel
+        A model of this adapter.
+    """
+
+    def __init__(self, model: RobotModel) -> None:
+        if not isinstance(model, RobotModel):
+            raise InvalidInputError(
+                f"model: expected an adapters.rtb_adapter.RobotModel, got {type(model).__name__}",
+                ErrorCode.INVALID_ARGUMENT,
+            )
+        super().__init__(model)
+
+
+api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+"""The implementation to plug in: ``--targets native,adapters.rtb_adapter:api``."""
