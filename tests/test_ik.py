@@ -133,6 +133,48 @@ def test_ik_normalizes_the_target_quaternion(impl) -> None:  # type: ignore[no-u
     assert model.inverse_kinematics(scaled, [0.2, 0.3, 0.4, 0.1, 0.6, 0.0]).status == IKStatus.SUCCESS
 
 
+@pytest.mark.parametrize("scale", [1e200, 1e305, 1.7e308 / 4])
+def test_ik_normalizes_huge_quaternions(impl, scale: float) -> None:  # type: ignore[no-untyped-def]
+    """Found by the adapter campaigns: x*x overflowed to inf in the quaternion's norm.
+
+    The quaternion is divided by its largest component before it is normalized,
+    so any finite multiple of a rotation is that rotation (to rounding).
+    """
+    model = impl.RobotModel(robot_path("probot_anno"))
+    pose = model.forward_kinematics([0.2, 0.3, 0.4, 0.1, 0.6, 0.2])
+    scaled = Pose(pose.position, tuple(scale * c for c in pose.orientation))  # type: ignore[arg-type]
+    seed = [0.2, 0.3, 0.4, 0.1, 0.6, 0.0]
+    got, expected = model.inverse_kinematics(scaled, seed), model.inverse_kinematics(pose, seed)
+    assert got.status == expected.status == IKStatus.SUCCESS
+    assert np.allclose(got.joint_values, expected.joint_values, rtol=0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [1e-10, 1e-200, 5e-320])
+def test_ik_refuses_near_zero_quaternions_without_underflow(impl, scale: float) -> None:  # type: ignore[no-untyped-def]
+    """Below QUATERNION_NORM_EPS (1e-9) a quaternion is INVALID_ARGUMENT, also where x*x underflows."""
+    model = impl.RobotModel(robot_path("probot_anno"))
+    pose = model.forward_kinematics([0.2, 0.3, 0.4, 0.1, 0.6, 0.2])
+    tiny = Pose(pose.position, tuple(scale * c for c in pose.orientation))  # type: ignore[arg-type]
+    with pytest.raises(InvalidInputError) as err:
+        model.inverse_kinematics(tiny)
+    assert err.value.code == ErrorCode.INVALID_ARGUMENT
+    assert "quaternion" in str(err.value)
+
+
+def test_ik_with_non_finite_iterates_is_no_solution(impl) -> None:  # type: ignore[no-untyped-def]
+    """Found by native vs python on Kinova: a 1e308 target made NaN iterates.
+
+    Native returned NaN joint values, the twin raised LinAlgError; both now stop
+    with NO_SOLUTION and the clamped seed (tests/regressions/crash-71f78e4f...).
+    """
+    model = impl.RobotModel(robot_path("kinova"))
+    seed = [0.1] * model.dof
+    result = model.inverse_kinematics(Pose((1.7976931348623157e308, 0.15, 0.2), (0.0, 0.0, 0.0, 1.0)), seed)
+    assert result.status == IKStatus.NO_SOLUTION
+    assert all(math.isfinite(v) for v in result.joint_values)
+    assert within_limits(model, result.joint_values)
+
+
 def test_continuous_joints_come_back_normalized() -> None:
     for impl in (native, python_impl):
         model = impl.RobotModel(robot_path("kinova"))

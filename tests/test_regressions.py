@@ -17,6 +17,7 @@ from fuzzer.replay import Result, replay_file
 from fuzzer.session import RunConfig
 
 FILES = suite_files()
+ROOT = Path(__file__).resolve().parents[1]  # sidecars name crafted URDFs relative to the repository
 
 
 def test_the_suite_is_not_empty() -> None:
@@ -26,7 +27,8 @@ def test_the_suite_is_not_empty() -> None:
 
 
 @pytest.mark.parametrize("path", FILES, ids=[p.name[:24] for p in FILES])
-def test_regression(path: Path) -> None:
+def test_regression(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)
     sidecar = load_sidecar(path)
     assert sidecar is not None
     expect = sidecar["regression"]["expect"]
