@@ -90,48 +90,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from python_impl import convert
+from adapters._common import ik_errors, matrix_pose, meets_criterion, urdf_bytes
 from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion, quaternion_matrix, rotation_angle, rotation_vector
+from python_impl.transforms import homogeneous, quaternion_matrix
 from python_impl.urdf import is_path_source, load_urdf
-from robot_api.constants import IK_EPS
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
 from robot_api.protocol import JointValues
 from robot_api.records import IKResult, IKStatus, JointType, Pose
 
 Matrix = NDArray[np.float64]
-
-
-def _urdf_bytes(urdf: Any) -> bytes:
-    """The URDF document the contract just accepted, as bytes for the library's own parser."""
-    source, is_path = is_path_source(urdf)
-    assert isinstance(source, str)  # the contract's checks ran first
-    if not is_path:
-        return source.encode("utf-8")
-    try:
-        with open(source, "rb") as handle:
-            return handle.read()
-    except OSError as exc:  # the file went away between two reads
-        raise URDFError(f"cannot read URDF file '{source}': {exc}", ErrorCode.URDF_INVALID) from None
-
-
-def _pose(t: Matrix) -> Pose:
-    x, y, z = (float(v) for v in t[:3, 3])
-    return Pose((x, y, z), quaternion(t[:3, :3]))
-
-
-def _converged(reached: Matrix, target: Matrix) -> bool:
-    """The contract's convergence criterion: every error twist component within IK_EPS."""
-    rot = reached[:3, :3]
-    twist = np.concatenate([target[:3, 3] - reached[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
-    return bool(np.all(np.abs(twist) <= IK_EPS))
-
-
-def _errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
-    return (
-        float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
-        rotation_angle(reached[:3, :3].T @ target[:3, :3]),
-    )
 
 
 class RobotModel(python_impl.RobotModel):
@@ -167,7 +134,7 @@ class RobotModel(python_impl.RobotModel):
         assert isinstance(source, str)
         tree = load_urdf(source, is_path)
         self._joints = tuple(tree.parent_joint[link].name for link in self.link_names[1:])
-        self._data = _urdf_bytes(urdf)
+        self._data = urdf_bytes(urdf)
         self._chains: dict[int, Any] = {}
         self._masks: dict[int, NDArray[np.bool_]] = {}
         self._chain_to(len(self.link_names) - 1)
@@ -208,7 +175,7 @@ class RobotModel(python_impl.RobotModel):
 
     def pose_of(self, values: list[float], link: int) -> Pose:
         """Pose of link index ``link`` for checked values, by IKPy's FK."""
-        return _pose(self._matrix(values, link))
+        return matrix_pose(self._matrix(values, link))
 
     def forward_kinematics_batch(
         self, joint_values: NDArray[np.float64], link: str | None = None
@@ -253,19 +220,7 @@ class RobotModel(python_impl.RobotModel):
         IKResult
             ``SUCCESS`` when IKPy's answer meets the contract's criterion (by IKPy's FK).
         """
-        position, orientation = convert.to_pose(pose)
-        q = list(self.home_values)
-        if seed is not None:
-            q = convert.to_vector(seed, "seed")
-            self.check_vector(q, "seed")
-        index = self.link_index(link)
-        nvars = self._ik_variables(index)
-        for i, lim in enumerate(self.joint_limits):
-            q[i] = (
-                normalize_angle(q[i])
-                if lim.type == JointType.CONTINUOUS
-                else min(max(q[i], lim.lower), lim.upper)
-            )
+        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
         target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
         values = list(q)
         if nvars > 0:
@@ -280,8 +235,8 @@ class RobotModel(python_impl.RobotModel):
             if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
                 values[i] = normalize_angle(values[i])
         reached = self._matrix(values, index)
-        status = IKStatus.SUCCESS if _converged(reached, target) else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *_errors(reached, target))
+        status = IKStatus.SUCCESS if meets_criterion(reached, target) else IKStatus.NO_SOLUTION
+        return IKResult(status, tuple(values), *ik_errors(reached, target))
 
 
 class MoveGroup(python_impl.MoveGroup):

@@ -113,7 +113,6 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 import python_impl
-from python_impl import convert
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source
@@ -329,20 +328,8 @@ class RobotModel(python_impl.RobotModel):
         IKResult
             Status, joint values (within limits), position (m) and orientation (rad) errors.
         """
-        position, orientation = convert.to_pose(pose)
-        q = list(self.home_values)
-        if seed is not None:
-            q = convert.to_vector(seed, "seed")
-            self.check_vector(q, "seed")
-        index = self.link_index(link)
-        nvars = self._ik_variables(index)
+        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
         limits = self.joint_limits
-        for i, lim in enumerate(limits):
-            q[i] = (
-                normalize_angle(q[i])
-                if lim.type == JointType.CONTINUOUS
-                else min(max(q[i], lim.lower), lim.upper)
-            )
         x, y, z, w = orientation
         target_rotation = np.asarray(pin.Quaternion(w, x, y, z).toRotationMatrix(), dtype=np.float64)
         target_position = np.array(position, dtype=np.float64)

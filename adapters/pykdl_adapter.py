@@ -125,7 +125,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from python_impl import convert
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle, unit
 from python_impl.urdf import Joint, is_path_source, load_urdf
@@ -390,20 +389,8 @@ class RobotModel(python_impl.RobotModel):
         IKResult
             Status, joint values (within limits), position (m) and orientation (rad) errors.
         """
-        position, orientation = convert.to_pose(pose)
-        q = list(self.home_values)
-        if seed is not None:
-            q = convert.to_vector(seed, "seed")
-            self.check_vector(q, "seed")
-        index = self.link_index(link)
-        nvars = self._ik_variables(index)
+        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
         limits = self.joint_limits
-        for i, lim in enumerate(limits):
-            q[i] = (
-                normalize_angle(q[i])
-                if lim.type == JointType.CONTINUOUS
-                else min(max(q[i], lim.lower), lim.upper)
-            )
         x, y, z, w = orientation
         target = KDL.Frame(KDL.Rotation.Quaternion(x, y, z, w), KDL.Vector(*position))
         if nvars == 0:

@@ -107,10 +107,9 @@ from numpy.typing import NDArray
 from roboticstoolbox.models.URDF.URDFRobot import URDF_file
 
 import python_impl
-from python_impl import convert
+from adapters._common import ik_errors, matrix_pose, meets_criterion, urdf_bytes
 from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion, quaternion_matrix, rotation_angle, rotation_vector
-from python_impl.urdf import is_path_source
+from python_impl.transforms import homogeneous, quaternion_matrix
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
 from robot_api.protocol import JointValues
@@ -120,19 +119,6 @@ Matrix = NDArray[np.float64]
 
 RTB_TOL = IK_EPS * IK_EPS / 2.0
 """The toolbox's ``tol`` (on ``E = 1/2 |e|^2``) that makes its success imply ``|e_i| <= IK_EPS``."""
-
-
-def _urdf_bytes(urdf: Any) -> bytes:
-    """The URDF document the contract just accepted, as bytes for the library's own parser."""
-    source, is_path = is_path_source(urdf)
-    assert isinstance(source, str)  # the contract's checks ran first
-    if not is_path:
-        return source.encode("utf-8")
-    try:
-        with open(source, "rb") as handle:
-            return handle.read()
-    except OSError as exc:  # the file went away between two reads
-        raise URDFError(f"cannot read URDF file '{source}': {exc}", ErrorCode.URDF_INVALID) from None
 
 
 def _kinematic_document(data: bytes) -> str:
@@ -145,25 +131,6 @@ def _kinematic_document(data: bytes) -> str:
         elif child.tag != "joint":
             root.remove(child)
     return ET.tostring(root, encoding="unicode")
-
-
-def _pose(t: Matrix) -> Pose:
-    x, y, z = (float(v) for v in t[:3, 3])
-    return Pose((x, y, z), quaternion(t[:3, :3]))
-
-
-def _converged(reached: Matrix, target: Matrix) -> bool:
-    """The contract's convergence criterion: every error twist component within IK_EPS."""
-    rot = reached[:3, :3]
-    twist = np.concatenate([target[:3, 3] - reached[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
-    return bool(np.all(np.abs(twist) <= IK_EPS))
-
-
-def _errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
-    return (
-        float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
-        rotation_angle(reached[:3, :3].T @ target[:3, :3]),
-    )
 
 
 class RobotModel(python_impl.RobotModel):
@@ -195,7 +162,7 @@ class RobotModel(python_impl.RobotModel):
                 f"{', '.join(m.name for m in self.mimic_joints)}",
                 ErrorCode.URDF_UNSUPPORTED,
             )
-        document = _kinematic_document(_urdf_bytes(urdf))
+        document = _kinematic_document(urdf_bytes(urdf))
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -225,7 +192,7 @@ class RobotModel(python_impl.RobotModel):
 
     def pose_of(self, values: list[float], link: int) -> Pose:
         """Pose of link index ``link`` for checked values, by the toolbox's FK."""
-        return _pose(self._matrix(values, link))
+        return matrix_pose(self._matrix(values, link))
 
     def forward_kinematics_batch(
         self, joint_values: NDArray[np.float64], link: str | None = None
@@ -273,19 +240,7 @@ class RobotModel(python_impl.RobotModel):
         IKResult
             ``SUCCESS`` when the toolbox reports success.
         """
-        position, orientation = convert.to_pose(pose)
-        q = list(self.home_values)
-        if seed is not None:
-            q = convert.to_vector(seed, "seed")
-            self.check_vector(q, "seed")
-        index = self.link_index(link)
-        nvars = self._ik_variables(index)
-        for i, lim in enumerate(self.joint_limits):
-            q[i] = (
-                normalize_angle(q[i])
-                if lim.type == JointType.CONTINUOUS
-                else min(max(q[i], lim.lower), lim.upper)
-            )
+        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
         target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
         values = list(q)
         if nvars > 0:
@@ -306,9 +261,9 @@ class RobotModel(python_impl.RobotModel):
                 values[i] = normalize_angle(values[i])
         reached = self._matrix(values, index)
         if nvars == 0:
-            converged = _converged(reached, target)
+            converged = meets_criterion(reached, target)
         status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *_errors(reached, target))
+        return IKResult(status, tuple(values), *ik_errors(reached, target))
 
 
 class MoveGroup(python_impl.MoveGroup):

@@ -221,6 +221,30 @@ class RobotModel:
         IKResult
             Status, joint values (within limits), position (m) and orientation (rad) errors.
         """
+        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
+        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
+        ok, values, perr, oerr = kinematics.ik(self._chain, target, q, index, nvars)
+        return IKResult(IKStatus.SUCCESS if ok else IKStatus.NO_SOLUTION, tuple(values), perr, oerr)
+
+    def _ik_start(
+        self, pose: Pose, seed: JointValues | None, link: str | None
+    ) -> tuple[list[float], list[float], list[float], int, int]:
+        """The contract's IK step 1, shared with the adapters (docs/api.md, "Inverse kinematics").
+
+        Returns
+        -------
+        position : list of float, shape (3,)
+            Target position (m).
+        orientation : list of float, shape (4,)
+            Target unit quaternion (x, y, z, w).
+        q : list of float, shape (dof,)
+            The seed (``home_values`` by default), clamped into the limits,
+            continuous joints normalized into (-pi, pi].
+        index : int
+            Index of ``link`` in ``link_names``.
+        nvars : int
+            Number of variables before ``link`` (the ones IK may move).
+        """
         position, orientation = convert.to_pose(pose)
         q = list(self._home)
         if seed is not None:
@@ -234,9 +258,7 @@ class RobotModel:
                 if lim.type == JointType.CONTINUOUS
                 else min(max(q[i], lim.lower), lim.upper)
             )
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        ok, values, perr, oerr = kinematics.ik(self._chain, target, q, index, nvars)
-        return IKResult(IKStatus.SUCCESS if ok else IKStatus.NO_SOLUTION, tuple(values), perr, oerr)
+        return position, orientation, q, index, nvars
 
     def _ik_variables(self, link: int) -> int:
         if link not in self._nvars_cache:

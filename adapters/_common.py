@@ -1,0 +1,55 @@
+"""Helpers shared by the adapters around the Python kinematics libraries.
+
+Only the contract's side lives here (the URDF bytes a library's own parser
+reads, the pose and IK criterion of the contract, evaluated on the library's
+matrices); every kinematic quantity still comes from the library.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from python_impl.transforms import quaternion, rotation_angle, rotation_vector
+from python_impl.urdf import is_path_source
+from robot_api.constants import IK_EPS
+from robot_api.errors import ErrorCode, URDFError
+from robot_api.records import Pose
+
+Matrix = NDArray[np.float64]
+
+
+def urdf_bytes(urdf: Any) -> bytes:
+    """The URDF document the contract just accepted, as bytes for the library's own parser."""
+    source, is_path = is_path_source(urdf)
+    assert isinstance(source, str)  # the contract's checks ran first
+    if not is_path:
+        return source.encode("utf-8")
+    try:
+        with open(source, "rb") as handle:
+            return handle.read()
+    except OSError as exc:  # the file went away between two reads
+        raise URDFError(f"cannot read URDF file '{source}': {exc}", ErrorCode.URDF_INVALID) from None
+
+
+def matrix_pose(t: Matrix) -> Pose:
+    """The contract's pose (position, canonical quaternion) of a 4x4 transform."""
+    x, y, z = (float(v) for v in t[:3, 3])
+    return Pose((x, y, z), quaternion(t[:3, :3]))
+
+
+def meets_criterion(reached: Matrix, target: Matrix) -> bool:
+    """The contract's convergence criterion: every error twist component within IK_EPS."""
+    rot = reached[:3, :3]
+    twist = np.concatenate([target[:3, 3] - reached[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
+    return bool(np.all(np.abs(twist) <= IK_EPS))
+
+
+def ik_errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
+    """The contract's IK errors: distance (m) and rotation angle (rad) from reached to target."""
+    return (
+        float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
+        rotation_angle(reached[:3, :3].T @ target[:3, :3]),
+    )
