@@ -30,9 +30,11 @@ if os.environ.get("RROSFUZZ_NATIVE_MODULE"):
     _loader.exec_module(_native)
 else:
     import native._native as _native
+from collections.abc import Sequence
+
 from robot_api.errors import ErrorCode, InvalidInputError
-from robot_api.protocol import JointTarget, JointValues
-from robot_api.records import IKResult, JointLimit, MimicJoint, Pose, RobotTrajectory
+from robot_api.protocol import JointTarget, JointValues, PoseLike
+from robot_api.records import IKResult, JointLimit, MimicJoint, PlanResult, Pose, RobotState, RobotTrajectory
 
 __all__ = ["MoveGroup", "RobotModel", "constants"]
 
@@ -221,6 +223,10 @@ class MoveGroup:
         """The joint value target, length dof."""
         return self._g.get_joint_value_target()  # type: ignore[no-any-return]
 
+    def get_current_state(self) -> RobotState:
+        """The current state as ``moveit_msgs/RobotState``: ``joint_state.name`` and ``.position``."""
+        return self._g.get_current_state()  # type: ignore[no-any-return]
+
     def set_joint_value_target(self, arg1: JointTarget, arg2: Any = None) -> None:
         """Set the joint value target (moveit_commander's forms).
 
@@ -271,8 +277,31 @@ class MoveGroup:
         """Scale the acceleration limit by ``value`` in (0, 1]."""
         self._g.set_max_acceleration_scaling_factor(value)
 
-    def plan(self, joints: JointTarget | None = None) -> RobotTrajectory:
-        """Plan from the current state to the target (set first from ``joints`` if given)."""
+    def set_pose_target(self, pose: PoseLike, end_effector_link: str | None = None) -> None:
+        """Make ``pose`` of ``end_effector_link`` (the tip by default) the goal of plan() and go().
+
+        The joint goal is found at planning time by IK (KDL) seeded with the current state;
+        ``set_joint_value_target``, ``set_named_target`` and ``clear_pose_targets`` end it.
+        """
+        self._g.set_pose_target(pose, end_effector_link)
+
+    def set_position_target(self, xyz: JointValues, end_effector_link: str | None = None) -> None:
+        """Like set_pose_target, with the link's orientation in the state planning starts from."""
+        self._g.set_position_target(xyz, end_effector_link)
+
+    def clear_pose_targets(self) -> None:
+        """Forget the pose or position target: plan() and go() aim at the joint value target again."""
+        self._g.clear_pose_targets()
+
+    def plan(self, joints: JointTarget | None = None) -> PlanResult:
+        """Plan from the current state to the goal (the joint target is set first from ``joints``).
+
+        Returns
+        -------
+        PlanResult
+            ``(success, trajectory, planning_time, error_code)`` as moveit_commander Noetic;
+            on failure the trajectory has no points and the state is unchanged.
+        """
         return self._g.plan(joints)  # type: ignore[no-any-return]
 
     def execute(self, plan: RobotTrajectory, wait: bool = True) -> bool:
@@ -282,3 +311,29 @@ class MoveGroup:
     def go(self, joints: JointTarget | None = None, wait: bool = True) -> bool:
         """Plan and execute a move to the target (set first from ``joints`` if given)."""
         return self._g.go(joints, wait)  # type: ignore[no-any-return]
+
+    def stop(self) -> None:
+        """Do nothing: execution is synchronous, so no motion is ever under way."""
+        self._g.stop()
+
+    def compute_cartesian_path(
+        self, waypoints: Sequence[PoseLike], eef_step: float, jump_threshold: float = 0.0
+    ) -> tuple[RobotTrajectory, float]:
+        """Straight lines in Cartesian space from the current pose through ``waypoints`` (KDL IK).
+
+        Parameters
+        ----------
+        waypoints : sequence of Pose or (position, orientation)
+            Poses of the end effector (the tip), at least one.
+        eef_step : float
+            Largest distance (m) between interpolated positions, finite and > 0.
+        jump_threshold : float, optional
+            MoveIt's relative jump factor, finite and >= 0; 0 disables the test.
+
+        Returns
+        -------
+        (RobotTrajectory, float)
+            The timed path (first point: the current state) and the fraction achieved.
+            The state does not change.
+        """
+        return self._g.compute_cartesian_path(waypoints, eef_step, jump_threshold)  # type: ignore[no-any-return]

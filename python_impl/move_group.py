@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from python_impl import convert
+from python_impl import cartesian, convert
 from python_impl.angles import normalize_angle
 from python_impl.model import RobotModel
-from python_impl.trajectory import plan_trajectory
+from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api.constants import EXECUTE_START_TOLERANCE, GOAL_JOINT_TOLERANCE
 from robot_api.errors import (
     ErrorCode,
@@ -19,10 +20,23 @@ from robot_api.errors import (
     PlanningError,
     UnknownNameError,
 )
-from robot_api.protocol import JointTarget, JointValues
-from robot_api.records import JointType, Pose, RobotTrajectory
+from robot_api.protocol import JointTarget, JointValues, PoseLike
+from robot_api.records import (
+    IKStatus,
+    JointState,
+    JointType,
+    MoveItErrorCode,
+    PlanResult,
+    Pose,
+    RobotState,
+    RobotTrajectory,
+)
 
 _WHAT = "joint value target"
+
+
+class _NoIKSolution(PlanningError):
+    """The pose target has no IK solution from the current state (plan() reports NO_IK_SOLUTION)."""
 
 
 class MoveGroup:
@@ -52,6 +66,8 @@ class MoveGroup:
         self._tolerance = GOAL_JOINT_TOLERANCE
         self._velocity_scaling = 1.0
         self._acceleration_scaling = 1.0
+        # (position, orientation or None for a position target, link index) or None
+        self._pose_goal: tuple[list[float], list[float] | None, int] | None = None
 
     # -- state -------------------------------------------------------------------------------
 
@@ -79,6 +95,10 @@ class MoveGroup:
         """The joint value target, length dof."""
         return list(self._target)
 
+    def get_current_state(self) -> RobotState:
+        """The current state as ``moveit_msgs/RobotState``: ``joint_state.name`` and ``.position``."""
+        return RobotState(JointState(tuple(self._model.joint_names), tuple(self._current)))
+
     # -- targets -----------------------------------------------------------------------------
 
     def _accept(self, i: int, value: float) -> float:
@@ -94,6 +114,7 @@ class MoveGroup:
     def _set_values(self, values: list[float]) -> None:
         self._model.check_vector(values, _WHAT)
         self._target = [self._accept(i, v) for i, v in enumerate(values)]
+        self._pose_goal = None
 
     def _set_named(self, names: list[str], values: list[float]) -> None:
         if len(names) != len(values):
@@ -119,6 +140,7 @@ class MoveGroup:
         for i, v in zip(index, values, strict=True):
             target[i] = self._accept(i, v)
         self._target = target
+        self._pose_goal = None
 
     def set_joint_value_target(self, arg1: JointTarget, arg2: Any = None) -> None:
         """Set the joint value target (moveit_commander's forms).
@@ -216,18 +238,80 @@ class MoveGroup:
         """Scale the acceleration limit by ``value`` in (0, 1]."""
         self._acceleration_scaling = self._scaling(value, "max acceleration scaling factor")
 
+    # -- pose targets ------------------------------------------------------------------------
+
+    def set_pose_target(self, pose: PoseLike, end_effector_link: str | None = None) -> None:
+        """Make ``pose`` of ``end_effector_link`` (the tip by default) the goal of plan() and go().
+
+        The joint goal is found at planning time by IK seeded with the current state;
+        ``set_joint_value_target``, ``set_named_target`` and ``clear_pose_targets`` end it.
+        """
+        position, orientation = convert.to_pose(pose)
+        self._pose_goal = (position, orientation, self._model.link_index(end_effector_link))
+
+    def set_position_target(self, xyz: JointValues, end_effector_link: str | None = None) -> None:
+        """Like set_pose_target, with the link's orientation in the state planning starts from."""
+        what = "position target"
+        position = convert.to_vector(xyz, what)
+        if len(position) != 3:
+            raise InvalidInputError(f"{what}: expected 3 values, got {len(position)}", ErrorCode.WRONG_LENGTH)
+        if not all(math.isfinite(v) for v in position):
+            raise InvalidInputError(f"{what} is not finite", ErrorCode.NON_FINITE)
+        self._pose_goal = (position, None, self._model.link_index(end_effector_link))
+
+    def clear_pose_targets(self) -> None:
+        """Forget the pose or position target: plan() and go() aim at the joint value target again."""
+        self._pose_goal = None
+
     # -- motion ------------------------------------------------------------------------------
+
+    def _goal(self) -> list[float]:
+        if self._pose_goal is None:
+            return self._target
+        position, orientation, link = self._pose_goal
+        if orientation is None:
+            orientation = list(self._model.pose_of(self._current, link).orientation)
+        answer = self._model.inverse_kinematics(
+            Pose(
+                (position[0], position[1], position[2]),
+                (orientation[0], orientation[1], orientation[2], orientation[3]),
+            ),
+            self._current,
+            self._model.link_names[link],
+        )
+        if answer.status != IKStatus.SUCCESS:
+            raise _NoIKSolution("no IK solution for the pose target from the current state")
+        return list(answer.joint_values)
 
     def _plan(self) -> RobotTrajectory:
         return plan_trajectory(
-            self._limits, self._current, self._target, self._velocity_scaling, self._acceleration_scaling
+            self._limits, self._current, self._goal(), self._velocity_scaling, self._acceleration_scaling
         )
 
-    def plan(self, joints: JointTarget | None = None) -> RobotTrajectory:
-        """Plan from the current state to the target (set first from ``joints`` if given)."""
+    def _empty(self) -> RobotTrajectory:
+        n = self._model.dof
+        return RobotTrajectory(
+            tuple(self._model.joint_names), np.zeros(0), np.zeros((0, n)), np.zeros((0, n)), np.zeros((0, n))
+        )
+
+    def plan(self, joints: JointTarget | None = None) -> PlanResult:
+        """Plan from the current state to the goal (the joint target is set first from ``joints``).
+
+        Returns
+        -------
+        PlanResult
+            ``(success, trajectory, planning_time, error_code)`` as moveit_commander Noetic;
+            on failure the trajectory has no points and the state is unchanged.
+        """
         if joints is not None:
             self.set_joint_value_target(joints)
-        return self._plan()
+        try:
+            trajectory = self._plan()
+        except _NoIKSolution:
+            return PlanResult(False, self._empty(), 0.0, MoveItErrorCode.NO_IK_SOLUTION)
+        except PlanningError:
+            return PlanResult(False, self._empty(), 0.0, MoveItErrorCode.PLANNING_FAILED)
+        return PlanResult(True, trajectory, 0.0, MoveItErrorCode.SUCCESS)
 
     def execute(self, plan: RobotTrajectory, wait: bool = True) -> bool:
         """Execute a trajectory; the state ends at its last point. Returns True."""
@@ -311,3 +395,42 @@ class MoveGroup:
             return False  # moveit_commander's go() returns False when planning fails
         self._execute(list(trajectory.joint_names), trajectory.time_from_start.tolist(), trajectory.positions)
         return True
+
+    def stop(self) -> None:
+        """Do nothing: execution is synchronous, so no motion is ever under way."""
+
+    def compute_cartesian_path(
+        self, waypoints: Sequence[PoseLike], eef_step: float, jump_threshold: float = 0.0
+    ) -> tuple[RobotTrajectory, float]:
+        """Straight lines in Cartesian space from the current pose through ``waypoints``.
+
+        Parameters
+        ----------
+        waypoints : sequence of Pose or (position, orientation)
+            Poses of the end effector (the tip), at least one.
+        eef_step : float
+            Largest distance (m) between interpolated positions, finite and > 0.
+        jump_threshold : float, optional
+            MoveIt's relative jump factor, finite and >= 0; 0 disables the test.
+
+        Returns
+        -------
+        (RobotTrajectory, float)
+            The timed path (first point: the current state) and the fraction achieved.
+            The state does not change.
+        """
+        poses, step, jump = cartesian.check_arguments(waypoints, eef_step, jump_threshold)
+
+        def solve(pose: Pose, seed: list[float]) -> tuple[IKStatus, list[float]]:
+            answer = self._model.inverse_kinematics(pose, seed)
+            return answer.status, list(answer.joint_values)
+
+        tip = len(self._model.link_names) - 1
+        start = self._model.pose_of(self._current, tip)
+        points, fraction = cartesian.cartesian_points(start, self._current, poses, step, solve)
+        if jump > 0.0:
+            fraction *= cartesian.jump_test(self._limits, points, jump)
+        trajectory = time_parameterize(
+            self._limits, points, self._velocity_scaling, self._acceleration_scaling
+        )
+        return trajectory, fraction

@@ -94,3 +94,112 @@ def plan_trajectory(
         np.vstack([deltas * sd[:, None], zero]),
         np.vstack([deltas * sdd[:, None], zero]),
     )
+
+
+def _segments(
+    limits: tuple[JointLimit, ...], points: list[list[float]], velocity_scaling: float
+) -> tuple[list[list[float]], list[tuple[list[float], float]]]:
+    """Points without exact repeats, and per segment (delta, cost = max_j |delta_j| / vmax_j)."""
+    vmax = [lim.velocity * velocity_scaling for lim in limits]
+    kept = [points[0]]
+    segments: list[tuple[list[float], float]] = []
+    for q in points[1:]:
+        prev = kept[-1]
+        delta = []
+        cost = 0.0
+        for lim, v, a, b in zip(limits, vmax, prev, q, strict=True):
+            d = b - a
+            if lim.type == JointType.CONTINUOUS:
+                d = normalize_angle(d)
+            delta.append(d)
+            if d != 0.0:
+                c = abs(d) / v if v > 0.0 else math.inf
+                cost = max(cost, c)
+        if cost > 0.0:  # an exact repeat of the previous point adds nothing
+            kept.append(q)
+            segments.append((delta, cost))
+    return kept, segments
+
+
+def time_parameterize(
+    limits: tuple[JointLimit, ...],
+    points: list[list[float]],
+    velocity_scaling: float,
+    acceleration_scaling: float,
+) -> RobotTrajectory:
+    """Time a joint-space polyline with plan()'s trapezoid on its path coordinate (docs/api.md).
+
+    ``points`` (at least one) are within limits. The path coordinate ``u`` grows by
+    ``max_j |delta_j| / vmax_j`` over each segment, so ``du/dt <= 1`` keeps every joint
+    within its scaled velocity limit; its acceleration bound ``A`` is the tightest
+    ``amax * cost / |delta_j|`` over all segments and joints.
+    """
+    names = tuple(lim.name for lim in limits)
+    n = len(limits)
+    kept, segments = _segments(limits, points, velocity_scaling)
+    if not segments:
+        zero = np.zeros((1, n))
+        return RobotTrajectory(names, np.zeros(1), np.array([kept[0]], dtype=np.float64), zero, zero.copy())
+    amax = ACCELERATION_LIMIT * acceleration_scaling
+    total_u = 0.0
+    accel = math.inf
+    for delta, cost in segments:
+        total_u += cost
+        for d in delta:
+            if d != 0.0:
+                accel = min(accel, amax * cost / abs(d))
+    if not (accel > 0.0 and total_u < math.inf):
+        raise PlanningError(f"the path would never end (length {total_u!r}, acceleration bound {accel!r})")
+    if accel * total_u > 1.0:  # reaches the cruise speed du/dt = 1
+        ta = 1.0 / accel
+        total = total_u + ta
+        peak = 1.0
+    else:  # triangular
+        ta = math.sqrt(total_u / accel)
+        total = 2.0 * ta
+        peak = accel * ta
+    if not total <= MAX_TRAJECTORY_DURATION:
+        raise PlanningError(f"the path would last {total!r} s, more than {MAX_TRAJECTORY_DURATION!r} s")
+    ua = 0.5 * accel * ta * ta
+    times = [0.0]
+    rows = [kept[0]]
+    still = [0.0] * n
+    first = segments[0]
+    velocities = [still]
+    accelerations = [[d * (accel / first[1]) for d in first[0]]]
+    u = 0.0
+    last = len(segments) - 1
+    for k, (delta, cost) in enumerate(segments):
+        u += cost  # the same sums as total_u: the last point has u == total_u exactly
+        if u < ua:
+            t = math.sqrt(2.0 * u / accel)
+            ud, udd = accel * t, accel
+        elif u <= total_u - ua:
+            t = ta + (u - ua) / peak
+            ud, udd = peak, 0.0
+        else:
+            r = math.sqrt(2.0 * (total_u - u) / accel)
+            t = total - r
+            ud, udd = accel * r, -accel
+        if k == last:
+            if not t > times[-1]:  # the end takes the place (and time) of the point before
+                t = times.pop()
+                rows.pop()
+                velocities.pop()
+                accelerations.pop()
+            times.append(t)
+            rows.append(kept[k + 1])
+            velocities.append(still)
+            accelerations.append(still)
+        elif t > times[-1]:
+            times.append(t)
+            rows.append(kept[k + 1])
+            velocities.append([d * (ud / cost) for d in delta])
+            accelerations.append([d * (udd / cost) for d in delta])
+    return RobotTrajectory(
+        names,
+        np.array(times, dtype=np.float64),
+        np.array(rows, dtype=np.float64).reshape(len(rows), n),
+        np.array(velocities, dtype=np.float64).reshape(len(rows), n),
+        np.array(accelerations, dtype=np.float64).reshape(len(rows), n),
+    )

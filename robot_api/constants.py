@@ -41,3 +41,7 @@ that ``execute`` accepts (MoveIt's ``allowed_start_tolerance``)."""
 
 QUATERNION_NORM_EPS = 1e-9
 """A pose orientation with a norm below this cannot be normalized: rejected."""
+
+CARTESIAN_MAX_POINTS = 1000
+"""``compute_cartesian_path`` fails with PLANNING_FAILED, before any IK, when its
+interpolation would need more points than this (a tiny ``eef_step``)."""

@@ -19,10 +19,19 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from robot_api.records import IKResult, JointLimit, MimicJoint, Pose, RobotTrajectory
+from robot_api.records import (
+    IKResult,
+    JointLimit,
+    MimicJoint,
+    PlanResult,
+    Pose,
+    RobotState,
+    RobotTrajectory,
+)
 
 JointValues = Sequence[float] | NDArray[np.float64]
 JointTarget = JointValues | Mapping[str, float] | str | Sequence[str]
+PoseLike = Pose | tuple[Sequence[float], Sequence[float]]
 
 
 @runtime_checkable
@@ -73,6 +82,7 @@ class MoveGroupAPI(Protocol):
     def get_current_joint_values(self) -> list[float]: ...
     def get_current_pose(self, link: str | None = None) -> Pose: ...
     def get_joint_value_target(self) -> list[float]: ...
+    def get_current_state(self) -> RobotState: ...
 
     def set_joint_value_target(self, arg1: JointTarget, arg2: Any = None) -> None: ...
     def set_named_target(self, name: str) -> None: ...
@@ -85,9 +95,17 @@ class MoveGroupAPI(Protocol):
     def set_max_velocity_scaling_factor(self, value: float) -> None: ...
     def set_max_acceleration_scaling_factor(self, value: float) -> None: ...
 
-    def plan(self, joints: JointTarget | None = None) -> RobotTrajectory: ...
+    def set_pose_target(self, pose: PoseLike, end_effector_link: str | None = None) -> None: ...
+    def set_position_target(self, xyz: JointValues, end_effector_link: str | None = None) -> None: ...
+    def clear_pose_targets(self) -> None: ...
+
+    def plan(self, joints: JointTarget | None = None) -> PlanResult: ...
     def execute(self, plan: RobotTrajectory, wait: bool = True) -> bool: ...
     def go(self, joints: JointTarget | None = None, wait: bool = True) -> bool: ...
+    def stop(self) -> None: ...
+    def compute_cartesian_path(
+        self, waypoints: Sequence[PoseLike], eef_step: float, jump_threshold: float = 0.0
+    ) -> tuple[RobotTrajectory, float]: ...
 
 
 class Implementation(Protocol):
@@ -120,6 +138,7 @@ GROUP_METHODS = (
     "get_current_joint_values",
     "get_current_pose",
     "get_joint_value_target",
+    "get_current_state",
     "set_joint_value_target",
     "set_named_target",
     "get_named_targets",
@@ -129,7 +148,12 @@ GROUP_METHODS = (
     "get_goal_joint_tolerance",
     "set_max_velocity_scaling_factor",
     "set_max_acceleration_scaling_factor",
+    "set_pose_target",
+    "set_position_target",
+    "clear_pose_targets",
     "plan",
     "execute",
     "go",
+    "stop",
+    "compute_cartesian_path",
 )

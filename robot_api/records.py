@@ -1,7 +1,8 @@
 """Typed records returned by both implementations.
 
-Poses and IK results are named tuples (immutable and cheap to build on the hot
-path); a trajectory is a frozen dataclass of numpy arrays.
+Poses, IK results, states and plan results are named tuples (immutable and
+cheap to build on the hot path); a trajectory is a frozen dataclass of numpy
+arrays.
 """
 
 from __future__ import annotations
@@ -141,3 +142,62 @@ class RobotTrajectory:
     def duration(self) -> float:
         """Time (s) of the last sample."""
         return float(self.time_from_start[-1]) if len(self) else 0.0
+
+
+class MoveItErrorCode(enum.IntEnum):
+    """Outcome of ``plan()``: the values of ``moveit_msgs/MoveItErrorCodes`` it can take."""
+
+    SUCCESS = 1
+    PLANNING_FAILED = -1
+    """No acceptable trajectory (it would last longer than ``MAX_TRAJECTORY_DURATION``)."""
+    NO_IK_SOLUTION = -31
+    """The pose or position target has no IK solution from the current state."""
+
+
+class PlanResult(NamedTuple):
+    """What ``plan()`` returns: moveit_commander Noetic's 4-tuple.
+
+    Attributes
+    ----------
+    success : bool
+        Whether a trajectory was found.
+    trajectory : RobotTrajectory
+        The plan; no points (shape ``(0, dof)``) when ``success`` is False.
+    planning_time : float
+        Always 0.0: planning is simulated (MoveIt reports wall time, which no
+        two runs share).
+    error_code : MoveItErrorCode
+        ``SUCCESS``, ``PLANNING_FAILED`` or ``NO_IK_SOLUTION``.
+    """
+
+    success: bool
+    trajectory: RobotTrajectory
+    planning_time: float
+    error_code: MoveItErrorCode
+
+
+class JointState(NamedTuple):
+    """``sensor_msgs/JointState`` restricted to what a simulated arm has.
+
+    Attributes
+    ----------
+    name : tuple of str, length dof
+        Joint variables, in the model's order.
+    position : tuple of float, length dof
+        Their values (rad, m).
+    """
+
+    name: tuple[str, ...]
+    position: tuple[float, ...]
+
+
+class RobotState(NamedTuple):
+    """``moveit_msgs/RobotState`` as ``get_current_state()`` returns it.
+
+    Attributes
+    ----------
+    joint_state : JointState
+        The group's variables and their current values.
+    """
+
+    joint_state: JointState

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 import native
 import python_impl
-from robot_api import ErrorCode, InvalidInputError, OutOfBoundsError, PlanningError, UnknownNameError
+from robot_api import ErrorCode, InvalidInputError, MoveItErrorCode, OutOfBoundsError, UnknownNameError
 from robot_api.constants import ACCELERATION_LIMIT, GOAL_JOINT_TOLERANCE, TRAJECTORY_DT
 from robot_api.records import JointType, RobotTrajectory
 from tests.support import outcome, robot_path, sample_configurations
@@ -51,7 +51,7 @@ def test_trajectories_respect_limits_and_end_at_the_goal(impl, robot: str) -> No
         start = g.get_current_joint_values()
         g.set_joint_value_target(target.tolist())
         goal = g.get_joint_value_target()
-        check_trajectory(g, g.plan(), start, goal)
+        check_trajectory(g, g.plan().trajectory, start, goal)
         assert g.go() is True
         assert g.get_current_joint_values() == goal
         assert g.get_current_pose() == model.forward_kinematics(goal)
@@ -67,7 +67,7 @@ def test_native_and_twin_plan_the_same_trajectory(robot: str) -> None:
             g.set_max_velocity_scaling_factor(scale)
             g.set_max_acceleration_scaling_factor(1.0 - scale / 2)
             g.set_joint_value_target(target.tolist())
-        ta, tb = a.plan(), b.plan()
+        ta, tb = a.plan().trajectory, b.plan().trajectory
         assert ta.joint_names == tb.joint_names
         assert ta.positions.shape == tb.positions.shape
         for name in ("time_from_start", "positions", "velocities", "accelerations"):
@@ -85,7 +85,7 @@ def test_scaled_trajectory_respects_scaled_limits(impl) -> None:
     g.set_max_acceleration_scaling_factor(0.5)
     start = g.get_current_joint_values()
     g.set_joint_value_target([1.0, -1.0, 2.0, 0.5, 3.0, -2.0])
-    check_trajectory(g, g.plan(), start, g.get_joint_value_target(), 0.25, 0.5)
+    check_trajectory(g, g.plan().trajectory, start, g.get_joint_value_target(), 0.25, 0.5)
 
 
 def test_continuous_joint_targets_are_normalized(impl) -> None:
@@ -103,7 +103,7 @@ def test_continuous_joint_targets_are_normalized(impl) -> None:
 def test_continuous_joints_take_the_short_way_round(impl) -> None:
     g = group(impl, "kinova")
     g.go({"j2s6s200_joint_1": 3.0})
-    traj = g.plan({"j2s6s200_joint_1": -3.0})
+    traj = g.plan({"j2s6s200_joint_1": -3.0}).trajectory
     column = traj.positions[:, 0]
     # 3.0 -> -3.0 the short way passes through pi (0.283 rad), not through 0 (6 rad).
     assert np.all(np.abs(column) >= 3.0 - 1e-12)
@@ -162,12 +162,19 @@ def test_named_targets(impl) -> None:
     assert err.value.code == ErrorCode.UNKNOWN_NAMED_TARGET
 
 
+def assert_planning_failed(result) -> None:  # type: ignore[no-untyped-def]
+    """plan() reports the failure as moveit_commander does: (False, empty plan, 0.0, PLANNING_FAILED)."""
+    success, trajectory, planning_time, error_code = result
+    assert success is False and planning_time == 0.0
+    assert error_code == MoveItErrorCode.PLANNING_FAILED
+    assert len(trajectory) == 0 and trajectory.positions.shape[0] == 0
+
+
 def test_tiny_scaling_fails_planning(impl) -> None:
     g = group(impl)
     g.set_max_velocity_scaling_factor(1e-9)
     g.set_joint_value_target([1.0] * 6)
-    with pytest.raises(PlanningError):
-        g.plan()
+    assert_planning_failed(g.plan())
     before = g.get_current_joint_values()
     assert g.go() is False
     assert g.get_current_joint_values() == before
@@ -179,8 +186,7 @@ def test_scaling_that_underflows_fails_planning_cleanly(impl, setter: str) -> No
     g = group(impl)
     getattr(g, setter)(5e-324)  # the smallest subnormal: a valid factor in (0, 1]
     g.set_joint_value_target([0.5, 0.0, 0.7, 0.0, 0.0, -1.0])
-    with pytest.raises(PlanningError):
-        g.plan()
+    assert_planning_failed(g.plan())
     assert g.go() is False
 
 
@@ -189,17 +195,16 @@ def test_a_subnormal_move_is_still_a_move(impl) -> None:
     g = group(impl)
     g.set_max_acceleration_scaling_factor(5e-324)
     g.set_joint_value_target([0.0, 0.0, 0.0, 0.0, 0.0, 5e-319])
-    with pytest.raises(PlanningError):  # 636 s at the scaled acceleration: more than 600 s
-        g.plan()
+    assert_planning_failed(g.plan())  # 636 s at the scaled acceleration: more than 600 s
     g.set_max_acceleration_scaling_factor(1.0)
-    traj = g.plan()  # both bounds overflow to inf: a zero-length profile, one sample, at the goal
+    traj = g.plan().trajectory  # both bounds overflow to inf: a zero-length profile, one sample, at the goal
     assert traj.time_from_start[0] == 0.0 and traj.positions[-1][5] == 5e-319
     assert g.go() is True and g.get_current_joint_values()[5] == 5e-319
 
 
 def test_execute_rejects_foreign_trajectories(impl) -> None:
     g = group(impl)
-    traj = g.plan([0.5, 0.5, 0.5, 0.5, 0.5, 0.5])
+    traj = g.plan([0.5, 0.5, 0.5, 0.5, 0.5, 0.5]).trajectory
     g.go([1.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # the state moved: traj no longer starts here
     with pytest.raises(InvalidInputError) as err:
         g.execute(traj)
@@ -216,7 +221,7 @@ def test_execute_rejects_foreign_trajectories(impl) -> None:
     with pytest.raises(InvalidInputError) as err:
         g.execute("not a plan")  # type: ignore[arg-type]
     assert err.value.code == ErrorCode.INVALID_ARGUMENT
-    fresh = g.plan([0.2, 0.2, 0.2, 0.2, 0.2, 0.2])
+    fresh = g.plan([0.2, 0.2, 0.2, 0.2, 0.2, 0.2]).trajectory
     assert g.execute(fresh) is True
     assert g.get_current_joint_values() == [0.2] * 6
 

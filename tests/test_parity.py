@@ -66,3 +66,22 @@ def test_models_of_one_implementation_do_not_mix() -> None:
         native.MoveGroup(python_impl.RobotModel(default_robot_path()))  # type: ignore[arg-type]
     with pytest.raises(InvalidInputError):
         python_impl.MoveGroup(native.RobotModel(default_robot_path()))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("impl", [native, python_impl], ids=["native", "python"])
+def test_new_group_methods_return_the_contract_records(impl) -> None:  # type: ignore[no-untyped-def]
+    from robot_api import MoveItErrorCode, PlanResult, Pose, RobotState, RobotTrajectory
+
+    g = impl.MoveGroup(impl.RobotModel(default_robot_path()))
+    result = g.plan([0.1] * 6)
+    assert type(result) is PlanResult and type(result.error_code) is MoveItErrorCode
+    assert type(result.success) is bool and type(result.planning_time) is float
+    assert type(result.trajectory) is RobotTrajectory
+    state = g.get_current_state()
+    assert type(state) is RobotState and type(state.joint_state.position) is tuple
+    path = g.compute_cartesian_path([g.get_current_pose()], 0.01)
+    assert type(path) is tuple and len(path) == 2
+    assert type(path[0]) is RobotTrajectory and type(path[1]) is float
+    assert g.set_pose_target(Pose((0.2, 0.0, 0.3), (0.0, 0.0, 0.0, 1.0))) is None
+    assert g.set_position_target([0.2, 0.0, 0.3]) is None
+    assert g.clear_pose_targets() is None and g.stop() is None

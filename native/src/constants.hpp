@@ -15,5 +15,6 @@ constexpr double kIkPinvEps = 1e-5;
 constexpr int kIkSvdIterations = 150;
 constexpr double kExecuteStartTolerance = 0.01;
 constexpr double kQuaternionNormEps = 1e-9;
+constexpr unsigned kCartesianMaxPoints = 1000;
 
 }  // namespace rrosfuzz

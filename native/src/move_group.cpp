@@ -1,5 +1,7 @@
 #include "move_group.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -17,6 +19,42 @@ std::string num(double v) {
   s.precision(17);
   s << v;
   return s.str();
+}
+
+// The pose rule's normalization (docs/api.md, "Arguments"), then KDL's rotation.
+KDL::Frame make_frame(const double p[3], const double q[4]) {
+  const double scale = std::max({std::fabs(q[0]), std::fabs(q[1]), std::fabs(q[2]), std::fabs(q[3])});
+  const double x = q[0] / scale, y = q[1] / scale, z = q[2] / scale, w = q[3] / scale;
+  const double unit = std::sqrt(x * x + y * y + z * z + w * w);
+  return KDL::Frame(KDL::Rotation::Quaternion(x / unit, y / unit, z / unit, w / unit), KDL::Vector(p[0], p[1], p[2]));
+}
+
+// MoveIt's RobotState::distance: per-joint distances summed, continuous joints the short way.
+double joint_distance(const std::vector<Variable>& vars, const std::vector<double>& a, const std::vector<double>& b) {
+  double total = 0.0;
+  for (std::size_t j = 0; j < vars.size(); ++j) {
+    const double d = a[j] - b[j];
+    total += vars[j].kind == JointKind::kContinuous ? std::fabs(normalize_angle(d)) : std::fabs(d);
+  }
+  return total;
+}
+
+// MoveIt's relative jump test: truncates `points` and returns the share kept.
+double jump_test(const std::vector<Variable>& vars, std::vector<std::vector<double>>& points, double factor) {
+  if (points.size() < 2) return 1.0;
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < points.size(); ++i) steps.push_back(joint_distance(vars, points[i], points[i - 1]));
+  double total = 0.0;
+  for (double d : steps) total += d;
+  const double threshold = factor * (total / static_cast<double>(steps.size()));
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    if (steps[i] > threshold) {
+      const double share = static_cast<double>(i + 1) / static_cast<double>(points.size());
+      points.resize(i + 1);
+      return share;
+    }
+  }
+  return 1.0;
 }
 
 void check_scaling(double value, const char* what) {
@@ -49,6 +87,7 @@ void MoveGroup::set_target(const std::vector<double>& values) {
   std::vector<double> next(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) next[i] = accept(i, values[i]);
   target_ = std::move(next);
+  pose_goal_.reset();
 }
 
 void MoveGroup::set_target(const std::vector<std::string>& names, const std::vector<double>& values) {
@@ -71,6 +110,7 @@ void MoveGroup::set_target(const std::vector<std::string>& names, const std::vec
   std::vector<double> next = target_;
   for (std::size_t k = 0; k < names.size(); ++k) next[index[k]] = accept(index[k], values[k]);
   target_ = std::move(next);
+  pose_goal_.reset();
 }
 
 void MoveGroup::set_named_target(const std::string& name) { set_target(named_target(name)); }
@@ -113,8 +153,102 @@ void MoveGroup::set_acceleration_scaling(double value) {
   acceleration_scaling_ = value;
 }
 
+void MoveGroup::set_pose_target(const PoseParts& pose, int link, bool position_only) {
+  pose_goal_ = PoseGoal{pose, link, position_only};
+}
+
+std::vector<double> MoveGroup::goal() const {
+  if (!pose_goal_) return target_;
+  const PoseGoal& g = *pose_goal_;
+  KDL::Frame target;
+  if (g.position_only) {
+    target = KDL::Frame(model_->fk(current_, g.link).M, KDL::Vector(g.pose.p[0], g.pose.p[1], g.pose.p[2]));
+  } else {
+    target = make_frame(g.pose.p, g.pose.q);
+  }
+  IkAnswer answer = model_->ik(target, current_, g.link);
+  if (answer.status != IkStatus::kSuccess) throw NoIkSolution("no IK solution for the pose target from the current state");
+  return std::move(answer.joint_values);
+}
+
 Trajectory MoveGroup::plan() const {
-  return plan_trajectory(*model_, current_, target_, velocity_scaling_, acceleration_scaling_);
+  return plan_trajectory(*model_, current_, goal(), velocity_scaling_, acceleration_scaling_);
+}
+
+PlanOutcome MoveGroup::plan_outcome() const {
+  PlanOutcome out;
+  out.code = PlanCode::kSuccess;
+  try {
+    out.trajectory = plan();
+  } catch (const NoIkSolution&) {
+    out.code = PlanCode::kNoIkSolution;
+  } catch (const ApiError& e) {
+    if (e.code() != ErrorCode::kPlanningFailed) throw;
+    out.code = PlanCode::kPlanningFailed;
+  }
+  if (out.code != PlanCode::kSuccess) {
+    out.trajectory = Trajectory();
+    out.trajectory.dof = model_->dof();
+  }
+  return out;
+}
+
+CartesianPath MoveGroup::compute_cartesian_path(const std::vector<PoseParts>& waypoints, double eef_step,
+                                                double jump_threshold) const {
+  const int tip = static_cast<int>(model_->link_names().size()) - 1;
+  const KDL::Frame here = model_->fk(current_, tip);
+  PoseParts start{{here.p.x(), here.p.y(), here.p.z()}, {0.0, 0.0, 0.0, 1.0}};
+  canonical_quaternion(here.M, start.q);
+
+  // Steps per segment, all checked before any IK.
+  const std::string too_many = "the path needs more than " + std::to_string(kCartesianMaxPoints) + " points at this eef_step";
+  std::vector<std::size_t> counts;
+  std::size_t total = 1;  // the start point
+  const double* prev_p = start.p;
+  for (const PoseParts& w : waypoints) {
+    const double dx = w.p[0] - prev_p[0], dy = w.p[1] - prev_p[1], dz = w.p[2] - prev_p[2];
+    const double ratio = std::sqrt(dx * dx + dy * dy + dz * dz) / eef_step;
+    if (!(ratio < static_cast<double>(kCartesianMaxPoints))) fail(ErrorCode::kPlanningFailed, too_many);
+    const std::size_t steps = static_cast<std::size_t>(std::floor(ratio)) + 1;
+    total += steps;
+    if (total > kCartesianMaxPoints) fail(ErrorCode::kPlanningFailed, too_many);
+    counts.push_back(steps);
+    prev_p = w.p;
+  }
+
+  std::vector<std::vector<double>> points{current_};
+  std::vector<double> q = current_;
+  double fraction = 0.0;
+  const double n_waypoints = static_cast<double>(waypoints.size());
+  const PoseParts* prev = &start;
+  for (std::size_t i = 0; i < waypoints.size(); ++i) {
+    const PoseParts& w = waypoints[i];
+    const std::size_t steps = counts[i];
+    const Eigen::Quaterniond qa(prev->q[3], prev->q[0], prev->q[1], prev->q[2]);
+    const Eigen::Quaterniond qb(w.q[3], w.q[0], w.q[1], w.q[2]);
+    std::size_t reached = 0;
+    for (std::size_t k = 1; k <= steps; ++k) {
+      const double t = static_cast<double>(k) / static_cast<double>(steps);
+      double p[3];
+      for (int c = 0; c < 3; ++c) p[c] = t * w.p[c] + (1.0 - t) * prev->p[c];
+      const Eigen::Quaterniond qs = qa.slerp(t, qb);
+      const double qv[4] = {qs.x(), qs.y(), qs.z(), qs.w()};
+      IkAnswer answer = model_->ik(make_frame(p, qv), q, tip);
+      if (answer.status != IkStatus::kSuccess) break;
+      q = std::move(answer.joint_values);
+      points.push_back(q);
+      reached = k;
+    }
+    if (reached == steps) {
+      fraction = static_cast<double>(i + 1) / n_waypoints;
+    } else {
+      fraction += (static_cast<double>(reached) / static_cast<double>(steps)) / n_waypoints;
+      break;
+    }
+    prev = &w;
+  }
+  if (jump_threshold > 0.0) fraction *= jump_test(model_->variables(), points, jump_threshold);
+  return CartesianPath{time_parameterize(*model_, points, velocity_scaling_, acceleration_scaling_), fraction};
 }
 
 void MoveGroup::execute(const std::vector<std::string>& names, const Trajectory& t) {

@@ -108,4 +108,124 @@ Trajectory plan_trajectory(const Model& model, const std::vector<double>& start,
   return traj;
 }
 
+Trajectory time_parameterize(const Model& model, const std::vector<std::vector<double>>& points,
+                             double velocity_scaling, double acceleration_scaling) {
+  const auto& vars = model.variables();
+  const std::size_t n = vars.size();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Trajectory traj;
+  traj.dof = n;
+
+  // Exact repeats dropped; per segment the delta (continuous: short way) and its cost.
+  std::vector<const std::vector<double>*> kept{&points.front()};
+  std::vector<std::vector<double>> deltas;
+  std::vector<double> costs;
+  for (std::size_t k = 1; k < points.size(); ++k) {
+    const std::vector<double>& prev = *kept.back();
+    std::vector<double> delta(n);
+    double cost = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      double d = points[k][j] - prev[j];
+      if (vars[j].kind == JointKind::kContinuous) d = normalize_angle(d);
+      delta[j] = d;
+      if (d != 0.0) {
+        const double vmax = vars[j].velocity * velocity_scaling;
+        cost = std::max(cost, vmax > 0.0 ? std::fabs(d) / vmax : kInf);
+      }
+    }
+    if (cost > 0.0) {
+      kept.push_back(&points[k]);
+      deltas.push_back(std::move(delta));
+      costs.push_back(cost);
+    }
+  }
+
+  auto push_row = [&](double t, const std::vector<double>& p, const std::vector<double>& v,
+                      const std::vector<double>& a) {
+    traj.time.push_back(t);
+    traj.positions.insert(traj.positions.end(), p.begin(), p.end());
+    traj.velocities.insert(traj.velocities.end(), v.begin(), v.end());
+    traj.accelerations.insert(traj.accelerations.end(), a.begin(), a.end());
+  };
+  auto pop_row = [&] {
+    traj.time.pop_back();
+    traj.positions.resize(traj.positions.size() - n);
+    traj.velocities.resize(traj.velocities.size() - n);
+    traj.accelerations.resize(traj.accelerations.size() - n);
+  };
+  const std::vector<double> zero(n, 0.0);
+  if (costs.empty()) {
+    push_row(0.0, *kept.front(), zero, zero);
+    return traj;
+  }
+
+  const double amax = kAccelerationLimit * acceleration_scaling;
+  double total_u = 0.0;
+  double accel = kInf;
+  for (std::size_t k = 0; k < costs.size(); ++k) {
+    total_u += costs[k];
+    for (double d : deltas[k]) {
+      if (d != 0.0) accel = std::min(accel, amax * costs[k] / std::fabs(d));
+    }
+  }
+  std::ostringstream msg;
+  msg.precision(17);
+  if (!(accel > 0.0 && total_u < kInf)) {
+    msg << "the path would never end (length " << total_u << ", acceleration bound " << accel << ")";
+    fail(ErrorCode::kPlanningFailed, msg.str());
+  }
+  double ta, total, peak;
+  if (accel * total_u > 1.0) {  // reaches the cruise speed du/dt = 1
+    ta = 1.0 / accel;
+    total = total_u + ta;
+    peak = 1.0;
+  } else {  // triangular
+    ta = std::sqrt(total_u / accel);
+    total = 2.0 * ta;
+    peak = accel * ta;
+  }
+  if (!(total <= kMaxTrajectoryDuration)) {
+    msg << "the path would last " << total << " s, more than " << kMaxTrajectoryDuration << " s";
+    fail(ErrorCode::kPlanningFailed, msg.str());
+  }
+  const double ua = 0.5 * accel * ta * ta;
+  std::vector<double> v(n), a(n);
+  for (std::size_t j = 0; j < n; ++j) a[j] = deltas[0][j] * (accel / costs[0]);
+  push_row(0.0, *kept.front(), zero, a);
+  double u = 0.0;
+  const std::size_t last = costs.size() - 1;
+  for (std::size_t k = 0; k < costs.size(); ++k) {
+    u += costs[k];  // the same sums as total_u: the last point has u == total_u exactly
+    double t, ud, udd;
+    if (u < ua) {
+      t = std::sqrt(2.0 * u / accel);
+      ud = accel * t;
+      udd = accel;
+    } else if (u <= total_u - ua) {
+      t = ta + (u - ua) / peak;
+      ud = peak;
+      udd = 0.0;
+    } else {
+      const double r = std::sqrt(2.0 * (total_u - u) / accel);
+      t = total - r;
+      ud = accel * r;
+      udd = -accel;
+    }
+    if (k == last) {
+      if (!(t > traj.time.back())) {  // the end takes the place (and time) of the point before
+        t = traj.time.back();
+        pop_row();
+      }
+      push_row(t, *kept[k + 1], zero, zero);
+    } else if (t > traj.time.back()) {
+      for (std::size_t j = 0; j < n; ++j) {
+        v[j] = deltas[k][j] * (ud / costs[k]);
+        a[j] = deltas[k][j] * (udd / costs[k]);
+      }
+      push_row(t, *kept[k + 1], v, a);
+    }
+  }
+  return traj;
+}
+
 }  // namespace rrosfuzz

@@ -1,6 +1,7 @@
 // Python binding of MoveGroup (wrapped by native.MoveGroup).
 #include <pybind11/pybind11.h>
 
+#include <cmath>
 #include <memory>
 
 #include "../errors.hpp"
@@ -76,6 +77,35 @@ Trajectory to_trajectory(const MoveGroup& g, py::handle plan, std::vector<std::s
   return t;
 }
 
+void set_position_target(MoveGroup& g, py::handle xyz, py::handle link) {
+  const char* what = "position target";
+  const std::vector<double> v = py_api::to_vector(xyz, what);
+  if (v.size() != 3) fail(ErrorCode::kWrongLength, std::string(what) + ": expected 3 values, got " + std::to_string(v.size()));
+  for (double x : v) {
+    if (!std::isfinite(x)) fail(ErrorCode::kNonFinite, std::string(what) + " is not finite");
+  }
+  const int index = g.model().link_index(py_api::to_optional_string(link, "link"));
+  g.set_pose_target(PoseParts{{v[0], v[1], v[2]}, {0.0, 0.0, 0.0, 1.0}}, index, true);
+}
+
+py::tuple compute_cartesian_path(const MoveGroup& g, py::handle waypoints, py::handle eef_step, py::handle jump) {
+  if (!PyList_Check(waypoints.ptr()) && !PyTuple_Check(waypoints.ptr())) {
+    fail(ErrorCode::kInvalidArgument, std::string("waypoints: expected a list or tuple of poses, got ") +
+                                          Py_TYPE(waypoints.ptr())->tp_name);
+  }
+  std::vector<PoseParts> poses;
+  for (py::handle w : py::reinterpret_borrow<py::sequence>(waypoints)) poses.push_back(py_api::to_pose_parts(w));
+  if (poses.empty()) fail(ErrorCode::kInvalidArgument, "waypoints: no waypoints");
+  const double step = py_api::to_real(eef_step, "eef_step");
+  if (!std::isfinite(step) || !(step > 0.0)) fail(ErrorCode::kInvalidArgument, "eef_step: must be finite and > 0");
+  const double factor = py_api::to_real(jump, "jump_threshold");
+  if (!std::isfinite(factor) || !(factor >= 0.0)) {
+    fail(ErrorCode::kInvalidArgument, "jump_threshold: must be finite and >= 0");
+  }
+  const CartesianPath path = g.compute_cartesian_path(poses, step, factor);
+  return py::make_tuple(py_api::trajectory(g.model(), path.trajectory), path.fraction);
+}
+
 }  // namespace
 
 void bind_move_group(py::module_& m) {
@@ -91,6 +121,7 @@ void bind_move_group(py::module_& m) {
       .def("get_planning_frame", [](const MoveGroup& g) { return g.model().root_link(); })
       .def("get_current_joint_values", [](const MoveGroup& g) { return py_api::to_list(g.current()); })
       .def("get_joint_value_target", [](const MoveGroup& g) { return py_api::to_list(g.target()); })
+      .def("get_current_state", [](const MoveGroup& g) { return py_api::robot_state(g.model(), g.current()); })
       .def("get_current_pose",
            [](const MoveGroup& g, py::handle link) {
              const int index = g.model().link_index(py_api::to_optional_string(link, "link"));
@@ -131,11 +162,20 @@ void bind_move_group(py::module_& m) {
            [](MoveGroup& g, py::handle v) {
              g.set_acceleration_scaling(py_api::to_real(v, "max acceleration scaling factor"));
            })
+      .def("set_pose_target",
+           [](MoveGroup& g, py::handle pose, py::handle link) {
+             const PoseParts parts = py_api::to_pose_parts(pose);
+             g.set_pose_target(parts, g.model().link_index(py_api::to_optional_string(link, "link")), false);
+           })
+      .def("set_position_target", &set_position_target)
+      .def("clear_pose_targets", &MoveGroup::clear_pose_targets)
       .def("plan",
            [](MoveGroup& g, py::handle joints) {
              if (!joints.is_none()) set_joint_value_target(g, joints, py::none());
-             return py_api::trajectory(g.model(), g.plan());
+             return py_api::plan_result(g.model(), g.plan_outcome());
            })
+      .def("stop", [](const MoveGroup&) {})
+      .def("compute_cartesian_path", &compute_cartesian_path)
       .def("execute",
            [](MoveGroup& g, py::handle plan, py::handle wait) {
              std::vector<std::string> names;

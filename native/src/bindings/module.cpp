@@ -30,5 +30,6 @@ PYBIND11_MODULE(_native, m) {
   constants["IK_PINV_EPS"] = rrosfuzz::kIkPinvEps;
   constants["EXECUTE_START_TOLERANCE"] = rrosfuzz::kExecuteStartTolerance;
   constants["QUATERNION_NORM_EPS"] = rrosfuzz::kQuaternionNormEps;
+  constants["CARTESIAN_MAX_POINTS"] = rrosfuzz::kCartesianMaxPoints;
   m.attr("constants") = constants;
 }

@@ -13,6 +13,7 @@ namespace {
 // outlive module teardown at interpreter exit).
 struct Handles {
   py::object pose, ik_result, ik_success, ik_no_solution, joint_limit, mimic_joint, trajectory, make_error;
+  py::object plan_result, moveit_error_code, robot_state, joint_state;
   py::object joint_type_revolute, joint_type_continuous, joint_type_prismatic;
   py::object ndarray;
 };
@@ -42,6 +43,10 @@ void init() {
   handles->joint_type_continuous = records.attr("JointType").attr("CONTINUOUS");
   handles->joint_type_prismatic = records.attr("JointType").attr("PRISMATIC");
   handles->make_error = errors.attr("make_error");
+  handles->plan_result = records.attr("PlanResult");
+  handles->moveit_error_code = records.attr("MoveItErrorCode");
+  handles->robot_state = records.attr("RobotState");
+  handles->joint_state = records.attr("JointState");
   handles->ndarray = py::module_::import("numpy").attr("ndarray");
 }
 
@@ -115,6 +120,12 @@ std::optional<std::string> to_optional_string(py::handle h, const char* what) {
 }
 
 KDL::Frame to_frame(py::handle pose) {
+  const PoseParts parts = to_pose_parts(pose);
+  return KDL::Frame(KDL::Rotation::Quaternion(parts.q[0], parts.q[1], parts.q[2], parts.q[3]),
+                    KDL::Vector(parts.p[0], parts.p[1], parts.p[2]));
+}
+
+PoseParts to_pose_parts(py::handle pose) {
   if (!PyTuple_Check(pose.ptr()) && !PyList_Check(pose.ptr())) {
     bad("pose", "expected a robot_api.Pose or a (position, orientation) pair, got " + type_of(pose));
   }
@@ -136,8 +147,7 @@ KDL::Frame to_frame(py::handle pose) {
   const double z = scale > 0.0 ? q[2] / scale : 0.0, w = scale > 0.0 ? q[3] / scale : 0.0;
   const double unit = std::sqrt(x * x + y * y + z * z + w * w);
   if (!(scale * unit >= kQuaternionNormEps)) bad("pose orientation", "quaternion has (near) zero norm");
-  return KDL::Frame(KDL::Rotation::Quaternion(x / unit, y / unit, z / unit, w / unit),
-                    KDL::Vector(p[0], p[1], p[2]));
+  return PoseParts{{p[0], p[1], p[2]}, {x / unit, y / unit, z / unit, w / unit}};
 }
 
 py::object pose(const KDL::Frame& f) {
@@ -185,6 +195,17 @@ py::object trajectory(const Model& m, const Trajectory& t) {
 }
 
 bool is_trajectory(py::handle h) { return py::isinstance(h, handles->trajectory); }
+
+py::object plan_result(const Model& m, const PlanOutcome& outcome) {
+  return handles->plan_result(outcome.code == PlanCode::kSuccess, trajectory(m, outcome.trajectory), 0.0,
+                              handles->moveit_error_code(static_cast<int>(outcome.code)));
+}
+
+py::object robot_state(const Model& m, const std::vector<double>& positions) {
+  std::vector<std::string> names;
+  for (const auto& v : m.variables()) names.push_back(v.name);
+  return handles->robot_state(handles->joint_state(to_tuple(names), to_tuple(positions)));
+}
 
 py::list to_list(const std::vector<double>& v) {
   py::list out(v.size());

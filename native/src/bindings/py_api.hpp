@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../model.hpp"
+#include "../move_group.hpp"
 #include "../trajectory.hpp"
 
 namespace rrosfuzz::py_api {
@@ -32,6 +33,7 @@ bool is_real(py::handle h);
 bool is_string(py::handle h);
 bool is_sequence(py::handle h);  // list, tuple or ndarray
 KDL::Frame to_frame(py::handle pose);  // robot_api.Pose or (position, orientation)
+PoseParts to_pose_parts(py::handle pose);  // the same checks; unit quaternion (x, y, z, w)
 
 // C++ -> Python (robot_api records).
 py::object pose(const KDL::Frame& f);
@@ -40,6 +42,8 @@ py::object joint_limits(const Model& m);
 py::object mimic_joints(const Model& m);
 py::object trajectory(const Model& m, const Trajectory& t);
 bool is_trajectory(py::handle h);
+py::object plan_result(const Model& m, const PlanOutcome& outcome);  // robot_api.PlanResult
+py::object robot_state(const Model& m, const std::vector<double>& positions);  // robot_api.RobotState
 py::list to_list(const std::vector<double>& v);
 py::tuple to_tuple(const std::vector<double>& v);
 py::tuple to_tuple(const std::vector<std::string>& v);
