@@ -3,7 +3,7 @@
 # a virtual environment in .venv, and the project (with its native build) in it.
 #   scripts/setup.sh            core + test dependencies
 # Environment: PYTHON (default: python3.11, else python3; must be 3.11),
-#              VENV (default: .venv), RROSFUZZ_EXTRAS (default: test,adapters).
+#              VENV (default: .venv), RROSFUZZ_EXTRAS (default: test,adapters,engines).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,7 +29,7 @@ if [ ! -x "$VENV/bin/python" ]; then
   "$PYTHON" -m venv "$VENV"
 fi
 echo "setup: installing the project into $VENV (native build in build/)"
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[${RROSFUZZ_EXTRAS:-test,adapters}]" 2>&1 \
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[${RROSFUZZ_EXTRAS:-test,adapters,engines}]" 2>&1 \
   | grep -v "is ignored: it is neither a file nor a directory" || true
 "$VENV/bin/python" -c "import native, python_impl" \
   || { echo "setup: the install did not produce an importable native module" >&2; exit 1; }

@@ -1,0 +1,208 @@
+"""rosbag in and out: bag messages as seeds, a divergence as a bag (Debian's ``python3-rosbag``).
+
+A bag is untrusted data. It embeds the definition of each message type it
+holds, and rosbag would compile a Python class from that text on first use
+(``genpy.dynamic``); here it never does: only connections whose type name and
+MD5 sum are those of Debian's compiled class for the campaign's type are read,
+and rosbag's class cache is filled with that class beforehand. Messages become
+plain data (:func:`to_data`) and pass the campaign's own validation.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from fuzzer import reporting
+from fuzzer.ros import env
+from fuzzer.session import ConfigError
+
+TOPICS = {
+    "sensor_msgs/JointState": "/joint_states",
+    "geometry_msgs/PoseStamped": "/rrosfuzz/pose_target",
+    "geometry_msgs/Pose": "/rrosfuzz/pose_target",
+    "std_msgs/Float64MultiArray": "/rrosfuzz/joint_values",
+}
+"""Topic of each input type in an exported bag (``/joint_states``: what robot_state_publisher reads)."""
+
+MAX_SEEDS = 1000
+"""At most this many messages of a bag become seeds (the first ones)."""
+
+
+class BagError(ConfigError):
+    """A bag that cannot be read or written (the CLI exits with 2 and this message)."""
+
+
+def message_class(msg_type: str) -> Any:
+    """Debian's compiled genpy class of ``pkg/Type``."""
+    package, _, name = msg_type.partition("/")
+    try:
+        return getattr(env.import_module(f"{package}.msg"), name)
+    except (ImportError, AttributeError):
+        raise BagError(f"no ROS message class for {msg_type} in Debian's packages") from None
+
+
+def to_data(message: Any) -> Any:
+    """A genpy message as the engine's plain data (dicts, lists, numbers, strings)."""
+    if hasattr(message, "__slots__") and hasattr(message, "_slot_types"):
+        return {name: to_data(getattr(message, name)) for name in message.__slots__}
+    if hasattr(message, "secs") and hasattr(message, "nsecs"):  # time, duration
+        return {"secs": int(message.secs), "nsecs": int(message.nsecs)}
+    if isinstance(message, bytes):  # uint8[] / char[]
+        return list(message)
+    if isinstance(message, list | tuple):
+        return [to_data(item) for item in message]
+    return message
+
+
+def from_data(cls: Any, data: Any) -> Any:
+    """The genpy message of class ``cls`` with the engine's plain data ``data``."""
+    message = cls()
+    for name, kind in zip(cls.__slots__, cls._slot_types, strict=True):
+        value = data[name]
+        current = getattr(message, name)
+        base = kind.split("[", 1)[0]
+        if kind in ("time", "duration"):
+            current.secs, current.nsecs = int(value["secs"]), int(value["nsecs"])
+        elif hasattr(current, "_slot_types"):
+            setattr(message, name, from_data(type(current), value))
+        elif kind.endswith("]") and base in ("uint8", "char"):
+            setattr(message, name, bytes(value))
+        elif kind.endswith("]") and "/" in base:
+            item = message_class(base)
+            setattr(message, name, [from_data(item, v) for v in value])
+        else:
+            setattr(message, name, value)
+    return message
+
+
+def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]:
+    """The ``msg_type`` messages of a bag (any topic), as seeds; the invalid ones are skipped.
+
+    Raises
+    ------
+    BagError
+        The file is not a readable bag, or holds no valid message of that type.
+    """
+    rosbag = env.import_module("rosbag")
+    cls = message_class(msg_type)
+    rosbag.bag._message_types[cls._md5sum] = cls  # never compile the bag's own definition
+
+    def wanted(topic: str, datatype: str, md5sum: str, msg_def: str, header: Any) -> bool:
+        return bool(datatype == msg_type and md5sum == cls._md5sum)
+
+    out: list[dict[str, Any]] = []
+    types: set[str] = set()
+    try:
+        with rosbag.Bag(str(path), "r") as bag:
+            types = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
+            for _topic, message, _t in bag.read_messages(connection_filter=wanted):
+                data = to_data(message)
+                try:
+                    validate(data)
+                except ValueError:
+                    continue
+                out.append(data)
+                if len(out) >= MAX_SEEDS:
+                    break
+    except Exception as exc:  # noqa: BLE001 - rosbag, genpy, struct, bz2/lz4: all mean "not readable"
+        raise BagError(f"--seeds-from-bag {path}: not a readable bag: {type(exc).__name__}: {exc}") from None
+    if not out:
+        held = ", ".join(sorted(types)) or "no messages"
+        raise BagError(f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {held})")
+    return out
+
+
+def _pose_stamped(values: dict[str, Any], frame: str) -> Any:
+    geometry_msgs = env.import_module("geometry_msgs.msg")
+    pose = geometry_msgs.PoseStamped()
+    pose.header.frame_id = frame
+    pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = values["position"]
+    o = pose.pose.orientation
+    o.x, o.y, o.z, o.w = values["orientation"]
+    return pose
+
+
+def export_bag(crash: Path, output: Path) -> list[str]:
+    """Write a divergence as a bag: its input, and each target's final joint state and pose.
+
+    Topics: the input on ``TOPICS[msg_type]`` (``/joint_states`` for a JointState);
+    per target ``k`` (0, 1), when its outcome has them,
+    ``/rrosfuzz/target_k/joint_states`` (``sensor_msgs/JointState``) and
+    ``/rrosfuzz/target_k/pose`` (``geometry_msgs/PoseStamped`` in the root link's
+    frame). Returns the topics written.
+
+    Raises
+    ------
+    BagError
+        The crash file or its sidecar cannot be used, or the bag cannot be written.
+    """
+    import python_impl
+    from fuzzer.sidecar import read_sidecar, safe_robot
+    from fuzzer.testcase import decode
+    from robot_api import robots
+
+    try:
+        case = decode(crash.read_bytes())
+    except (OSError, ValueError) as exc:
+        raise BagError(f"{crash}: not a crash file: {exc}") from None
+    sidecar = read_sidecar(crash) or {}
+    config = sidecar.get("config", {})
+    rosbag = env.import_module("rosbag")
+    rospy = env.import_module("rospy")
+    sensor_msgs = env.import_module("sensor_msgs.msg")
+    model = python_impl.RobotModel(
+        robots.resolve(safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)), config.get("tip_link")
+    )
+    stamp = case.message.get("header", {}).get("stamp", {})
+    secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
+    start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
+    records: list[tuple[str, Any]] = []
+    if case.msg_type in TOPICS:
+        records.append((TOPICS[case.msg_type], from_data(message_class(case.msg_type), case.message)))
+    for k, outcome in enumerate(sidecar.get("outcomes", [])[:2]):
+        values = outcome.get("values", {}) if isinstance(outcome, dict) else {}
+        joints = values.get("joint_values")
+        if isinstance(joints, list) and len(joints) == model.dof:
+            state = sensor_msgs.JointState()
+            state.header.stamp = start
+            state.name, state.position = list(model.joint_names), [float(v) for v in joints]
+            records.append((f"/rrosfuzz/target_{k}/joint_states", state))
+        if len(values.get("position", [])) == 3 and len(values.get("orientation", [])) == 4:
+            pose = _pose_stamped(values, model.root_link)
+            pose.header.stamp = start
+            records.append((f"/rrosfuzz/target_{k}/pose", pose))
+    if not records:
+        raise BagError(f"{crash}: nothing to export ({case.msg_type}, no outcome values in its sidecar)")
+    try:
+        with rosbag.Bag(str(output), "w") as bag:
+            for topic, message in records:
+                bag.write(topic, message, start)
+    except Exception as exc:  # noqa: BLE001 - genpy's serialization errors name the field
+        output.unlink(missing_ok=True)
+        raise BagError(f"{output}: cannot write the bag: {type(exc).__name__}: {exc}") from None
+    return [topic for topic, _ in records]
+
+
+def export_bag_main(argv: Sequence[str]) -> int:
+    """``fuzz_diff.py export-bag CRASH [-o OUT.bag]``."""
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py export-bag",
+        description="write a divergence as a bag for `rosbag play` (ROS 1 from apt: scripts/ros-ensure.sh)",
+    )
+    parser.add_argument("crash", type=Path)
+    parser.add_argument("-o", "--output", type=Path, help="the bag to write (default: CRASH.bag)")
+    args = parser.parse_args(argv)
+    if not args.crash.is_file():
+        raise BagError(f"{args.crash}: no such file")
+    try:
+        env.require()
+    except env.RosUnavailableError as exc:
+        raise BagError(str(exc)) from None
+    output = args.output or args.crash.with_name(args.crash.name + ".bag")
+    topics = export_bag(args.crash, output)
+    reporting.out(f"wrote {output}: {', '.join(topics)}")
+    reporting.out(f"play it: rosbag play {output}")
+    return 0

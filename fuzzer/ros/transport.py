@@ -1,0 +1,334 @@
+"""The ROS transport (``--transport ros``): every target runs as a ROS node.
+
+The engine joins the master of ``ROS_MASTER_URI`` (when one answers) or starts
+one on a free loopback port (``fuzzer.ros.node``), and starts each target as a
+node (``ros/target_node.py``, rospy, any target spec). Protocol, per target
+node ``/rrosfuzz/<name>``:
+
+* ``/rrosfuzz/<name>/ready`` (``std_msgs/String``, latched): the node's JSON
+  ``{"pid": int, "spec": str, "joint_names": [...], "error": str}`` once its
+  model is built (``error`` non-empty: the constructor failed; the node exits);
+* ``/rrosfuzz/<name>/request`` (``std_msgs/String``): the engine publishes one
+  request per test case, ``"<n>\n<JSON>"`` with the JSON ``{"id": n, "op": "run",
+  "call": call_to_json(call, ik_seed)}``, or ``{"id": n, "op": "fresh"}`` (rebuild
+  the model), or ``{"id": n, "op": "ping"}`` (answered with an ``ok`` outcome: the
+  engine's handshake after the ready message, repeated until answered);
+* ``/rrosfuzz/<name>/response`` (``std_msgs/String``): the node answers
+  ``"<n>\n{"id": n, "outcome": Outcome.to_json()}"``, the outcome of
+  ``fuzzer.targets.Runner.run``: the same records, oracle and artifacts as in
+  process. A rejected call's outcome may carry the contract's code only (the C++
+  node); the engine names its class (``robot_api.errors.error_class``).
+
+The JSON is plain JSON (RFC 8259): a non-finite float travels as
+``{"$float": "nan" | "inf" | "-inf"}``. Which node runs a target:
+``native`` runs in the C++ node (``ros/cpp``, roscpp, linking ``native/src``
+directly; built on first use into ``build/ros-cpp`` by CMake), every other spec
+(``python``, ``module:attribute``) in the rospy node ``ros/target_node.py``.
+
+The engine waits ``REQUEST_TIMEOUT`` seconds for the answer with the request's
+id. A node that dies (a segfault, an abort, ``os._exit``) or does not answer in
+time is an outcome ``crashed`` (``NodeDied`` with its exit status, or
+``NodeTimeout``): the engine's usual crash handling saves the input as a crash
+artifact; the node is stopped (its process group killed) and restarted before
+the next call. Every node dies with the engine (``fuzzer.ros.processes``).
+The robot facts the engine needs (joint names, limits, reachable poses for
+seeds) come from an in-process ``python_impl`` model of the same URDF; every
+test case runs over ROS.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import itertools
+import json
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import python_impl
+from fuzzer.mapping import Call, call_to_json
+from fuzzer.records import Outcome, Status
+from fuzzer.ros import env, node, processes
+from robot_api.errors import error_class
+
+ROOT = Path(__file__).resolve().parents[2]
+NODE_SCRIPT = ROOT / "ros" / "target_node.py"
+CPP_SOURCE = ROOT / "ros" / "cpp"
+CPP_BUILD = ROOT / "build" / "ros-cpp"
+CPP_NODE = CPP_BUILD / "rrosfuzz_native_node"
+REQUEST_TIMEOUT = 20.0
+"""Seconds a node may take to answer one test case (libFuzzer's -timeout is 20 s too)."""
+START_TIMEOUT = 60.0
+"""Seconds a node may take to start (Python, numpy, the target's import, its model)."""
+PING_SECONDS = 0.25
+"""How long one handshake ping waits for its answer before the next one is sent."""
+
+_names = itertools.count()
+
+
+class NodeStartError(RuntimeError):
+    """A target node that could not start (the message has its log's tail)."""
+
+
+def _tagged(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return {"$float": "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")}
+    if isinstance(value, dict):
+        return {k: _tagged(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_tagged(v) for v in value]
+    return value
+
+
+def _untag(obj: dict[str, Any]) -> Any:
+    if len(obj) == 1 and obj.get("$float") in ("nan", "inf", "-inf"):
+        return float(obj["$float"])
+    return obj
+
+
+def encode(ident: int, payload: dict[str, Any]) -> str:
+    """A request or answer as sent: ``"<id>\n<JSON>"`` (plain JSON, non-finite floats tagged)."""
+    return f"{ident}\n" + json.dumps(_tagged({"id": ident, **payload}), allow_nan=False)
+
+
+def decode(text: str) -> dict[str, Any]:
+    """Read what :func:`encode` wrote (data only).
+
+    Raises
+    ------
+    ValueError
+        Not a message of the protocol.
+    """
+    _, _, body = text.partition("\n")
+    data = json.loads(body, object_hook=_untag)
+    if not isinstance(data, dict) or not isinstance(data.get("id"), int):
+        raise ValueError("not a request or answer of the ROS transport")
+    return data
+
+
+def build_cpp_node() -> Path:
+    """Build the C++ node (``ros/cpp``) into ``build/ros-cpp`` if needed; its path.
+
+    Raises
+    ------
+    NodeStartError
+        CMake failed (the message has the end of its output).
+    """
+    CPP_BUILD.mkdir(parents=True, exist_ok=True)
+    with open(CPP_BUILD / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # -fork workers build it once
+        steps = [
+            ["cmake", "-S", str(CPP_SOURCE), "-B", str(CPP_BUILD)],
+            ["cmake", "--build", str(CPP_BUILD), "-j2"],
+        ]
+        if (CPP_BUILD / "CMakeCache.txt").exists():
+            steps = steps[1:]
+        for step in steps:
+            done = subprocess.run(step, capture_output=True, text=True, check=False)
+            if done.returncode != 0:
+                tail = "\n".join((done.stdout + done.stderr).splitlines()[-15:])
+                raise NodeStartError(
+                    f"building the C++ node failed ({' '.join(step)}); {env.INSTALL_HINT}:\n{tail}"
+                )
+    return CPP_NODE
+
+
+@dataclass
+class TargetNode:
+    """One target running as a ROS node, and the engine's side of its topics."""
+
+    spec: str
+    urdf: str
+    tip_link: str | None
+    name: str = field(default_factory=lambda: f"t{os.getpid()}_{next(_names)}")
+    process: processes.Process | None = None
+    restarts: int = 0
+    _ids: itertools.count[int] = field(default_factory=itertools.count)
+    _answers: dict[int, dict[str, Any]] = field(default_factory=dict)
+    _ready: dict[str, Any] | None = None
+    _changed: threading.Condition = field(default_factory=threading.Condition)
+    _topics: list[Any] = field(default_factory=list)
+
+    @property
+    def topic(self) -> str:
+        return f"/rrosfuzz/{self.name}"
+
+    def start(self) -> None:
+        """Start the node and wait until it is ready and connected.
+
+        Raises
+        ------
+        NodeStartError
+            The node exited or did not become ready in ``START_TIMEOUT`` seconds.
+        """
+        ros = node.context()
+        rospy = ros.rospy
+        std_msgs = env.import_module("std_msgs.msg")
+        if not self._topics:
+            self._request = rospy.Publisher(f"{self.topic}/request", std_msgs.String, queue_size=10)
+            self._topics = [
+                self._request,
+                rospy.Subscriber(f"{self.topic}/response", std_msgs.String, self._on_response, queue_size=10),
+                rospy.Subscriber(f"{self.topic}/ready", std_msgs.String, self._on_ready, queue_size=1),
+            ]
+        with self._changed:
+            self._ready = None
+        if self.spec == "native":
+            argv = [str(build_cpp_node()), "--urdf", self.urdf, "--name", self.name]
+        else:
+            argv = [
+                sys.executable,
+                str(NODE_SCRIPT),
+                "--spec",
+                self.spec,
+                "--urdf",
+                self.urdf,
+                "--name",
+                self.name,
+            ]
+        if self.tip_link is not None:
+            argv += ["--tip-link", self.tip_link]
+        environment = {
+            **ros.environment,
+            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+        }
+        self.process = processes.spawn(f"target-{self.name}", argv, environment, ros.master.log_dir)
+        deadline = time.monotonic() + START_TIMEOUT
+        ready = False
+        with self._changed:
+            while not ready and self.process.alive() and time.monotonic() < deadline:
+                if self._ready is not None and self._ready.get("error"):
+                    break
+                if self._ready is None or self._ready.get("pid") != self.process.pid:
+                    self._changed.wait(0.05)
+                    continue
+                ready = self._ping()
+            self._answers.clear()
+        if self._ready is not None and self._ready.get("error"):
+            self.process.stop()
+            raise NodeStartError(f"target {self.spec!r} as a ROS node: {self._ready['error']}")
+        if not ready:
+            self.process.stop()
+            raise NodeStartError(
+                f"target {self.spec!r}: its ROS node did not start in {START_TIMEOUT} s; log:\n"
+                f"{self.process.log_tail()}"
+            )
+
+    def _ping(self) -> bool:
+        """One handshake: a ``ping`` request answered within ``PING_SECONDS`` (the node's
+        subscription to the request topic is connected; a stale connection count is not proof)."""
+        std_msgs = env.import_module("std_msgs.msg")
+        ident = next(self._ids)
+        self._request.publish(std_msgs.String(encode(ident, {"op": "ping"})))
+        until = time.monotonic() + PING_SECONDS
+        while ident not in self._answers and time.monotonic() < until:
+            self._changed.wait(0.02)
+        return ident in self._answers
+
+    def _on_ready(self, message: Any) -> None:
+        with self._changed:
+            self._ready = json.loads(message.data)
+            self._changed.notify_all()
+
+    def _on_response(self, message: Any) -> None:
+        try:
+            answer = decode(message.data)
+            ident = answer["id"]
+        except ValueError:
+            return
+        with self._changed:
+            self._answers[ident] = answer
+            self._changed.notify_all()
+
+    def request(self, payload: dict[str, Any]) -> Outcome:
+        """Send one request and wait for its answer; a dead or silent node is a crash outcome."""
+        if self.process is None or not self.process.alive():
+            self.restart()
+        assert self.process is not None
+        std_msgs = env.import_module("std_msgs.msg")
+        ident = next(self._ids)
+        deadline = time.monotonic() + REQUEST_TIMEOUT
+        with self._changed:
+            self._request.publish(std_msgs.String(encode(ident, payload)))
+            while ident not in self._answers:
+                if not self.process.alive():
+                    status = self.process.popen.returncode
+                    self.restart()
+                    return Outcome(
+                        Status.CRASHED, "NodeDied", None, f"the target's ROS node died (status {status})"
+                    )
+                if time.monotonic() > deadline:
+                    self.restart()
+                    return Outcome(
+                        Status.CRASHED,
+                        "NodeTimeout",
+                        None,
+                        f"no answer from the target's node in {REQUEST_TIMEOUT} s",
+                    )
+                self._changed.wait(0.05)
+            answer = self._answers.pop(ident)
+        outcome = Outcome.from_json(answer["outcome"])
+        if outcome.status == Status.REJECTED and not outcome.error and outcome.code is not None:
+            outcome = Outcome(
+                outcome.status, error_class(outcome.code).__name__, outcome.code, outcome.message
+            )
+        return outcome
+
+    def restart(self) -> None:
+        """Stop the node (its whole process group) and start it again."""
+        if self.process is not None:
+            self.process.stop()
+        self.restarts += 1
+        with self._changed:
+            self._answers.clear()
+        self.start()
+
+    def stop(self) -> None:
+        if self.process is not None:
+            self.process.stop()
+        for topic in self._topics:
+            topic.unregister()
+        self._topics = []
+
+
+@dataclass
+class RosRunner:
+    """A target that runs as a ROS node; the engine's ``Runner`` interface (``run``, ``fresh``)."""
+
+    name: str
+    node: TargetNode
+    model: Any
+
+    @classmethod
+    def create(cls, spec: str, urdf: str | os.PathLike[str], tip_link: str | None) -> RosRunner:
+        """Start ``spec`` as a node on ``urdf``; the facts come from a local ``python_impl`` model.
+
+        Raises
+        ------
+        NodeStartError, RosUnavailableError
+            The node or ROS could not start.
+        """
+        target = TargetNode(spec, str(urdf), tip_link)
+        target.start()
+        return cls(spec, target, python_impl.RobotModel(urdf, tip_link))
+
+    @property
+    def home(self) -> tuple[float, ...]:
+        return tuple(self.model.home_values)
+
+    def run(self, call: Call, ik_seed: tuple[float, ...] | None = None) -> Outcome:
+        """Execute ``call`` in the node; never raises (failures become the outcome)."""
+        return self.node.request({"op": "run", "call": call_to_json(call, ik_seed)})
+
+    def fresh(self) -> RosRunner:
+        """The node rebuilds its model (no state from earlier calls)."""
+        outcome = self.node.request({"op": "fresh"})
+        if outcome.status != Status.OK:
+            raise RuntimeError(f"target {self.name!r}: rebuilding its model failed: {outcome.message}")
+        return self

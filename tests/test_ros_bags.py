@@ -1,0 +1,165 @@
+"""rosbag in (--seeds-from-bag) and out (export-bag), with bags the tests write."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fuzzer.testcase import TestCase, decode
+from tests.support import skip_or_fail
+
+ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.filterwarnings("ignore:notifyAll:DeprecationWarning")  # rospy 1.15
+
+
+@pytest.fixture(scope="module")
+def ros() -> Any:
+    from fuzzer.ros import env
+
+    gone = env.missing()
+    if gone:
+        skip_or_fail(f"ROS 1 is not installed ({', '.join(gone)}): run scripts/ros-ensure.sh")
+    env.require()
+    import rosbag
+    import sensor_msgs.msg
+    import std_msgs.msg
+
+    return rosbag, sensor_msgs.msg, std_msgs.msg
+
+
+def _state(sensor_msgs: Any, values: list[float], stamp: int) -> Any:
+    m = sensor_msgs.JointState()
+    m.header.stamp.secs = stamp
+    m.header.frame_id = "link_3" if stamp % 2 else ""
+    m.name = [f"joint_{i}" for i in range(1, 7)]
+    m.position = values
+    return m
+
+
+def _fuzz(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+    return subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), *args],
+        capture_output=True, text=True, timeout=180, cwd=cwd, env=environment, check=False,
+    )  # fmt: skip
+
+
+def test_bag_messages_become_seeds(ros: Any, tmp_path: Path) -> None:
+    rosbag, sensor_msgs, std_msgs = ros
+    bag_path = tmp_path / "recorded.bag"
+    states = [[0.1 * k + 0.01 * i for i in range(6)] for k in range(3)]
+    with rosbag.Bag(str(bag_path), "w") as bag:
+        for k, values in enumerate(states):
+            bag.write("/joint_states", _state(sensor_msgs, values, 10 + k))
+            bag.write("/chatter", std_msgs.String(f"not a joint state {k}"))
+    corpus = tmp_path / "corpus"
+    run = _fuzz(str(corpus), "--op", "fk", "--seeds-from-bag", str(bag_path), "--artifacts",
+                str(tmp_path / "art"), "-runs=20", "-seed=1", "--no-progress", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert f"wrote 3 seeds from {bag_path}" in run.stderr
+    cases = [decode(p.read_bytes()) for p in corpus.iterdir() if p.is_file()]
+    from_bag = sorted((c for c in cases if c.origin == "rosbag"), key=lambda c: c.sequence)
+    assert [c.message["position"] for c in from_bag] == states
+    assert [c.message["header"]["stamp"] for c in from_bag] == [
+        {"secs": 10 + k, "nsecs": 0} for k in range(3)
+    ]
+    assert from_bag[1].message["header"]["frame_id"] == "link_3"
+    assert not any(c.origin == "hypothesis" for c in cases)  # the bag's seeds replace Hypothesis'
+
+
+def test_unusable_bags_are_usage_errors(ros: Any, tmp_path: Path) -> None:
+    rosbag, _sensor_msgs, std_msgs = ros
+    only_strings = tmp_path / "strings.bag"
+    with rosbag.Bag(str(only_strings), "w") as bag:
+        bag.write("/chatter", std_msgs.String("hello"))
+    garbage = tmp_path / "garbage.bag"
+    garbage.write_bytes(b"#ROSBAG V2.0\n" + bytes(range(256)) * 4)
+    for path, expected in (
+        (
+            only_strings,
+            "no valid sensor_msgs/JointState message (the bag holds: std_msgs/String on /chatter)",
+        ),
+        (garbage, "not a readable bag"),
+        (tmp_path / "missing.bag", "no such file"),
+    ):
+        run = _fuzz(str(tmp_path / "c"), "--op", "fk", "--seeds-from-bag", str(path), "-runs=1", cwd=tmp_path)
+        assert run.returncode == 2, run.stderr[-2000:]
+        assert expected in run.stderr and "Traceback" not in run.stderr
+
+
+def test_a_bag_message_definition_is_never_compiled(
+    ros: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    rosbag, sensor_msgs, _std_msgs = ros
+    import genpy.dynamic
+
+    from fuzzer.ros import bags
+
+    hostile = tmp_path / "hostile.bag"
+    data = _state(sensor_msgs, [0.0] * 6, 1)
+    with rosbag.Bag(str(hostile), "w") as bag:  # same type name, another definition and MD5 sum
+        header = {
+            "type": "sensor_msgs/JointState",
+            "md5sum": "0" * 32,
+            "message_definition": "string __import__\n",
+        }
+        bag.write("/joint_states", ("sensor_msgs/JointState", b"\x00" * 16, "0" * 32, None), raw=True,
+                  connection_header=header)  # fmt: skip
+        bag.write("/good", data)
+
+    def refuse(*_args: Any) -> Any:
+        raise AssertionError("a bag's message definition was compiled")
+
+    monkeypatch.setattr(genpy.dynamic, "generate_dynamic", refuse)
+    seeds = bags.read_seeds(hostile, "sensor_msgs/JointState", lambda m: None)
+    assert len(seeds) == 1 and seeds[0]["position"] == [0.0] * 6
+
+
+def test_export_bag_writes_the_input_and_each_targets_answer(ros: Any, tmp_path: Path) -> None:
+    rosbag, _sensor_msgs, _std_msgs = ros
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 42, "nsecs": 0}, "frame_id": ""},
+        "name": [f"joint_{i}" for i in range(1, 7)], "position": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+        "velocity": [0.5], "effort": [],
+    }  # fmt: skip
+    crash = tmp_path / "crash-0123456789abcdef0123456789abcdef01234567"
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    q = [[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], [0.1, 0.2, 0.3, 0.4, 0.5, math.pi]]
+    outcomes = [
+        {"target": t, "status": "ok", "values": {"joint_values": v, "position": [0.1 * k, 0.2, 0.3],
+                                                  "orientation": [0.0, 0.0, 0.0, 1.0]}}
+        for k, (t, v) in enumerate(zip(("native", "python"), q, strict=True))
+    ]  # fmt: skip
+    sidecar = {"config": {"op": "move", "robot": "probot_anno", "targets": ["native", "python"]},
+               "signature": {"key": "k"}, "outcomes": outcomes}  # fmt: skip
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    out = crash.with_name(crash.name + ".bag")
+    assert f"rosbag play {out}" in run.stdout
+    got: dict[str, Any] = {}
+    with rosbag.Bag(str(out)) as bag:
+        for topic, msg, t in bag.read_messages():
+            got[topic] = msg
+            assert t.secs == 42
+    assert list(got["/joint_states"].position) == message["position"]
+    assert list(got["/joint_states"].velocity) == [0.5]
+    for k in (0, 1):
+        assert list(got[f"/rrosfuzz/target_{k}/joint_states"].position) == q[k]
+        pose = got[f"/rrosfuzz/target_{k}/pose"]
+        assert pose.header.frame_id == "base_link" and pose.pose.position.x == 0.1 * k
+    info = subprocess.run(
+        ["rosbag", "info", str(out)], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert info.returncode == 0 and "/rrosfuzz/target_1/pose" in info.stdout, (
+        info.stderr
+    )  # Debian's own reader
+    bad = _fuzz("export-bag", str(tmp_path / "nope"), cwd=tmp_path)
+    assert bad.returncode == 2 and "no such file" in bad.stderr

@@ -1,0 +1,155 @@
+"""The ROS transport (--transport ros): targets as ROS nodes, crashes, timeouts, shutdown."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fuzzer.mapping import FkCall, IkCall, MoveCall
+from fuzzer.records import Status
+from fuzzer.targets import Runner
+from fuzzer.testcase import TestCase
+from robot_api import robots
+from tests import ros_faulty_target as faulty
+from tests.support import skip_or_fail
+from tests.test_ros_tf import _processes_with
+
+ROOT = Path(__file__).resolve().parents[1]
+FAULTY = "tests.ros_faulty_target:api"
+pytestmark = pytest.mark.filterwarnings("ignore:notifyAll:DeprecationWarning")  # rospy 1.15
+
+CALLS = [
+    FkCall((0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
+    FkCall((0.1, 0.2, 0.3, 0.4, 0.5, math.nan)),
+    FkCall((0.1,) * 6, "no_such_link"),
+    FkCall((-2.5, 1e5, 0.3, -0.4, 3.0, 0.6), "link_3"),
+    FkCall((0.1,) * 5),
+    IkCall((0.2, 0.0, 0.4), (0.0, 0.0, 0.0, 1.0)),
+    IkCall((0.2, 0.0, 0.4), (0.0, 0.0, 0.0, 0.0)),
+    IkCall((math.inf, 0.0, 0.4), (0.0, 0.0, 0.0, 1.0)),
+    MoveCall(None, (0.1, 0.2, 0.3, 0.4, 0.5, 0.6), 0.5, None),
+    MoveCall(("joint_1",), (0.3,)),
+    MoveCall(("joint_1", "nope"), (0.3, 0.1)),
+    MoveCall(None, (9.0,) * 6),
+]
+
+
+@pytest.fixture(scope="module")
+def transport():  # type: ignore[no-untyped-def]
+    from fuzzer.ros import env
+
+    gone = env.missing()
+    if gone:
+        skip_or_fail(f"ROS 1 is not installed ({', '.join(gone)}): run scripts/ros-ensure.sh")
+    from fuzzer.ros import transport
+
+    return transport
+
+
+@pytest.mark.parametrize("spec", ["native", "python"])  # native: the C++ roscpp node; python: rospy
+def test_nodes_answer_exactly_as_in_process(transport, spec: str) -> None:  # type: ignore[no-untyped-def]
+    urdf = robots.resolve(robots.DEFAULT_ROBOT)
+    over_ros = transport.RosRunner.create(spec, urdf, None)
+    local = Runner.create(spec, urdf, None)
+    try:
+        for call in CALLS:
+            assert over_ros.run(call) == local.run(call), call
+        seed = (0.3, -0.2, 0.1, 0.0, 0.5, -0.1)
+        assert over_ros.run(CALLS[5], seed) == local.run(CALLS[5], seed)
+        assert over_ros.fresh() is over_ros and over_ros.run(CALLS[0]) == local.run(CALLS[0])
+    finally:
+        over_ros.node.stop()
+    assert not over_ros.node.process.alive()
+
+
+def test_dead_and_silent_nodes_are_crashes_and_restarted(transport, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.setattr(transport, "REQUEST_TIMEOUT", 2.0)
+    runner = transport.RosRunner.create(FAULTY, robots.resolve(robots.DEFAULT_ROBOT), None)
+    good = FkCall((0.1, 0.0, 0.0, 0.0, 0.0, 0.0))
+    try:
+        first_pid = runner.node.process.pid
+        died = runner.run(FkCall((faulty.DIE, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        assert (died.status, died.error) == (Status.CRASHED, "NodeDied") and "status 3" in died.message
+        assert runner.node.restarts == 1 and runner.node.process.pid != first_pid
+        assert runner.run(good).status == Status.OK
+        hung = runner.run(FkCall((faulty.HANG, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        assert (hung.status, hung.error) == (Status.CRASHED, "NodeTimeout")
+        assert runner.node.restarts == 2 and runner.run(good).status == Status.OK
+        raised = runner.run(FkCall((faulty.RAISE, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        assert (raised.status, raised.error, raised.message) == (
+            Status.CRASHED,
+            "RuntimeError",
+            "injected fault",
+        )
+        assert runner.node.restarts == 2
+    finally:
+        runner.node.stop()
+
+
+def test_protocol_encoding_round_trips_and_refuses_garbage(transport) -> None:  # type: ignore[no-untyped-def]
+    payload = {
+        "call": {"kind": "FkCall", "joint_values": [math.nan, math.inf, -math.inf, 0.1], "link": "NaN"}
+    }
+    text = transport.encode(7, payload)
+    assert "NaN" not in text.split("\n", 1)[1].replace('"NaN"', "")  # plain JSON: no bare NaN token
+    json.loads(text.split("\n", 1)[1])
+    back = transport.decode(text)
+    values = back["call"]["joint_values"]
+    assert back["id"] == 7 and math.isnan(values[0]) and values[1:] == [math.inf, -math.inf, 0.1]
+    assert back["call"]["link"] == "NaN"
+    for garbage in ("", "1\n[]", '1\n{"id": "x"}', "1\n{not json"):
+        with pytest.raises(ValueError):
+            transport.decode(garbage)
+
+
+def _case(path: Path, first: float) -> None:
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": [first, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
+    }  # fmt: skip
+    path.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+
+
+def test_campaign_over_ros_saves_crashes_that_replay_in_process(transport, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    corpus, artifacts, log_dir = tmp_path / "corpus", tmp_path / "art", tmp_path / "roslog"
+    corpus.mkdir()
+    log_dir.mkdir()
+    for i, first in enumerate((faulty.RAISE, faulty.DIE, 0.1)):
+        _case(corpus / f"seed-{i}", first)
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+    environment["ROS_LOG_DIR"] = str(log_dir)
+    command = [sys.executable, str(ROOT / "fuzz_diff.py")]
+    run = subprocess.run(
+        [*command, str(corpus), "--op", "fk", "--transport", "ros", "--targets", f"python,{FAULTY}",
+         "--artifacts", str(artifacts), "-runs=40", "-seed=1", "--no-progress"],
+        capture_output=True, text=True, timeout=300, env=environment, cwd=ROOT, check=False,
+    )  # fmt: skip
+    output = run.stdout + run.stderr
+    assert run.returncode == 1, output[-3000:]
+    assert "as ROS nodes (master http://127.0.0.1:" in output
+    errors = {}
+    for sidecar in artifacts.glob("crash-*.json"):
+        data = json.loads(sidecar.read_text())
+        assert data["config"]["transport"] == "ros"
+        errors[data["outcomes"][1]["error"]] = sidecar.with_suffix("")
+    assert {"NodeDied", "RuntimeError"} <= set(errors), errors
+    assert _processes_with(str(log_dir)) == []
+    replay = subprocess.run(
+        [*command, str(errors["RuntimeError"]), "--targets", f"python,{FAULTY}"],
+        capture_output=True, text=True, timeout=120, env=environment, cwd=ROOT, check=False,
+    )  # fmt: skip
+    assert "still diverges (same signature)" in replay.stdout + replay.stderr, replay.stderr[-2000:]
+
+
+def test_transport_option_is_checked(tmp_path: Path) -> None:
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), str(tmp_path), "--transport", "carrier-pigeon"],
+        capture_output=True, text=True, timeout=60, cwd=ROOT, check=False,
+    )  # fmt: skip
+    assert run.returncode == 2 and "--transport" in run.stderr

@@ -1,0 +1,82 @@
+"""fuzz_diff.py view: RViz under Xvfb draws both targets' arms (a screenshot is checked)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from fuzzer.testcase import TestCase
+from tests.support import skip_or_fail
+from tests.test_ros_tf import _processes_with
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _crash(folder: Path, q0: list[float], q1: list[float]) -> Path:
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": q0, "velocity": [], "effort": [],
+    }  # fmt: skip
+    crash = folder / "crash-00112233445566778899aabbccddeeff00112233"
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    outcomes = [
+        {"target": "native", "status": "ok", "values": {"joint_values": q0}},
+        {"target": "python", "status": "ok", "values": {"joint_values": q1}},
+    ]
+    sidecar = {
+        "config": {"op": "move", "robot": "probot_anno"},
+        "signature": {"key": "k"},
+        "outcomes": outcomes,
+    }
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    return crash
+
+
+def test_coloured_pixels_sees_arms_not_grey_or_blank() -> None:
+    from fuzzer.ros.view import coloured_pixels
+
+    blank = np.full((50, 80, 3), 40, dtype=np.uint8)
+    assert coloured_pixels(blank) == (0, 0)
+    grey = blank.copy()
+    grey[10:20, 10:20] = (120, 120, 120)
+    assert coloured_pixels(grey) == (0, 0)
+    arms = blank.copy()
+    arms[5:15, 5:25] = (200, 30, 30)  # a shaded red
+    arms[20:30, 5:20] = (40, 80, 220)  # a shaded blue
+    assert coloured_pixels(arms) == (200, 150)
+
+
+def test_view_draws_both_arms_under_xvfb(tmp_path: Path) -> None:
+    from fuzzer.ros import env
+
+    gone = env.missing() + [tool for tool in ("rviz", "Xvfb", "import") if shutil.which(tool) is None]
+    if gone:
+        skip_or_fail(f"ROS 1, RViz or Xvfb missing ({', '.join(gone)}): run scripts/ros-ensure.sh --viz")
+    crash = _crash(tmp_path, [0.5, 0.3, -0.4, 0.0, 0.6, 0.0], [-1.2, 0.9, 0.4, 0.0, -0.6, 0.0])
+    shot = tmp_path / "view.ppm"
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_") and k != "DISPLAY"}
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), "view", str(crash), "--screenshot", str(shot)],
+        capture_output=True, text=True, timeout=180, env=environment, cwd=tmp_path, check=False,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stdout + run.stderr[-3000:]
+    counts = re.search(r"(\d+) red and (\d+) blue pixels", run.stdout)
+    assert counts is not None and min(int(counts[1]), int(counts[2])) >= 200, run.stdout
+    assert shot.read_bytes().startswith(b"P6")
+    log_dir = re.search(r"logs in (\S+)\)", run.stderr)
+    assert log_dir is not None and _processes_with(log_dir[1]) == []  # Xvfb, RViz, master, nodes: gone
+
+
+def test_view_refuses_a_missing_crash_file(tmp_path: Path) -> None:
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), "view", str(tmp_path / "crash-nope")],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path, check=False,
+    )  # fmt: skip
+    assert run.returncode == 2 and "no such file" in run.stderr
