@@ -19,6 +19,7 @@ run: setup
 
 ## The test suite (what CI runs).
 test: setup
+	scripts/ros-ensure.sh --viz  # ROS 1, RViz and Xvfb from apt, for the ROS tests only (tests/test_ros_*.py)
 	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds.
@@ -36,6 +37,9 @@ lint: setup
 COV_BUILD := build/coverage
 ATHERIS_PRELOAD = $$($(PY) -c "import atheris, os; print(os.path.join(atheris.path(), 'asan_with_fuzzer.so'))")
 COV_MODULE = $$(ls $(CURDIR)/$(COV_BUILD)/_native*.so)
+## libFuzzer preloaded this way resolves its weak custom-mutator hooks at start-up, before
+## Atheris defines them: the shim defines them and forwards to Atheris (native/coverage/).
+MUTATOR_SHIM := $(COV_BUILD)/librrosfuzz_mutator_shim.so
 FUZZ_ARGS ?= corpus/ -max_total_time=60
 
 native-cov: setup
@@ -45,7 +49,19 @@ native-cov: setup
 	  -DCMAKE_CXX_COMPILER=clang++ -DPython_EXECUTABLE=$(CURDIR)/$(PY) \
 	  -Dpybind11_DIR=$$($(PY) -m pybind11 --cmakedir) > /dev/null
 	cmake --build $(COV_BUILD) -j2
+	cc -shared -fPIC -O2 -Wall -o $(MUTATOR_SHIM) native/coverage/mutator_shim.c -ldl
 
 fuzz-native: native-cov
-	LD_PRELOAD=$(ATHERIS_PRELOAD) ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
+	LD_PRELOAD="$(ATHERIS_PRELOAD) $(CURDIR)/$(MUTATOR_SHIM)" ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
 	  $(PY) fuzz_diff.py $(FUZZ_ARGS)
+
+## The native URDF loader under ASan for 10 minutes (tests/fuzz_urdf_loader.py; CI runs a
+## bounded version in tests/test_fuzz_urdf_loader.py). Corpus and crash files: FUZZ_URDF_DIR.
+FUZZ_URDF_DIR ?= build/fuzz-urdf
+FUZZ_URDF_ARGS ?= -max_total_time=600 -timeout=30
+.PHONY: fuzz-urdf
+fuzz-urdf: native-cov
+	mkdir -p $(FUZZ_URDF_DIR)/corpus
+	LD_PRELOAD=$(ATHERIS_PRELOAD) ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
+	  $(PY) tests/fuzz_urdf_loader.py $(FUZZ_URDF_ARGS) -artifact_prefix=$(CURDIR)/$(FUZZ_URDF_DIR)/ \
+	  $(FUZZ_URDF_DIR)/corpus

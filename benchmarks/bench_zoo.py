@@ -1,7 +1,9 @@
 """Bug-finding power: every engine against every zoo bug, on the same budget.
 
     .venv/bin/python -m benchmarks.bench_zoo --mode quick     # a few bugs, 1 seed, short budget
-    .venv/bin/python -m benchmarks.bench_zoo --mode full      # all bugs + control, 5 seeds
+    .venv/bin/python -m benchmarks.bench_zoo --mode full      # all bugs + controls, 5 seeds
+    .venv/bin/python -m benchmarks.bench_zoo --mode controls  # false positives only
+    .venv/bin/python -m benchmarks.bench_zoo --mode buckets   # buckets per injected bug only
 
 Engines, each a subprocess started the same way (the clock starts at launch):
 
@@ -10,7 +12,11 @@ Engines, each a subprocess started the same way (the clock starts at launch):
 * ``paper``, ``hypothesis``, ``uniform``: ``benchmarks/baselines.py``.
 
 Per run: time to first detection (the first logged divergence that is not
-``ill_conditioned`` or ``flaky``), unique signatures, and exec/s. Results go to
+``ill_conditioned``, ``known_limitation`` or ``flaky``), unique signatures (for a
+zoo bug: its buckets, goal one), and exec/s. The controls (the unmodified twin on
+every configuration a bug uses, ``fk`` on every known robot, ``ik`` on the default
+arm; full engine only) give the false-positive rate: control runs that reported
+any divergence, and divergences per minute. Results go to
 ``benchmarks/results/zoo-<mode>.json`` and a plot ``zoo-<mode>.png``; with
 ``--write-md`` the tables replace the marked section of BENCHMARKS.md.
 """
@@ -31,23 +37,31 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.zoo import BY_NAME, CONTROL, ZOO, Bug
+from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, ZOO, Bug
 from fuzzer.divlog import DIVERGENCES, STATS, read_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 ENGINES = ("full", "libfuzzer", "paper", "hypothesis", "uniform")
-NOT_DETECTIONS = {"ill_conditioned", "flaky"}
+NOT_DETECTIONS = {"ill_conditioned", "known_limitation", "flaky"}
+CONTROL_ENGINES = ("full",)
+"""Engines run on the control configurations (the plain ``control`` entry runs them all)."""
+
+
 @dataclass(frozen=True)
 class Mode:
     bugs: tuple[str, ...]
     seeds: int
     budget: float  # seconds per run
+    engines: tuple[str, ...] = ENGINES
+    replay: bool = False
 
 
 MODES = {
     "quick": Mode(bugs=("silent_clamp", "off_by_tolerance", "wrap_positive"), seeds=1, budget=8.0),
-    "full": Mode(bugs=tuple(b.name for b in (*ZOO, CONTROL)), seeds=5, budget=20.0),
+    "full": Mode(bugs=tuple(b.name for b in (*ZOO, CONTROL, *CONTROLS)), seeds=5, budget=20.0, replay=True),
+    "controls": Mode(bugs=tuple(b.name for b in CONTROLS), seeds=1, budget=15.0, engines=("full",)),
+    "buckets": Mode(bugs=tuple(b.name for b in ZOO), seeds=1, budget=10.0, engines=("full",), replay=True),
 }
 MARK_BEGIN, MARK_END = "<!-- bench_zoo:begin -->", "<!-- bench_zoo:end -->"
 
@@ -64,6 +78,14 @@ class Run:
     elapsed: float
     op: str
     returncode: int
+    divergences: int = 0
+    """Logged divergences that count as detections."""
+    replayed: int = 0
+    """Crash files (with a sidecar) replayed in a fresh process (``--replay``)."""
+    replay_same: int = 0
+    """Of those, the ones that replayed with the same signature."""
+    replay_misses: tuple[str, ...] = ()
+    """Kind and verdict of each file that did not."""
 
 
 def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
@@ -95,7 +117,37 @@ def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> l
     ]
 
 
-def run_one(bug: Bug, engine: str, seed: int, budget: float) -> Run:
+def replay_fidelity(bug: Bug, artifacts: Path) -> tuple[int, int, tuple[str, ...]]:
+    """Replay every crash file of a run in one new process: (files, same signature, misses)."""
+    crashes = sorted(
+        p for p in artifacts.glob("crash-*") if p.suffix != ".json" and Path(f"{p}.json").is_file()
+    )
+    if not crashes:
+        return 0, 0, ()
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), *map(str, crashes), f"--targets=native,{bug.target}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+    )
+    same, misses = 0, []
+    for path in crashes:
+        line = next(
+            (ln for ln in done.stdout.splitlines() if ln.startswith(f"{path}:")),
+            f"no verdict (exit {done.returncode}: {done.stderr.strip()[-300:]})",
+        )
+        if "still diverges (same signature)" in line:
+            same += 1
+        else:
+            kind = json.loads(path.with_name(path.name + ".json").read_text())["signature"]["kind"]
+            misses.append(f"{kind}: {line.removeprefix(f'{path}: ')}")
+    return len(crashes), same, tuple(misses)
+
+
+def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = False) -> Run:
     with tempfile.TemporaryDirectory(prefix="rrosfuzz-bench-") as tmp:
         workdir = Path(tmp)
         started = time.time()
@@ -116,6 +168,7 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float) -> Run:
             last[record.get("pid")] = record
         executions = sum(int(r.get("execs", 0)) for r in last.values())
         elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
+        fidelity = replay_fidelity(bug, artifacts) if replay and engine == "full" else (0, 0, ())
     return Run(
         bug.name,
         engine,
@@ -127,6 +180,8 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float) -> Run:
         elapsed or budget,
         bug.op,
         done.returncode,
+        len(hits),
+        *fidelity,
     )
 
 
@@ -145,6 +200,8 @@ def summarize(runs: list[Run], engines: tuple[str, ...], bugs: tuple[str, ...]) 
                 "median_ttd": None if median == float("inf") else median,
                 "median_signatures": statistics.median(r.signatures for r in mine),
                 "median_exec_per_s": statistics.median(r.executions / r.elapsed for r in mine),
+                "divergences": sum(r.divergences for r in mine),
+                "minutes": sum(r.elapsed for r in mine) / 60.0,
             }
     return cells
 
@@ -172,13 +229,67 @@ def compare_times(mine: float, other: float) -> str:
     return "faster" if mine < other else "slower"
 
 
+def _is_config_control(name: str) -> bool:
+    return name.startswith("control@")
+
+
+def buckets_per_bug(result: dict[str, Any], engine: str = "full") -> dict[str, float]:
+    """Median unique signatures (buckets) per zoo bug that the engine detected."""
+    out = {}
+    for bug in result["bugs"]:
+        cell = result["cells"].get(f"{bug}/{engine}")
+        if cell and not BY_NAME[bug].is_control and cell["detected"]:
+            out[bug] = cell["median_signatures"]
+    return out
+
+
+def controls_markdown(result: dict[str, Any]) -> list[str]:
+    """The false-positive table: every control run of the full engine."""
+    runs = [r for r in result["runs"] if BY_NAME[r["bug"]].is_control and r["engine"] == "full"]
+    if not runs:
+        return []
+    lines = [
+        "False positives: the unmodified twin against native (full engine). A control run that reports "
+        "any divergence counting as a detection is a false positive.",
+        "",
+        "| control configuration | op | runs reporting a divergence | divergences per minute |",
+        "|---|---|---|---|",
+    ]
+    for bug in result["bugs"]:
+        mine = [r for r in runs if r["bug"] == bug]
+        if not mine:
+            continue
+        minutes = sum(r["elapsed"] for r in mine) / 60.0
+        found = sum(r.get("divergences", 0) for r in mine)
+        reporting = sum(1 for r in mine if r.get("divergences", 0) or r["detected_at"] is not None)
+        rate = found / minutes if minutes else 0.0
+        lines.append(f"| {bug} | {BY_NAME[bug].op} | {reporting}/{len(mine)} | {rate:.1f} |")
+    minutes = sum(r["elapsed"] for r in runs) / 60.0
+    reporting = sum(1 for r in runs if r.get("divergences", 0) or r["detected_at"] is not None)
+    total = sum(r.get("divergences", 0) for r in runs)
+    lines += [
+        "",
+        f"False-positive rate: {reporting} of {len(runs)} control runs reported a divergence; "
+        f"{total} divergences in {minutes:.1f} min ({total / minutes if minutes else 0.0:.1f} per minute).",
+    ]
+    return lines
+
+
 def markdown(result: dict[str, Any]) -> str:
-    engines, bugs, budget = result["engines"], result["bugs"], result["budget"]
+    engines, budget = result["engines"], result["budget"]
+    bugs = [b for b in result["bugs"] if not _is_config_control(b)]
     cells = result["cells"]
     lines = [
         f"Mode `{result['mode']}`: {len(bugs)} bugs x {len(engines)} engines x {result['seeds']} seed(s), "
         f"{budget:.0f} s each, {result['jobs']} runs at a time on {result['cpus']} CPUs "
         f"({result['machine']}). Command: `{result['command']}`.",
+    ]
+    configs = len(result["bugs"]) - len(bugs)
+    if not bugs:
+        return "\n".join(
+            [lines[0].replace("0 bugs", f"{configs} control configurations"), "", *controls_markdown(result)]
+        )
+    lines += [
         "",
         "Median time to first detection in seconds from launch (startup included), and runs that detected it "
         "(`-`: not detected within the budget by at least half the runs).",
@@ -193,7 +304,7 @@ def markdown(result: dict[str, Any]) -> str:
         op = BY_NAME[bug].op
         lines.append(f"| {bug} | {op} | " + " | ".join(_fmt_ttd(c, budget) if c else "" for c in row) + " |")
         full = cells.get(f"{bug}/full")
-        if bug == CONTROL.name or not full:
+        if BY_NAME[bug].is_control or not full:
             continue
         comparable += 1
         full_t = full["median_ttd"] if full["median_ttd"] is not None else float("inf")
@@ -235,10 +346,33 @@ def markdown(result: dict[str, Any]) -> str:
             rates = [
                 c["median_exec_per_s"]
                 for k, c in cells.items()
-                if k.endswith(f"/{e}") and BY_NAME[k.split("/")[0]].op == op
+                if k.endswith(f"/{e}") and BY_NAME[k.rsplit("/", 1)[0]].op == op
             ]
             values.append(f"{statistics.median(rates):,.0f}" if rates else "")
         lines.append(f"| {op} | " + " | ".join(values) + " |")
+    per_bug = buckets_per_bug(result)
+    if per_bug:
+        counts = list(per_bug.values())
+        worst = max(per_bug, key=lambda b: per_bug[b])
+        lines += [
+            "",
+            f"One bug, one bucket: buckets (unique signatures) per detected zoo bug, full engine: "
+            f"median {statistics.median(counts):g}, max {max(counts):g} ({worst}) over {len(counts)} bugs "
+            "(goal: median 1, at most 3).",
+        ]
+    replayed = [r for r in result["runs"] if r.get("replayed")]
+    if replayed:
+        files = sum(r["replayed"] for r in replayed)
+        same = sum(r["replay_same"] for r in replayed)
+        lines += [
+            "",
+            f"Replay fidelity: {same} of {files} crash files ({same / files:.0%}) replayed in a new process "
+            "with the same signature.",
+        ]
+        lines += [f"- not replayed, {r['bug']}: {m}" for r in replayed for m in r["replay_misses"]]
+    control_lines = controls_markdown(result)
+    if control_lines:
+        lines += ["", *control_lines]
     return "\n".join(lines)
 
 
@@ -249,7 +383,9 @@ def plot(result: dict[str, Any], path: Path) -> None:
     from matplotlib.figure import Figure
 
     engines, bugs, budget, cells = result["engines"], result["bugs"], result["budget"], result["cells"]
-    bugs = [b for b in bugs if b != CONTROL.name]
+    bugs = [b for b in bugs if not BY_NAME[b].is_control]
+    if not bugs:
+        return
     fig = Figure(figsize=(10, 0.45 * len(bugs) + 1.8))
     ax = fig.add_subplot()
     height = 0.8 / len(engines)
@@ -273,14 +409,26 @@ def plot(result: dict[str, Any], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def write_markdown(text: str, path: Path = ROOT / "BENCHMARKS.md") -> None:
+SECTIONS = {
+    "controls": "## False positives (controls, short sweep)",
+    "buckets": "## One bug, one bucket, and replay fidelity (short sweep)",
+}
+
+
+def write_markdown(text: str, path: Path = ROOT / "BENCHMARKS.md", mode: str = "full") -> None:
+    """Replace this mode's marked section of BENCHMARKS.md (``full``: the main one; the
+    short ``controls`` and ``buckets`` sweeps have sections of their own)."""
+    begin, end = MARK_BEGIN, MARK_END
+    if mode in SECTIONS:
+        begin, end = f"<!-- bench_zoo_{mode}:begin -->", f"<!-- bench_zoo_{mode}:end -->"
     content = path.read_text(encoding="utf-8")
-    block = f"{MARK_BEGIN}\n{text}\n{MARK_END}"
-    if MARK_BEGIN in content:
-        head, rest = content.split(MARK_BEGIN, 1)
-        content = head + block + rest.split(MARK_END, 1)[1]
+    block = f"{begin}\n{text}\n{end}"
+    if begin in content:
+        head, rest = content.split(begin, 1)
+        content = head + block + rest.split(end, 1)[1]
     else:
-        content = content.rstrip() + "\n\n## Bug-finding power (the bug zoo)\n\n" + block + "\n"
+        title = SECTIONS.get(mode, "## Bug-finding power (the bug zoo)")
+        content = content.rstrip() + f"\n\n{title}\n\n" + block + "\n"
     path.write_text(content, encoding="utf-8")
 
 
@@ -290,13 +438,26 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     parser.add_argument("--mode", choices=MODES, default="quick")
     parser.add_argument("--bugs", nargs="+", default=None)
-    parser.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
+    parser.add_argument("--engines", nargs="+", default=None, choices=ENGINES)
     parser.add_argument("--seeds", type=int, default=None)
     parser.add_argument("--budget", type=float, default=None)
     parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
+    parser.add_argument(
+        "--render", type=Path, default=None, help="only render a saved result (JSON) as markdown, run nothing"
+    )
+    parser.add_argument(
+        "--replay", action="store_true", help="replay each full-engine run's crash files in a new process"
+    )
     args = parser.parse_args(argv)
+    if args.render is not None:
+        saved: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
+        text = markdown(saved)
+        print(text)
+        if args.write_md:
+            write_markdown(text, mode=str(saved.get("mode", "full")))
+        return saved
     mode = MODES[args.mode]
     bugs = tuple(args.bugs or mode.bugs)
     unknown = [b for b in bugs if b not in BY_NAME]
@@ -304,10 +465,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         parser.error(f"unknown bugs: {unknown}")
     seeds = args.seeds or mode.seeds
     budget = args.budget or mode.budget
-    engines = tuple(args.engines)
-    jobs = [(BY_NAME[b], e, s) for b in bugs for e in engines for s in range(1, seeds + 1)]
+    engines = tuple(args.engines or mode.engines)
+    replay = args.replay or mode.replay
+    jobs = [
+        (BY_NAME[b], e, s)
+        for b in bugs
+        for e in engines
+        if not _is_config_control(b) or e in CONTROL_ENGINES
+        for s in range(1, seeds + 1)
+    ]
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], budget), jobs))
+        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], budget, replay), jobs))
     result = {
         "mode": args.mode,
         "bugs": list(bugs),
@@ -328,7 +496,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     text = markdown(result)
     print(text)
     if args.write_md:
-        write_markdown(text)
+        write_markdown(text, mode=args.mode)
     return result
 
 

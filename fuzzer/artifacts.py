@@ -1,41 +1,105 @@
 """Crash files: atomic writes, one file per new divergence signature, sidecars.
 
 Every file is written to a hidden temporary name in its final directory and
-then renamed, so ``kill -9`` can leave a stray ``.tmp-*`` (removed at the next
-start) but never a half-written artifact. The first input of each signature
-wins across processes (``-fork``/``-jobs``): a marker created with O_EXCL
-under ``.signatures/`` decides.
+then renamed, so ``kill -9`` never leaves a half-written artifact. Temporaries
+are per process (``.tmp-<name>.<pid>.<token>``); start-up clean-up removes only
+those of dead processes (or older than ``STALE_SECONDS``), so ``-fork``/``-jobs``
+workers never touch each other's in-flight files.
+
+The first input of each signature wins across processes: a marker under
+``.signatures/`` decides. Claiming and writing are atomic together
+(:meth:`ArtifactStore.record`): the crash file and sidecar are first written
+in full to temporaries, then the marker is created (atomically, holding the
+crash file's name), then the temporaries are renamed. A process killed after
+claiming leaves complete temporaries, which the next start completes
+(:meth:`ArtifactStore.recover`); a marker without crash file and without
+temporaries is dropped, so its signature can be written again.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import re
+import secrets
+import signal
+import time
 from pathlib import Path
 from typing import Any
 
 TMP_PREFIX = ".tmp-"
+CRASH_NAME = re.compile(r"crash-[0-9a-f]{40}")
+STALE_SECONDS = 600.0
+"""A temporary this old is abandoned even if a process with its pid is alive (pid reuse)."""
+KILL_HOOK = "RROSFUZZ_TEST_KILL_AT"
+"""Test-only: ``<point>:<n>`` makes the process SIGKILL itself at ``point`` ("temp", "claim"
+or "sidecar") of its n-th :meth:`ArtifactStore.record`, inside the write window."""
 
 
-def atomic_write(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` all at once (temporary file, fsync, rename)."""
+def _temporary(path: Path) -> Path:
+    return path.parent / f"{TMP_PREFIX}{path.name}.{os.getpid()}.{secrets.token_hex(4)}"
+
+
+def _write_temporary(path: Path, data: bytes) -> Path:
+    """Write ``data`` in full (fsync) to a temporary next to ``path``; return the temporary."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f"{TMP_PREFIX}{path.name}-{os.getpid()}"
+    tmp = _temporary(path)
     with open(tmp, "wb") as handle:
         handle.write(data)
         handle.flush()
         os.fsync(handle.fileno())
-    os.replace(tmp, path)
+    return tmp
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` all at once (per-process temporary file, fsync, rename)."""
+    tmp = _write_temporary(path, data)
+    try:
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _owner(tmp: Path) -> int | None:
+    """The pid in a temporary's name (``.tmp-<name>.<pid>.<token>``), None if it has none."""
+    parts = tmp.name.rsplit(".", 2)
+    return int(parts[1]) if len(parts) == 3 and parts[1].isdigit() else None
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def abandoned(tmp: Path, now: float | None = None) -> bool:
+    """Whether a temporary belongs to no live writer: its process is gone, or it is stale."""
+    pid = _owner(tmp)
+    if pid is None or not _alive(pid):
+        return True
+    try:
+        return (now or time.time()) - tmp.stat().st_mtime > STALE_SECONDS
+    except FileNotFoundError:
+        return False  # renamed meanwhile by its writer
 
 
 def clean_temporaries(directory: Path) -> list[Path]:
-    """Remove leftovers of interrupted writes; return what was removed."""
+    """Remove leftovers of interrupted writes of dead processes; return what was removed."""
     removed = []
     if directory.is_dir():
         for path in directory.glob(f"{TMP_PREFIX}*"):
-            path.unlink(missing_ok=True)
-            removed.append(path)
+            if abandoned(path):
+                path.unlink(missing_ok=True)
+                removed.append(path)
     return removed
 
 
@@ -48,6 +112,13 @@ def sidecar_path(crash: Path) -> Path:
     return crash.with_name(crash.name + ".json")
 
 
+def _test_kill(point: str, count: int) -> None:
+    """The test-only kill hook (see ``KILL_HOOK``)."""
+    spec = os.environ.get(KILL_HOOK)
+    if spec and spec == f"{point}:{count}":
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
 class ArtifactStore:
     """The artifacts folder of a campaign."""
 
@@ -55,17 +126,135 @@ class ArtifactStore:
         self.directory = directory
         self.markers = directory / ".signatures"
         self.markers.mkdir(parents=True, exist_ok=True)
+        self.recorded = 0
+        self.recovered = self.recover()
         clean_temporaries(directory)
         clean_temporaries(self.markers)
 
-    def claim(self, signature_key: str) -> bool:
-        """True for the first caller (in any process) to report this signature."""
+    # -- claiming ---------------------------------------------------------------------------
+
+    def _marker_link(self, signature_key: str, crash: str) -> bool:
+        """Create the marker with the crash file's name in it, atomically (link of a
+        complete temporary); False if it exists."""
+        marker = self.markers / signature_key
+        tmp = _write_temporary(marker, crash.encode())
         try:
-            fd = os.open(self.markers / signature_key, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            os.link(tmp, marker)
         except FileExistsError:
             return False
-        os.close(fd)
+        except OSError:  # no hard links here (some network file systems): O_EXCL, then the name
+            try:
+                fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                return False
+            with os.fdopen(fd, "wb") as handle:  # an empty marker is matched through the sidecars
+                handle.write(crash.encode())
+        finally:
+            tmp.unlink(missing_ok=True)
         return True
+
+    def claim(self, signature_key: str, crash: str = "") -> bool:
+        """True for the first caller (in any process) to report this signature."""
+        return self._marker_link(signature_key, crash)
+
+    def record(
+        self, signature_key: str, data: bytes, sidecar: dict[str, Any], *, with_input: bool = True
+    ) -> Path | None:
+        """Claim ``signature_key`` and write its crash file and sidecar, atomically together.
+
+        Returns the crash file's path, or None if another process (or an earlier
+        run) holds the signature. With ``with_input=False`` only the sidecar is
+        written (libFuzzer writes the input itself, ``--stop-on-divergence``).
+        """
+        self.recorded += 1
+        path = self.directory / crash_name(data)
+        side = sidecar_path(path)
+        tmp_side = _write_temporary(side, json.dumps(sidecar, indent=1, sort_keys=True).encode())
+        tmp_data = _write_temporary(path, data) if with_input else None
+        _test_kill("temp", self.recorded)
+        if not self.claim(signature_key, path.name):
+            tmp_side.unlink(missing_ok=True)
+            if tmp_data is not None:
+                tmp_data.unlink(missing_ok=True)
+            return None
+        _test_kill("claim", self.recorded)
+        os.replace(tmp_side, side)  # the sidecar first: a crash file always has its sidecar
+        _test_kill("sidecar", self.recorded)
+        if tmp_data is not None:
+            os.replace(tmp_data, path)
+        return path
+
+    # -- recovery ---------------------------------------------------------------------------
+
+    def _finish(self, final: Path) -> bool:
+        """Complete ``final`` from an abandoned temporary if it is missing; whether it exists."""
+        if final.is_file():
+            return True
+        for tmp in sorted(final.parent.glob(f"{TMP_PREFIX}{final.name}.*")):
+            if _owner(tmp) is None or not abandoned(tmp):
+                continue
+            with contextlib.suppress(FileNotFoundError):  # another process completed it first
+                os.replace(tmp, final)
+            break
+        return final.is_file()
+
+    def _writer_alive(self, final: Path) -> bool:
+        return any(not abandoned(t) for t in final.parent.glob(f"{TMP_PREFIX}{final.name}.*"))
+
+    def _legacy_names(self) -> dict[str, str]:
+        """signature key -> crash file name, from the sidecars and the sidecar temporaries of
+        dead writers (markers of older versions, or written without hard links, may be empty)."""
+        names: dict[str, str] = {}
+        sides = [*self.directory.glob("crash-*.json"), *self.directory.glob(f"{TMP_PREFIX}crash-*.json.*")]
+        for side in sides:
+            if not side.is_file():  # never open a FIFO or device planted here
+                continue
+            name = side.name.removeprefix(TMP_PREFIX).split(".json", 1)[0]
+            with contextlib.suppress(OSError, ValueError, AttributeError, TypeError):
+                key = json.loads(side.read_text(encoding="utf-8"))["signature"]["key"]
+                names.setdefault(str(key), name)
+        return names
+
+    def recover(self) -> list[str]:
+        """Complete claimed signatures whose crash file is missing; drop the markers that
+        cannot be completed (so their signature is written again when found again).
+        Returns the names of the crash files completed."""
+        completed: list[str] = []
+        legacy: dict[str, str] | None = None
+        for marker in sorted(self.markers.iterdir()):
+            if marker.name.startswith(".") or not marker.is_file():
+                continue
+            try:
+                name = marker.read_text(encoding="ascii").strip()
+            except (OSError, UnicodeDecodeError):
+                continue
+            if not name:
+                legacy = self._legacy_names() if legacy is None else legacy
+                name = legacy.get(marker.name, "")
+                if not name:  # its crash file is gone: release it, unless a writer is at work
+                    if not any(not abandoned(t) for t in self.directory.glob(f"{TMP_PREFIX}*")):
+                        marker.unlink(missing_ok=True)
+                    continue
+            if not CRASH_NAME.fullmatch(name):
+                continue  # not written by us: leave it alone
+            crash = self.directory / name
+            if crash.is_file() and sidecar_path(crash).is_file():
+                continue
+            side_ok = self._finish(sidecar_path(crash))
+            data_ok = self._finish(crash)
+            if side_ok and data_ok:
+                completed.append(name)
+            elif not (self._writer_alive(crash) or self._writer_alive(sidecar_path(crash))):
+                if crash.is_file() and sidecar_path(crash).is_file():  # its writer just finished
+                    continue
+                if not crash.is_file():
+                    marker.unlink(missing_ok=True)
+        return completed
+
+    def crash_files(self) -> list[Path]:
+        return sorted(p for p in self.directory.glob("crash-*") if not p.name.endswith(".json"))
+
+    # -- writing without claiming (minimize, tests) -------------------------------------------
 
     def write_sidecar(self, data: bytes, sidecar: dict[str, Any]) -> Path:
         """Write the sidecar of the crash file for ``data``; return the crash file's path."""
@@ -74,16 +263,13 @@ class ArtifactStore:
         return path
 
     def write(self, data: bytes, sidecar: dict[str, Any]) -> Path:
-        """Write the input and its sidecar; return the crash file's path.
+        """Write the input and its sidecar (no claim); return the crash file's path.
 
         The sidecar goes first: a crash file always has its sidecar.
         """
         path = self.write_sidecar(data, sidecar)
         atomic_write(path, data)
         return path
-
-    def crash_files(self) -> list[Path]:
-        return sorted(p for p in self.directory.glob("crash-*") if not p.name.endswith(".json"))
 
 
 def load_sidecar(crash: Path) -> dict[str, Any] | None:

@@ -17,18 +17,31 @@ import os
 import random
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
 from fuzzer.artifacts import ArtifactStore, atomic_write, clean_temporaries
-from fuzzer.divlog import CampaignLog
+from fuzzer.divlog import CampaignLog, worker_totals
+from fuzzer.processes import (
+    CHILD_ENV,
+    DEADLINE_ENV,
+    TIMEOUT_EXIT,
+    absolute_flag,
+    absolute_option,
+    exit_status,
+    flag_value,
+    int_flag,
+    is_number,
+    new_artifacts,
+    supervises,
+)
+from fuzzer.processes import deadline as child_deadline
 from fuzzer.session import RunConfig, Session, outcome_json, versions
 from fuzzer.targets import module_of
 from fuzzer.testcase import TestCase, TestCaseError, decode
 
-CHILD_ENV = "RROSFUZZ_CHILD"
 DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
 
 
@@ -47,6 +60,9 @@ class CampaignOptions:
     progress_interval: float
     dictionary_file: str | None
     mutator: str = "rrosfuzz"
+    verbose: bool = False
+    seeds_from_bag: Path | None = None
+    """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
 
 
 def instrument(config: RunConfig) -> None:
@@ -54,7 +70,8 @@ def instrument(config: RunConfig) -> None:
     import atheris
 
     names = sorted({module_of(spec) for spec in config.targets} - {"native"} | {"fuzzer.oracle"})
-    fresh = [n for n in names if n not in sys.modules]
+    # a malformed spec (":x", "a..b") is left to load_target, which reports it by name
+    fresh = [n for n in names if n not in sys.modules and all(s.isidentifier() for s in n.split("."))]
     if fresh:
         with atheris.instrument_imports(include=fresh):
             for name in fresh:
@@ -119,6 +136,15 @@ def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
     return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
 
 
+def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
+    """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
+    from fuzzer.ros.bags import read_seeds
+
+    msg_type = session.config.message_type
+    messages = read_seeds(bag, msg_type, lambda m: session.registry.validate(msg_type, m))
+    return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
+
+
 def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
     for case in seeds:
         data = case.encode()
@@ -159,7 +185,11 @@ def libfuzzer_mutate(data: bytes, max_size: int) -> bytes:
 
 
 def run(config: RunConfig, options: CampaignOptions) -> int:
-    """Run a campaign; returns only if libFuzzer does (it usually exits the process)."""
+    """Run a campaign; returns only if libFuzzer does (it usually exits the process, and the
+    exit hook then sets the status: see ``exit_status``)."""
+    deadline = child_deadline()
+    if deadline is not None and time.time() >= deadline:
+        os._exit(0)  # a -fork job or merge started after the budget: nothing left to do
     import atheris
 
     instrument(config)
@@ -169,13 +199,29 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
+    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/manifest.py)
+        from fuzzer.travel import record_corpus
+
+        record_corpus(options.corpus, config)
     options.artifacts.mkdir(parents=True, exist_ok=True)
+    artifacts = options.artifacts.resolve()  # -jobs changes the working folder
     folders = tuple(p for p in options.corpus if not p.is_file())
     for directory in folders:
         directory.mkdir(parents=True, exist_ok=True)
-    store = ArtifactStore(options.artifacts)
+    store = ArtifactStore(artifacts)
+    if store.recovered and not child:
+        reporting.info(
+            f"completed {len(store.recovered)} crash file(s) that an interrupted run had claimed: "
+            + ", ".join(store.recovered[:5])
+            + (" ..." if len(store.recovered) > 5 else "")
+        )
 
     usable, seeds = prescan(session, folders) if not child else (1, [])
+    if options.seeds_from_bag is not None and not child and folders:
+        from_bag = bag_seeds(session, options.seeds_from_bag)
+        write_seeds(folders[0], from_bag)
+        seeds, usable = from_bag + seeds, usable + len(from_bag)
+        reporting.info(f"wrote {len(from_bag)} seeds from {options.seeds_from_bag} to {folders[0]}")
     wanted = (
         options.seeds
         if options.seeds is not None
@@ -230,74 +276,124 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         lower=lower,
         upper=upper,
         stop_on_divergence=options.stop_on_divergence,
-        log=CampaignLog(options.artifacts),
+        log=CampaignLog(artifacts),
         joint_names=tuple(session.reference.joint_names),
     )
-    total = _flag_value(options.libfuzzer_flags, "-max_total_time")
+    total = flag_value(options.libfuzzer_flags, "-max_total_time")
+    supervisor = not child and supervises(options.libfuzzer_flags)
     progress = reporting.Progress(
         harness.stats,
         features,
         options.progress_interval,
-        float(total) if total else None,
-        enabled=options.progress,
+        float(total) if total and is_number(total) else None,
+        enabled=options.progress and not supervisor,
     )
     harness.on_exec = progress.tick
 
-    from fuzzer.exit_hook import on_exit
+    from fuzzer.exit_hook import flush_all, on_exit
 
     started = time.time()
+    timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
 
-    def finish() -> None:
+    def shown(path: Path) -> str:
+        return str(options.artifacts / path.name)  # as the user named the folder
+
+    def finish(status: int | None) -> int | None:
         progress.close()
         if harness.stats.execs:
             harness.maybe_snapshot(force=True)
-        new_files = [str(p) for p in store.crash_files() if p.stat().st_mtime >= started]
+        found = new_artifacts(artifacts, started)
+        if store.recovered:  # completed for a killed run that never reported them: new to the user
+            recovered = [artifacts / name for name in store.recovered]
+            found = replace(found, divergences=sorted({*found.divergences, *recovered}))
+        totals = worker_totals(artifacts, started, os.getpid()) if supervisor else None
+        code: int | None = exit_status(status, found, supervisor, timeout_code)
+        if status is None and (in_callback[0] or found.crashes or found.timeouts):
+            # Atheris ending the process: an exception in the target (libFuzzer reports it as a
+            # crash next), or a -jobs run whose failed job set libFuzzer's status
+            code = None
+        if child:
+            return None  # a worker's status is libFuzzer's business (its parent reads it)
         reporting.summary(
             harness.stats,
             len(features.seen),
             str(options.artifacts),
             [str(c) for c in options.corpus],
-            new_files,
+            [shown(p) for p in found.divergences],
+            totals=totals,
+            timeouts=[shown(p) for p in found.timeouts],
+            crashes=[shown(p) for p in found.crashes],
+            exit_code=code,
         )
+        return code
 
-    on_exit(finish)
+    once = on_exit(finish)
+    in_callback = [False]
+
+    def test_one_input(data: bytes) -> None:
+        if not data:
+            return  # libFuzzer always runs the empty input first: not a test case, not counted
+        if deadline is not None and time.time() >= deadline:
+            once(0)  # the -fork budget is spent: end this job as if its own time were up
+            flush_all()
+            os._exit(0)
+        in_callback[0] = True
+        harness.test_one_input(data)
+        in_callback[0] = False
+
     reporting.info(
         f"fuzzing {config.op} on {session.urdf.name} ({session.reference.dof} joints): "
-        f"{config.targets[0]} vs {config.targets[1]}, {config.message_type}, tolerance "
+        f"{config.targets[0]} vs {config.targets[1]}{_transport_note(config)}, "
+        f"{config.message_type}, tolerance "
         f"{config.tolerance.metres:g} m / {config.tolerance.radians:g} rad, artifacts in {options.artifacts}"
     )
     argv = libfuzzer_argv(options)
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
+    if not child and total and is_number(total) and int_flag(options.libfuzzer_flags, "-fork", 0) > 0:
+        os.environ[DEADLINE_ENV] = repr(started + float(total))
+    if not child and int_flag(options.libfuzzer_flags, "-jobs", 0) > 0:
+        if os.environ.get("PYTHONPATH"):  # the jobs import plugin targets from it
+            entries = os.environ["PYTHONPATH"].split(os.pathsep)
+            os.environ["PYTHONPATH"] = os.pathsep.join(os.path.abspath(e) if e else e for e in entries)
+        os.chdir(artifacts)  # libFuzzer writes fuzz-<job>.log into the working folder
     if options.mutator == "libfuzzer":  # baseline: libFuzzer's own byte-level mutations of the JSON
-        atheris.Setup(argv, harness.test_one_input)
+        atheris.Setup(argv, test_one_input)
     else:
-        atheris.Setup(
-            argv, harness.test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover
-        )
+        atheris.Setup(argv, test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover)
     atheris.Fuzz()
-    return 0
-
-
-def _flag_value(flags: tuple[str, ...], name: str) -> str | None:
-    for flag in flags:
-        key, _, value = flag.partition("=")
-        if key == name:
-            return value
-    return None
+    return once(0) or 0
 
 
 def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     """argv for Atheris: our script (absolute, for re-execution), libFuzzer flags with our
-    defaults, our options as --name=value tokens, the corpus folders."""
+    defaults, our options as --name=value tokens, the corpus folders.
+
+    Without ``--verbose``, ``-verbosity=0`` hides libFuzzer's per-input lines (NEW, REDUCE,
+    pulse); its crash, timeout and -fork reports still show. ``-jobs=N`` without
+    ``-workers`` gets ``-workers=N`` (libFuzzer's default, half the cores, runs the jobs one
+    at a time on small machines). With ``-jobs`` the campaign runs in its artifacts folder
+    (libFuzzer writes ``fuzz-<job>.log`` into the working folder), so paths are made absolute.
+    """
     script = os.path.abspath(sys.argv[0])
     flags = list(options.libfuzzer_flags)
     for name, value in DEFAULT_FLAGS.items():
-        if _flag_value(options.libfuzzer_flags, name) is None:
+        if flag_value(options.libfuzzer_flags, name) is None:
             flags.append(f"{name}={value}")
-    if _flag_value(options.libfuzzer_flags, "-artifact_prefix") is None:
+    if flag_value(options.libfuzzer_flags, "-artifact_prefix") is None:
         flags.append(f"-artifact_prefix={options.artifacts.resolve()}/")
-    return [script, *flags, *options.forwarded, *(str(c) for c in options.corpus)]
+    if not options.verbose and flag_value(options.libfuzzer_flags, "-verbosity") is None:
+        flags.append("-verbosity=0")
+    jobs = int_flag(options.libfuzzer_flags, "-jobs", 0)
+    forwarded = list(options.forwarded)
+    corpus = [str(c) for c in options.corpus]
+    if jobs > 0:
+        if flag_value(options.libfuzzer_flags, "-workers") is None:
+            flags.append(f"-workers={jobs}")
+        flags = [absolute_flag(f) for f in flags]
+        forwarded = [absolute_option(o) for o in forwarded]
+        corpus = [str(Path(c).resolve()) for c in corpus]
+    return [script, *flags, *forwarded, *corpus]
 
 
 def build_sidecar(
@@ -327,3 +423,10 @@ def build_sidecar(
         "versions": recorded,
         "written": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
+
+
+def _transport_note(config: RunConfig) -> str:
+    """`` as ROS nodes (master ...)`` for ``--transport ros`` (``rosnode list`` shows them there)."""
+    if config.transport != "ros":
+        return ""
+    return f" as ROS nodes (master {os.environ.get('ROS_MASTER_URI', '?')})"

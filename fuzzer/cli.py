@@ -1,12 +1,12 @@
 """Command line of RROSFuzz (``python fuzz_diff.py`` and the ``rrosfuzz`` script).
 
     fuzz_diff.py CORPUS_DIR [CORPUS_DIR...] [-libfuzzer_flag=value ...] [--options]
-    fuzz_diff.py CRASH_FILE [--options]          replay one file
+    fuzz_diff.py CRASH_FILE... [--options]       replay files (like replay, below)
     fuzz_diff.py replay PATH... [--options]      replay files or folders (exit 1 if any diverges)
-    fuzz_diff.py triage DIR [--json]             buckets of an artifacts folder, most severe first
+    fuzz_diff.py triage DIR|CRASH... [--json]    buckets of an artifacts folder, most severe first
     fuzz_diff.py minimize CRASH... [--budget N]  shrink to the simplest input with the same signature
     fuzz_diff.py report DIR [-o OUT]             HTML report with the paper's tables and figures
-    fuzz_diff.py promote CRASH [--fixed]         add to the regression suite (tests/regressions/)
+    fuzz_diff.py promote CRASH... [--fixed]      add to the regression suite (tests/regressions/)
     fuzz_diff.py coverage CORPUS... [--html DIR] line and branch coverage of python_impl
 
 Arguments starting with a single dash go to libFuzzer unchanged
@@ -17,6 +17,7 @@ Arguments starting with a single dash go to libFuzzer unchanged
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 from dataclasses import replace
@@ -29,7 +30,36 @@ from fuzzer.session import ConfigError, RunConfig
 from fuzzer.tolerance import Tolerance, default_tolerance
 from robot_api import robots
 
-SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage")
+SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage", "export-bag", "view")
+COMMANDS_HELP = """\
+commands (fuzz_diff.py COMMAND --help for each):
+  replay PATH...        replay crash files or folders; exit 1 if any still diverges
+  triage DIR|CRASH...   buckets of an artifacts folder, most severe first (--json)
+  minimize CRASH...     shrink crash files to the simplest input with the same signature
+  report DIR            HTML report of an artifacts folder (-o OUT)
+  promote CRASH...      add crash files to the regression suite (--fixed)
+  coverage CORPUS...    line and branch coverage of python_impl over a corpus
+  export-bag CRASH      a divergence as a ROS bag for `rosbag play` (-o OUT.bag; ROS 1 from apt)
+  view CRASH            a divergence in RViz, both targets' arms overlaid (ROS 1 + RViz from apt)
+
+exit status of a campaign:
+  0   no new divergence          1   new divergences (crash files written by this run)
+  2   usage error                70  a timeout (libFuzzer's -timeout_exitcode; also when
+                                     a -fork/-jobs worker timed out)
+  77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
+      (libFuzzer's -error_exitcode); any other status is libFuzzer's own
+"""
+
+
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds (argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a positive, finite number of seconds")
+    return value
 
 
 class UsageError(Exception):
@@ -85,6 +115,23 @@ def _config_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-filter", action="store_true", help="keep NaN, inf and absurd values (robustness campaigns)"
     )
+    parser.add_argument(
+        "--transport",
+        choices=("inprocess", "ros"),
+        default=None,
+        help="how targets run: inprocess (default), or ros: each target a ROS node on a master "
+        "(ROS_MASTER_URI's, else a new one on a free loopback port; docs/engine.md)",
+    )
+    _trust_option(parser)
+
+
+def _trust_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--trust-sidecar",
+        action="store_true",
+        help="import the targets a crash file's sidecar (or a corpus manifest) names, even if they are "
+        "not the builtins; without it such a file is refused unless --targets is given",
+    )
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -92,7 +139,11 @@ def _parser() -> argparse.ArgumentParser:
         prog="fuzz_diff.py",
         description="Differential fuzzing of two implementations of one robot motion API "
         "(libFuzzer via Atheris). Single-dash arguments go to libFuzzer.",
-        epilog="Replay: fuzz_diff.py CRASH_FILE, or fuzz_diff.py replay PATH...",
+        epilog=COMMANDS_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        usage="fuzz_diff.py CORPUS_DIR [CORPUS_DIR ...] [-libfuzzer_flag=value ...] [options]\n"
+        "       fuzz_diff.py CRASH_FILE [options]\n"
+        f"       fuzz_diff.py {{{','.join(SUBCOMMANDS)}}} ... (see below)",
     )
     parser.add_argument("corpus", nargs="+", type=Path, help="corpus folder(s); the first receives new seeds")
     _config_options(parser)
@@ -104,6 +155,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--seed", type=int, default=None, help="seed of the seed generation (default: -seed or 0)"
+    )
+    parser.add_argument(
+        "--seeds-from-bag",
+        type=Path,
+        default=None,
+        metavar="FILE.bag",
+        help="write the bag's messages of the campaign's type (any topic) into the corpus as seeds "
+        "(ROS 1 from apt: scripts/ros-ensure.sh)",
     )
     parser.add_argument(
         "--artifacts", type=Path, default=Path("artifacts"), help="crash files (default artifacts/)"
@@ -120,8 +179,19 @@ def _parser() -> argparse.ArgumentParser:
         help="rrosfuzz: the structured mutators (default); libfuzzer: libFuzzer's own byte "
         "mutator only (a baseline)",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no live progress lines")
-    parser.add_argument("--progress-interval", type=float, default=5.0, help="seconds between progress lines")
+    parser.add_argument("--no-progress", action="store_true", help="no live progress line")
+    parser.add_argument(
+        "--progress-interval",
+        type=_seconds,
+        default=5.0,
+        help="seconds between progress updates (default 5)",
+    )
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="show libFuzzer's own per-input lines (NEW, REDUCE, pulse); hidden by default "
+        "(-verbosity=0), crash and timeout reports always show",
+    )
     return parser
 
 
@@ -146,6 +216,10 @@ def _config(args: argparse.Namespace, *, overrides_only: bool = False) -> tuple[
         given["op"] = args.op
     if args.targets is not None:
         specs = tuple(s.strip() for s in args.targets.split(",") if s.strip())
+        if len(specs) == 2 and specs[0] == specs[1]:
+            raise UsageError(
+                f"--targets names {specs[0]!r} twice: a differential campaign needs two different targets"
+            )
         if len(specs) != 2:
             raise UsageError(f"--targets needs exactly two targets, got {len(specs)}: {args.targets!r}")
         given["targets"] = specs
@@ -163,6 +237,8 @@ def _config(args: argparse.Namespace, *, overrides_only: bool = False) -> tuple[
         given["msg_path"] = tuple(args.msg_path)
     if args.no_filter:
         given["filtering"] = False
+    if args.transport is not None:
+        given["transport"] = args.transport
     config = RunConfig(**given)
     if "tolerance" not in given:
         config = replace(config, tolerance=default_tolerance(config.op))
@@ -182,6 +258,7 @@ def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
         "seed",
         "progress_interval",
         "mutator",
+        "transport",
     ):
         value = getattr(args, name)
         if value is not None:
@@ -197,34 +274,65 @@ def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def replay_main(argv: Sequence[str]) -> int:
-    from fuzzer.replay import expand, replay_file
+    from fuzzer.replay import replay_file, source_of
+    from fuzzer.session import ConfigError
 
     args = _replay_parser().parse_args(argv)
     base, given = _config(args)
     sessions: dict[Any, Any] = {}
-    diverging = 0
-    files = expand(args.paths)
-    if not files:
-        raise UsageError("nothing to replay")
+    diverging = errors = 0
+    files = _inputs(args.paths)
     for path in files:
-        if not path.exists():
-            raise UsageError(f"{path}: no such file")
-        result = replay_file(path, base, given, sessions)
+        try:
+            result = replay_file(path, base, given, sessions, trust=args.trust_sidecar)
+        except ConfigError as exc:
+            if len(files) == 1:
+                raise
+            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+            errors += 1
+            continue
+        if not result.has_sidecar and source_of(path) == "command line":
+            reporting.warn(
+                f"{path}: no sidecar, so no recorded configuration or signature to compare with; "
+                "replayed under the command line's configuration (give --op, --robot, --targets... "
+                "to choose another)"
+            )
         diverging += result.diverges
         reporting.verdict(str(path), str(result.result), result.detail)
-    return 1 if diverging else 0
+    return 2 if errors else (1 if diverging else 0)
+
+
+def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
+    """Crash files from paths, folders and shell globs (sidecars skipped); missing ones are errors."""
+    from fuzzer.paths import PathError, crash_inputs
+
+    try:
+        return crash_inputs(paths, folders=folders)
+    except PathError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def triage_main(argv: Sequence[str]) -> int:
     from fuzzer import triage
 
     parser = argparse.ArgumentParser(prog="fuzz_diff.py triage", description="List divergence buckets.")
-    parser.add_argument("directory", type=Path)
+    parser.add_argument(
+        "paths", nargs="+", type=Path, help="an artifacts folder, or crash files of one folder (globs work)"
+    )
     parser.add_argument("--json", action="store_true", help="machine-readable output")
     args = parser.parse_args(argv)
-    if not args.directory.is_dir():
-        raise UsageError(f"{args.directory}: not a folder")
-    buckets = triage.collect(args.directory)
+    if len(args.paths) == 1 and args.paths[0].is_dir():
+        directory, files = args.paths[0], None
+    else:
+        files = _inputs(args.paths, folders=False)
+        folders = {p.parent.resolve() for p in files}
+        if len(folders) > 1:
+            raise UsageError("crash files from several folders: give one artifacts folder at a time")
+        directory = files[0].parent
+    try:
+        buckets = triage.collect(directory, files)
+    except OSError as exc:
+        raise UsageError(f"{directory}: cannot read: {exc.strerror or exc}") from None
     if args.json:
         reporting.out(triage.dumps(buckets))
     else:
@@ -234,16 +342,20 @@ def triage_main(argv: Sequence[str]) -> int:
 
 
 def minimize_main(argv: Sequence[str]) -> int:
-    from fuzzer.artifacts import ArtifactStore, load_sidecar
+    from fuzzer.artifacts import ArtifactStore, sidecar_path
+    from fuzzer.evaluate import history_of
     from fuzzer.minimize import Minimizer, joints_that_matter
-    from fuzzer.session import Session
+    from fuzzer.session import ConfigError, Session
+    from fuzzer.sidecar import SidecarError, config_from, read_sidecar
     from fuzzer.testcase import TestCaseError, decode
 
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py minimize",
-        description="Shrink crash files to the simplest input with the same signature.",
+        description="Shrink crash files to the simplest input with the same signature, under the "
+        "configuration their sidecars record (options given here override it).",
     )
-    parser.add_argument("paths", nargs="+", type=Path, help="crash files (with sidecars)")
+    parser.add_argument("paths", nargs="+", type=Path, help="crash files with sidecars (globs work)")
+    _config_options(parser)
     parser.add_argument("--budget", type=int, default=2000, help="evaluations per file (default 2000)")
     parser.add_argument(
         "-o",
@@ -255,28 +367,47 @@ def minimize_main(argv: Sequence[str]) -> int:
     args = parser.parse_args(argv)
     if args.budget < 1:
         raise UsageError("--budget must be >= 1")
+    _, given = _config(args)
+    files = _inputs(args.paths, folders=False)
+    if args.output is not None:
+        from fuzzer.paths import prepare_folder
+
+        prepare_folder(args.output, "--output", writable=True)
     sessions: dict[Any, Any] = {}
-    for path in args.paths:
-        sidecar = load_sidecar(path) if path.is_file() else None
-        if sidecar is None or "signature" not in sidecar:
-            raise UsageError(f"{path}: not a crash file with a sidecar")
-        config = RunConfig.from_json(sidecar["config"])
-        if config not in sessions:
-            sessions[config] = Session.open(config)
-        session = sessions[config]
+    errors = 0
+    for path in files:
         try:
-            case = decode(path.read_bytes())
-        except TestCaseError as exc:
-            raise UsageError(f"{path}: {exc}") from None
+            sidecar = read_sidecar(path)
+            if sidecar is None:
+                raise SidecarError(
+                    f"{path}: no sidecar ({sidecar_path(path).name}); only divergence crash files "
+                    "written by RROSFuzz can be minimized (use -minimize_crash=1 for others)"
+                )
+            config = config_from(sidecar, sidecar_path(path), given, args.trust_sidecar)
+            if config not in sessions:
+                sessions[config] = Session.open(config)
+            session = sessions[config]
+            try:
+                raw = path.read_bytes()
+                case = decode(raw)
+            except (OSError, TestCaseError) as exc:
+                raise SidecarError(f"{path}: not a test case: {exc}") from None
+        except ConfigError as exc:
+            if len(files) == 1:
+                raise
+            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+            errors += 1
+            continue
         try:
-            shrunk = Minimizer(session, args.budget).minimize(case, sidecar["signature"]["key"])
+            history = history_of(sidecar) if "history" in sidecar else None  # state_dependent
+            shrunk = Minimizer(session, args.budget, history).minimize(case, sidecar["signature"]["key"])
         except ValueError as exc:
             reporting.verdict(str(path), f"not minimized: {exc}")
             continue
         data = shrunk.case.encode()
-        store = ArtifactStore(args.output or path.parent)
         out = dict(
             sidecar,
+            config=config.to_json(),
             testcase=shrunk.case.to_json(),
             minimized_from=path.name,
             joints_that_matter=joints_that_matter(shrunk.case, session.reference.joint_names),
@@ -286,18 +417,24 @@ def minimize_main(argv: Sequence[str]) -> int:
                 "complete": shrunk.complete,
             },
         )
-        written = store.write(data, out)
-        minimized = written.with_name("minimized-" + written.name.split("-", 1)[1])
-        written.replace(minimized)
-        written.with_name(written.name + ".json").replace(minimized.with_name(minimized.name + ".json"))
+        folder = args.output or path.parent
+        try:
+            written = ArtifactStore(folder).write(data, out)
+            minimized = written.with_name("minimized-" + written.name.split("-", 1)[1])
+            written.replace(minimized)
+            written.with_name(written.name + ".json").replace(minimized.with_name(minimized.name + ".json"))
+        except OSError as exc:
+            sys.stderr.write(f"fuzz_diff.py: error: cannot write into {folder}: {exc.strerror or exc}\n")
+            errors += 1
+            continue
         reporting.verdict(
             str(path),
             f"minimized to {minimized}",
-            f"{len(path.read_bytes())} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
+            f"{len(raw)} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
             f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
             + ("" if shrunk.complete else ", budget exhausted"),
         )
-    return 0
+    return 2 if errors else 0
 
 
 def report_main(argv: Sequence[str]) -> int:
@@ -308,10 +445,19 @@ def report_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("directory", type=Path)
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default DIR/report)")
+    _trust_option(parser)
     args = parser.parse_args(argv)
     if not args.directory.is_dir():
         raise UsageError(f"{args.directory}: not a folder")
-    page = write_report(args.directory, args.output)
+    output = args.output
+    if output is None:
+        output = args.directory / "report"
+        if output.is_symlink():  # a crafted folder must not make us write elsewhere
+            raise UsageError(f"{output} is a symbolic link; choose the output folder with -o")
+    from fuzzer.paths import prepare_folder
+
+    prepare_folder(output, "report output", writable=True)
+    page = write_report(args.directory, output, trust=args.trust_sidecar)
     reporting.out(f"report: {page}")
     return 0
 
@@ -322,20 +468,22 @@ def promote_main(argv: Sequence[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py promote", description="Add a crash file to the regression suite."
     )
-    parser.add_argument("crash", type=Path)
+    parser.add_argument("crash", nargs="+", type=Path, help="crash files with sidecars (globs work)")
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
     parser.add_argument("--suite", type=Path, default=SUITE, help=f"suite folder (default {SUITE})")
+    _trust_option(parser)
     args = parser.parse_args(argv)
-    if not args.crash.is_file():
-        raise UsageError(f"{args.crash}: no such file")
-    try:
-        done = promote(args.crash, args.fixed, args.note, args.suite)
-    except PromoteError as exc:
-        reporting.out(f"not promoted: {exc}")
-        return 1
-    reporting.out(f"promoted {done.path} (expect: {done.expect})")
-    return 0
+    status = 0
+    for crash in _inputs(args.crash, folders=False):
+        try:
+            done = promote(crash, args.fixed, args.note, args.suite, trust=args.trust_sidecar)
+        except PromoteError as exc:
+            reporting.out(f"not promoted: {exc}")
+            status = max(status, 1)
+            continue
+        reporting.out(f"promoted {done.path} (expect: {done.expect})")
+    return status
 
 
 def coverage_main(argv: Sequence[str]) -> int:
@@ -348,10 +496,21 @@ def coverage_main(argv: Sequence[str]) -> int:
     _config_options(parser)
     parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
     args = parser.parse_args(argv)
+    from fuzzer.paths import PathError, check_input_file
+
     for path in args.corpus:
         if not path.exists():
             raise UsageError(f"{path}: no such file or folder")
+        check_input_file(path)
+    from fuzzer.travel import adopt_manifest
+
+    adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
     config, _ = _config(args)
+    from fuzzer.travel import check_manifests
+
+    check_manifests([p for p in args.corpus if p.is_dir()], config)
+    if args.html.exists() and not args.html.is_dir():
+        raise PathError(f"--html {args.html}: is a file, not a folder")
     reporting.out(measure(list(args.corpus), config, args.html).line())
     return 0
 
@@ -364,11 +523,21 @@ def campaign_main(argv: Sequence[str]) -> int:
     # Files next to libFuzzer flags are libFuzzer's business (-minimize_crash, running single inputs).
     if args.seeds is not None and args.seeds < 0:
         raise UsageError("--seeds must be >= 0")
+    from fuzzer import travel
+
+    # settings travel: from a crash file's sidecar (-minimize_crash), else the corpus manifest
+    if not travel.is_child() and not travel.adopt_sidecar(args, [p for p in args.corpus if p.is_file()]):
+        travel.adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
     config, _ = _config(args)
+    if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
+        folders = travel.prepare_campaign(args.corpus, args.artifacts)
+        travel.check_manifests(folders, config)
     seed = args.seed
     if seed is None:
         value = next((f.split("=", 1)[1] for f in flags if f.startswith("-seed=")), "0")
         seed = int(value) if value.lstrip("-").isdigit() else 0
+    if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
+        raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: no such file")
     dictionary = next((f.split("=", 1)[1] for f in flags if f.startswith("-dict=")), None)
     if dictionary is not None and not Path(dictionary).is_file():
         raise UsageError(f"-dict={dictionary}: no such file")
@@ -384,6 +553,8 @@ def campaign_main(argv: Sequence[str]) -> int:
         progress_interval=args.progress_interval,
         dictionary_file=dictionary,
         mutator=args.mutator,
+        verbose=args.verbose,
+        seeds_from_bag=args.seeds_from_bag,
     )
     return run(config, options)
 
@@ -399,17 +570,57 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "report": report_main,
                 "promote": promote_main,
                 "coverage": coverage_main,
+                "export-bag": _export_bag_main,
+                "view": _view_main,
             }[argv[0]]
             return handler(argv[1:])
         flags, rest = _split(argv)
         if not flags:
             known, _ = _parser().parse_known_args(rest)
-            if len(known.corpus) == 1 and known.corpus[0].is_file():
+            if known.corpus and all(p.is_file() for p in known.corpus):  # fuzz_diff.py CRASH...
                 return replay_main(rest)
+        known, _ = _parser().parse_known_args(rest)
+        for path in known.corpus:
+            if _missing_artifact(path):
+                raise UsageError(f"{path}: no such file (not fuzzed into as a new corpus folder)")
         return campaign_main(argv)
     except (UsageError, ConfigError) as exc:
         sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
         return 2
+    except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
+        _silence_stdout()
+        return 141
+
+
+def _export_bag_main(argv: Sequence[str]) -> int:
+    from fuzzer.ros.bags import export_bag_main
+
+    return export_bag_main(argv)
+
+
+def _view_main(argv: Sequence[str]) -> int:
+    from fuzzer.ros.view import view_main
+
+    return view_main(argv)
+
+
+def _missing_artifact(path: Path) -> bool:
+    """A path named like a crash file that does not exist (a typo, not a new corpus folder)."""
+    from fuzzer.paths import looks_like_artifact
+
+    return looks_like_artifact(path) and not path.exists() and not path.is_symlink()
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush cannot fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
 
 
 __all__ = ["DEFAULT_MSG_TYPE", "main"]

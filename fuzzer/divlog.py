@@ -87,3 +87,44 @@ class CampaignLog:
 
     def snapshot(self, record: dict[str, Any]) -> None:
         append_line(self.stats, {"t": time.time(), "pid": self.pid, **record})
+
+
+def worker_totals(directory: Path, since: float, exclude_pid: int | None = None) -> dict[str, Any]:
+    """Counters summed over the processes that logged to ``directory`` since ``since``
+    (``-fork``/``-jobs`` workers): the last ``stats.jsonl`` snapshot of each process, and
+    the distinct signatures of ``divergences.jsonl``.
+
+    Returns ``processes``, ``execs``, ``filtered``, ``malformed``, ``divergent`` (kind ->
+    count), ``divergences``, ``signatures`` and ``max_difference``.
+    """
+    last: dict[Any, dict[str, Any]] = {}
+    for record in read_lines(directory / STATS):
+        t, pid = record.get("t"), record.get("pid")
+        if not isinstance(t, int | float) or t < since or pid == exclude_pid:
+            continue
+        last[pid] = record
+    totals: dict[str, Any] = {"processes": len(last), "execs": 0, "filtered": 0, "malformed": 0}
+    divergent: dict[str, int] = {}
+    biggest = 0.0
+    for record in last.values():
+        for name in ("execs", "filtered", "malformed"):
+            value = record.get(name)
+            totals[name] += value if isinstance(value, int) else 0
+        kinds = record.get("divergent")
+        for kind, n in kinds.items() if isinstance(kinds, dict) else ():
+            divergent[str(kind)] = divergent.get(str(kind), 0) + (n if isinstance(n, int) else 0)
+        value = record.get("max_difference")
+        if isinstance(value, int | float) and math.isfinite(value):
+            biggest = max(biggest, float(value))
+    signatures = {
+        str(r.get("sig"))
+        for r in read_lines(directory / DIVERGENCES)
+        if isinstance(r.get("t"), int | float) and r["t"] >= since and r.get("pid") != exclude_pid
+    }
+    totals.update(
+        divergent=divergent,
+        divergences=sum(divergent.values()),
+        signatures=len(signatures),
+        max_difference=biggest,
+    )
+    return totals

@@ -1,25 +1,40 @@
 """Unified execution and difference computation (paper III.D) for one test case.
 
 ``Evaluator.evaluate`` filters the input (III.E), maps the message onto a call,
-runs it on both targets, asks the oracle, and confirms a divergence before it
-counts: the input is run a second time (nondeterminism gives ``flaky``), and
-an IK status divergence is re-run from seeds moved by 1e-9 (both ways) and 1e-7,
-where a target that changes its own answer makes it ``ill_conditioned``.
+runs it on both targets, asks the oracle (and, for IK, checks each target's
+success on its own: ``oracle.ik_property``), and confirms a divergence before
+it counts:
+
+* on fresh targets: the input is run on newly constructed targets (new model,
+  new group, same process). If they show the same verdict, the divergence
+  stands. If not, the campaign's targets are asked again: the same verdict there
+  makes it ``state_dependent`` (the answer depends on earlier calls; the last
+  ``HISTORY`` calls go with it, and ``evaluate(case, history=...)`` replays them
+  on fresh targets first), a different one ``flaky``;
+* an IK status divergence is re-run with each target's documented default seed
+  (its ``home_values``) passed explicitly: a target whose answer changes has
+  another default seed, and the divergence stands. Otherwise the seeds are moved
+  by 1e-9 (both ways) and 1e-7, and a target that changes its own answer makes
+  it ``ill_conditioned``. A divergence inside KDL's rotation dead zone (the
+  requested orientation within ``DEAD_ZONE`` of a half turn from where the seed
+  puts the link) is a ``known_limitation`` (docs/api.md).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fuzzer import oracle
-from fuzzer.mapping import Call, IkCall
+from fuzzer.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.records import Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.targets import Runner
 from fuzzer.testcase import TestCase
 from fuzzer.tolerance import Tolerance
+from robot_api.records import JointType
 
 ABSURD = 1e6
 """Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
@@ -27,6 +42,16 @@ ABSURD = 1e6
 IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
 """Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
 moves by the shift, alternating in sign for the last one)."""
+
+HISTORY = 32
+"""Calls on the campaign's targets kept for a ``state_dependent`` divergence's sidecar."""
+
+DEAD_ZONE = 1e-6
+"""KDL's rotation dead zone (rad): ``diff(R_seed, R_target)`` goes through the rotation axis,
+undefined at a half turn, so a target within this of pi from the seed's orientation is
+reached by one solver and not by the other (docs/api.md, "Known limitations")."""
+
+Seeds = tuple[tuple[float, ...] | None, ...]
 
 
 class Verdict:
@@ -45,7 +70,10 @@ class Evaluation:
     comparison: Comparison = field(default_factory=lambda: Comparison(Kind.AGREE))
     signature: Signature | None = None
     difference: float = 0.0
+    """The comparison's headline difference (in ``comparison.unit``)."""
     reason: str = ""
+    history: tuple[dict[str, Any], ...] = ()
+    """For ``state_dependent``: the calls made on the targets before this one, oldest first."""
 
     @property
     def divergent(self) -> bool:
@@ -80,16 +108,69 @@ class Evaluator:
     validate: Callable[[dict[str, Any]], None]
     filtering: bool = True
     prismatic: tuple[bool, ...] = ()
+    _history: deque[tuple[Call, Seeds]] = field(default_factory=lambda: deque(maxlen=HISTORY))
+    _stateless: set[str] = field(default_factory=set)
+    """Live signatures already confirmed on fresh targets (later ones skip the construction)."""
+
+    def __post_init__(self) -> None:
+        limits = list(getattr(self.runners[0].model, "joint_limits", []))
+        self.joint_types = tuple(str(lim.type) for lim in limits)
+        self.continuous = tuple(lim.type == JointType.CONTINUOUS for lim in limits)
+        self.joint_facts = tuple(
+            oracle.JointFacts(lim.type == JointType.CONTINUOUS, lim.lower, lim.upper) for lim in limits
+        )
 
     def run_both(
-        self, call: Call, seeds: tuple[tuple[float, ...] | None, ...] = (None, None)
+        self, call: Call, seeds: Seeds = (None, None), runners: Sequence[Runner] | None = None
     ) -> tuple[Outcome, ...]:
-        return tuple(r.run(call, s) for r, s in zip(self.runners, seeds, strict=True))
+        """Run ``call`` on both targets (the campaign's unless ``runners`` is given)."""
+        if runners is None:
+            runners = self.runners
+            self._history.append((call, seeds))
+        return tuple(r.run(call, s) for r, s in zip(runners, seeds, strict=True))
 
-    def judge(self, outcomes: tuple[Outcome, ...]) -> Comparison:
-        return oracle.compare(outcomes[0], outcomes[1], self.tolerance, self.prismatic, self.op)
+    def judge(self, outcomes: tuple[Outcome, ...], call: Call | None = None) -> Comparison:
+        comparison = oracle.compare(
+            outcomes[0], outcomes[1], self.tolerance, self.prismatic, self.op, self.continuous
+        )
+        if comparison.divergent or not isinstance(call, IkCall):
+            return comparison
+        for runner, outcome in zip(self.runners, outcomes, strict=True):
+            violation = oracle.ik_property(
+                outcome, runner.name, (call.position, call.orientation), self.joint_facts
+            )
+            if violation is not None:
+                return violation
+        return comparison
 
-    def evaluate(self, case: TestCase, validated: bool = False) -> Evaluation:
+    def fresh(self) -> tuple[Runner, Runner]:
+        """Newly constructed targets (no state from earlier calls). A target whose constructor
+        fails the second time (a finding of its own, not this input's) is kept as it is."""
+        out = []
+        for runner in self.runners:
+            try:
+                out.append(runner.fresh())
+            except Exception:  # noqa: BLE001 - the target's failure, never the campaign's
+                out.append(runner)
+        return (out[0], out[1])
+
+    def evaluate(
+        self,
+        case: TestCase,
+        validated: bool = False,
+        history: Sequence[tuple[Call, tuple[float, ...] | None]] | None = None,
+    ) -> Evaluation:
+        """Judge one test case.
+
+        Parameters
+        ----------
+        case : TestCase
+        validated : bool
+            The message is known valid (skip validation).
+        history : sequence of (call, IK seed), optional
+            Replay: start from fresh targets and make these calls on them first (a
+            ``state_dependent`` sidecar's history; ``[]`` for fresh targets only).
+        """
         message = case.message
         if not validated:
             try:
@@ -99,31 +180,94 @@ class Evaluator:
         if self.filtering and not is_reasonable(message):
             return Evaluation(Verdict.FILTERED, reason="non-finite or absurd value")
         call = self.mapping(message)
+        if history is not None:
+            self.runners = self.fresh()
+            for past, seed in history:
+                self.run_both(past, (seed, seed))
+        before = tuple(self._history)
         outcomes = self.run_both(call)
-        comparison = self.judge(outcomes)
+        comparison = self.judge(outcomes, call)
+        recorded: tuple[dict[str, Any], ...] = ()
         if comparison.divergent:
             comparison, outcomes = self._confirm(call, outcomes, comparison)
+            if comparison.kind is Kind.STATE_DEPENDENT:
+                recorded = tuple(call_to_json(c, s[0]) for c, s in before)
         a, b = outcomes
-        signature = signature_of(self.op, a, b, comparison) if comparison.divergent else None
-        return Evaluation(Verdict.EVALUATED, call, outcomes, comparison, signature, comparison.largest)
+        signature = (
+            signature_of(self.op, a, b, comparison, self.joint_types) if comparison.divergent else None
+        )
+        return Evaluation(
+            Verdict.EVALUATED, call, outcomes, comparison, signature, comparison.difference, history=recorded
+        )
 
     def _confirm(
         self, call: Call, outcomes: tuple[Outcome, ...], comparison: Comparison
     ) -> tuple[Comparison, tuple[Outcome, ...]]:
-        again = self.run_both(call)
-        if self.judge(again) != comparison:
-            return replace(comparison, kind=Kind.FLAKY), outcomes
+        live_key = signature_of(self.op, outcomes[0], outcomes[1], comparison, self.joint_types).key
+        fresh: tuple[Runner, Runner] | None = None
+        if live_key in self._stateless:
+            if self.judge(self.run_both(call), call) != comparison:
+                return replace(comparison, kind=Kind.FLAKY), outcomes
+        else:
+            fresh = self.fresh()
+            if self.judge(self.run_both(call, runners=fresh), call) != comparison:
+                same = self.judge(self.run_both(call), call) == comparison
+                return replace(comparison, kind=Kind.STATE_DEPENDENT if same else Kind.FLAKY), outcomes
+            self._stateless.add(live_key)
         if (
             isinstance(call, IkCall)
             and comparison.kind is Kind.STATUS
             and {o.status for o in outcomes} <= {Status.OK, Status.FAILED}
         ):
-            for i, shift in enumerate(IK_PERTURBATIONS):
-                moved = tuple(
-                    tuple(v + (shift if i < 2 or j % 2 == 0 else -shift) for j, v in enumerate(r.home))
-                    for r in self.runners
-                )
-                for first, second in zip(outcomes, self.run_both(call, moved), strict=True):
-                    if first.status is not second.status:
-                        return replace(comparison, kind=Kind.ILL_CONDITIONED), outcomes
+            return self._ik_status(call, outcomes, comparison, fresh or self.fresh()), outcomes
         return comparison, outcomes
+
+    def _ik_status(
+        self, call: IkCall, outcomes: tuple[Outcome, ...], comparison: Comparison, runners: Sequence[Runner]
+    ) -> Comparison:
+        """An IK status divergence judged for what it is (see the module docstring)."""
+        homes = tuple(r.home for r in runners)
+        explicit = self.run_both(call, homes, runners)
+        if any(x.status is not y.status for x, y in zip(outcomes, explicit, strict=True)):
+            return comparison  # a target's default seed is not its home_values: a real divergence
+        if in_dead_zone(runners[0].model, call, homes[0]):
+            return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+        for i, shift in enumerate(IK_PERTURBATIONS):
+            moved = tuple(
+                tuple(v + (shift if i < 2 or j % 2 == 0 else -shift) for j, v in enumerate(home))
+                for home in homes
+            )
+            for first, second in zip(outcomes, self.run_both(call, moved, runners), strict=True):
+                if first.status is not second.status:
+                    return replace(comparison, kind=Kind.ILL_CONDITIONED)
+        return comparison
+
+
+def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
+    """Whether the requested orientation is within ``DEAD_ZONE`` of a half turn from the
+    orientation the seed gives the link (where KDL's rotation error is undefined)."""
+    norm = math.sqrt(sum(x * x for x in call.orientation))
+    if not (norm > 0.0 and math.isfinite(norm)):
+        return False
+    try:
+        start = tuple(float(x) for x in model.forward_kinematics(list(seed), call.link).orientation)
+    except Exception:  # noqa: BLE001 - a target that cannot answer is not in the dead zone
+        return False
+    target = tuple(x / norm for x in call.orientation)
+    return oracle.rotation_distance(start, target) >= math.pi - DEAD_ZONE
+
+
+def history_of(sidecar: dict[str, Any] | None) -> list[tuple[Call, tuple[float, ...] | None]]:
+    """The call history a sidecar records (``[]`` without one).
+
+    Raises
+    ------
+    ValueError
+        When it is not a list of calls (``fuzzer.mapping.CallError`` names the field).
+    """
+    raw = sidecar.get("history", []) if isinstance(sidecar, dict) else []
+    if not isinstance(raw, list):
+        raise ValueError("'history' must be a list of calls")
+    if len(raw) > 10 * HISTORY:
+        raise ValueError(f"'history' holds {len(raw)} calls, more than {10 * HISTORY}")
+    return [call_from_json(item) for item in raw]

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import bisect
 import hashlib
+import math
 import random
 import time
 from collections import Counter, OrderedDict
@@ -55,6 +56,9 @@ class Stats:
     executed_by_strategy: Counter[str] = field(default_factory=Counter)
     signatures: dict[str, str] = field(default_factory=dict)
     max_difference: float = 0.0
+    """The largest headline difference of a value divergence (never a representation)."""
+    max_difference_unit: str = ""
+    """Its unit (m or rad); '' when no value divergence was seen."""
     near_zero: Counter[int] = field(default_factory=Counter)
     """Fig. 7: evaluated test cases by how many joint values are close to zero."""
 
@@ -69,6 +73,7 @@ class Stats:
             "executed_by_strategy": dict(self.executed_by_strategy),
             "signatures": len(self.signatures),
             "max_difference": self.max_difference,
+            "max_difference_unit": self.max_difference_unit,
             "near_zero": {str(k): v for k, v in sorted(self.near_zero.items())},
         }
 
@@ -179,9 +184,10 @@ class Harness:
     def _record(self, case: TestCase, data: bytes, ev: Evaluation) -> None:
         stats = self.stats
         stats.executed_by_strategy[case.strategy] += 1
-        stats.max_difference = max(stats.max_difference, ev.difference)
         a, b = ev.outcomes
         cmp = ev.comparison
+        if cmp.kind == "value" and math.isfinite(ev.difference) and ev.difference > stats.max_difference:
+            stats.max_difference, stats.max_difference_unit = ev.difference, cmp.unit
         self.features.hit(f"o:{a.label}|{b.label}")
         self.features.hit(f"d:{cmp.kind}:{cmp.field}:{cmp.bucket}:{int(cmp.sign_flip)}")
         if cmp.joints:
@@ -191,7 +197,7 @@ class Harness:
             values = ev.call.positions if isinstance(ev.call, MoveCall) else ev.call.joint_values
             self.features.hit_ids(input_features(values, self.lower, self.upper))
             stats.near_zero[near_zero_count(values)] += 1
-        self.pool.offer(ev.difference, data)
+        self.pool.offer(cmp.largest, data)  # Algorithm 3: the paper's difference information
         if not cmp.divergent or ev.signature is None:
             return
         stats.divergent[str(cmp.kind)] += 1
@@ -199,17 +205,16 @@ class Harness:
         key = ev.signature.key
         if self.log is not None:
             self._log_divergence(case, data, ev, values)
-        first = key not in stats.signatures and self.store.claim(key)
         if key not in stats.signatures:
-            stats.signatures[key] = ""
+            # claim and write together (the store's record); None: another process has it.
+            # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.
+            written = self.store.record(
+                key, data, self._sidecar(case, data, ev), with_input=not self.stop_on_divergence
+            )
+            stats.signatures[key] = str(written or "")
         if self.stop_on_divergence:
-            # every divergence is a crash here (libFuzzer's -minimize_crash relies on it); libFuzzer
-            # writes crash-<sha1> itself, into the same folder, when this raises
-            if first:
-                stats.signatures[key] = str(self.store.write_sidecar(data, self.sidecar(case, data, ev)))
-            raise DivergenceFound(f"{cmp.kind} divergence on {cmp.field or 'status'}: signature {key}")
-        if first:
-            stats.signatures[key] = str(self.store.write(data, self.sidecar(case, data, ev)))
+            # every divergence is a crash here (libFuzzer's -minimize_crash relies on it)
+            raise DivergenceFound(f"{cmp.headline(self.joint_names)}: signature {key}")
 
     def _log_divergence(self, case: TestCase, data: bytes, ev: Evaluation, values: tuple[float, ...]) -> None:
         a, b = ev.outcomes
@@ -226,7 +231,11 @@ class Harness:
                 "bucket": cmp.bucket,
                 "sign_flip": cmp.sign_flip,
                 "difference": cmp.difference,
+                "unit": cmp.unit,
+                "raw": cmp.raw,
                 "joints": list(cmp.joints),
+                "joint_names": [self.joint_names[j] for j in cmp.joints if j < len(self.joint_names)],
+                "target": cmp.target,
                 "outcome_a": a.label,
                 "outcome_b": b.label,
                 "strategy": case.strategy,
@@ -237,6 +246,15 @@ class Harness:
                 "sha1": hashlib.sha1(data).hexdigest(),
             }
         )
+
+    def _sidecar(self, case: TestCase, data: bytes, ev: Evaluation) -> dict[str, Any]:
+        """The sidecar, with the call history of a ``state_dependent`` divergence (replay
+        makes those calls on fresh targets before the input)."""
+        sidecar = self.sidecar(case, data, ev)
+        if ev.history:
+            sidecar["history"] = list(ev.history)
+        sidecar.setdefault("unit", ev.comparison.unit)
+        return sidecar
 
     # -- custom mutator / crossover ------------------------------------------------------------
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 from hypothesis import strategies as st
 from hypothesis.strategies import SearchStrategy
@@ -58,6 +58,70 @@ class IkCall:
 
 
 Call = MoveCall | FkCall | IkCall
+
+
+class CallError(ValueError):
+    """A stored call (a sidecar's call history) that is not a call."""
+
+
+def call_to_json(call: Call, seed: tuple[float, ...] | None = None) -> dict[str, Any]:
+    """A call (and the IK seed it ran with) as plain JSON data."""
+    data: dict[str, Any] = {"kind": type(call).__name__}
+    for name, value in vars(call).items():
+        data[name] = list(value) if isinstance(value, tuple) else value
+    if seed is not None:
+        data["seed"] = list(seed)
+    return data
+
+
+def _floats(data: dict[str, Any], name: str) -> tuple[float, ...]:
+    value = data.get(name)
+    if not isinstance(value, list) or not all(
+        isinstance(x, int | float) and not isinstance(x, bool) for x in value
+    ):
+        raise CallError(f"call field {name!r} must be a list of numbers")
+    return tuple(float(x) for x in value)
+
+
+def _optional(data: dict[str, Any], name: str, kind: type) -> Any:
+    value: Any = data.get(name)
+    accepted = (int, float) if kind is float else (kind,)
+    if value is not None and (not isinstance(value, accepted) or isinstance(value, bool)):
+        raise CallError(f"call field {name!r} must be a {kind.__name__} or null")
+    if kind is float and value is not None:
+        return float(cast(float, value))
+    return value
+
+
+def call_from_json(data: Any) -> tuple[Call, tuple[float, ...] | None]:
+    """Read a call written by ``call_to_json`` (data only: nothing is evaluated).
+
+    Raises
+    ------
+    CallError
+        Naming the field that is wrong.
+    """
+    if not isinstance(data, dict):
+        raise CallError("a stored call must be an object")
+    kind = data.get("kind")
+    call: Call
+    if kind == "MoveCall":
+        names = data.get("names")
+        if names is not None and (not isinstance(names, list) or not all(isinstance(n, str) for n in names)):
+            raise CallError("call field 'names' must be a list of strings or null")
+        call = MoveCall(
+            None if names is None else tuple(names),
+            _floats(data, "positions"),
+            _optional(data, "velocity_scaling", float),
+            _optional(data, "acceleration_scaling", float),
+        )
+    elif kind == "FkCall":
+        call = FkCall(_floats(data, "joint_values"), _optional(data, "link", str))
+    elif kind == "IkCall":
+        call = IkCall(_floats(data, "position"), _floats(data, "orientation"), _optional(data, "link", str))
+    else:
+        raise CallError(f"unknown call kind {kind!r}: expected MoveCall, FkCall or IkCall")
+    return call, (_floats(data, "seed") if data.get("seed") is not None else None)
 
 
 def _joint_state_move(m: dict[str, Any]) -> MoveCall:

@@ -128,12 +128,15 @@ def _simplicity(value: Any) -> tuple[int, float]:
 class Minimizer:
     """Shrinks test cases under one session (targets, robot, op)."""
 
-    def __init__(self, session: Session, budget: int = 2000) -> None:
+    def __init__(self, session: Session, budget: int = 2000, history: list[Any] | None = None) -> None:
         self.evaluator = session.evaluator()
         self.budget = budget
+        self.history = history
+        """A state_dependent divergence's call history (``fuzzer.evaluate.history_of``): each
+        candidate then runs on fresh targets after those calls."""
 
     def _key(self, case: TestCase) -> str | None:
-        ev = self.evaluator.evaluate(case)
+        ev = self.evaluator.evaluate(case, history=self.history)
         if ev.verdict != Verdict.EVALUATED or ev.signature is None:
             return None
         key: str = ev.signature.key

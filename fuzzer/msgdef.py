@@ -27,7 +27,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import keyword
+import os
 import re
+import stat
 import struct
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -73,6 +75,13 @@ TYPE_ALIASES = {"byte": "int8", "char": "uint8"}
 MAX_FIXED_LENGTH = 1024
 #: Deepest nesting of message types accepted.
 MAX_DEPTH = 32
+#: Most values a message's fixed part may hold (fixed arrays multiply through nesting);
+#: a default value is built eagerly, so ``T[1024]`` nested three deep would need 1e9.
+MAX_FIXED_VALUES = 1 << 16
+#: Largest ``.msg`` file read, in bytes; real definitions are under 10 KiB.
+MAX_MSG_BYTES = 1 << 20
+#: Most digits in an integer literal (array length or constant): uint64 needs 20.
+_MAX_INT_DIGITS = 20
 
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _FULL_NAME = re.compile(r"(?P<pkg>[A-Za-z][A-Za-z0-9_]*)/(?:msg/)?(?P<type>[A-Za-z][A-Za-z0-9_]*)")
@@ -252,9 +261,10 @@ def _parse_type(token: str, package: str, where: str) -> tuple[str, bool, int | 
         return resolved, False, None
     if not match["length"]:
         return resolved, True, None
-    length = int(match["length"])
+    digits = match["length"].lstrip("0") or "0"
+    length = int(digits) if len(digits) <= _MAX_INT_DIGITS else MAX_FIXED_LENGTH + 1
     if not 1 <= length <= MAX_FIXED_LENGTH:
-        raise MsgError(f"{where}: fixed array length must be 1..{MAX_FIXED_LENGTH}, got {token!r}")
+        raise MsgError(f"{where}: fixed array length must be 1..{MAX_FIXED_LENGTH}, got {token!r:.80}")
     return resolved, True, length
 
 
@@ -295,8 +305,11 @@ def _constant_value(ctype: str, text: str, where: str) -> bool | int | float:
     if ctype in INT_RANGES:
         lo, hi = INT_RANGES[ctype]
         if not _INT_LITERAL.fullmatch(text):
-            raise MsgError(f"{where}: invalid {ctype} constant {text!r}")
-        value = int(text)
+            raise MsgError(f"{where}: invalid {ctype} constant {text!r:.80}")
+        sign, digits = ("-" if text[0] == "-" else ""), text.lstrip("+-").lstrip("0") or "0"
+        if len(digits) > _MAX_INT_DIGITS:  # int() refuses more than 4300 digits; the range check needs <= 20
+            raise MsgError(f"{where}: {ctype} constant {text:.40}... out of range {lo}..{hi}")
+        value = int(sign + digits)
         if not lo <= value <= hi:
             raise MsgError(f"{where}: {ctype} constant {value} out of range {lo}..{hi}")
         return value
@@ -330,6 +343,7 @@ class MessageRegistry:
         self.roots: tuple[Path, ...] = (SHIPPED_MSG_ROOT, *(Path(p) for p in extra))
         self._specs: dict[str, MessageSpec] = {}
         self._classes: dict[str, type] = {}
+        self._fixed_values: dict[str, int] = {}
 
     # ----------------------------------------------------------------- lookup
 
@@ -358,10 +372,21 @@ class MessageRegistry:
         if len(chain) >= MAX_DEPTH:
             raise MsgError(f"message nesting deeper than {MAX_DEPTH}: {' -> '.join((*chain, name))}")
         spec = self._load(name, referrer)
+        total = 0
         for fld in spec.fields:
+            per_value = 2 if fld.type in SECS_RANGES else 1
             if not fld.is_builtin:
                 where = f"field {fld.name!r} of {name} ({spec.source}:{fld.line})"
                 self._resolve(fld.type, (*chain, name), where)
+                per_value = self._fixed_values[fld.type]
+            count = (fld.length or 0) if fld.is_array else 1
+            total += count * per_value
+            if total > MAX_FIXED_VALUES:
+                raise MsgError(
+                    f"{spec.source}:{fld.line}: {name} holds more than {MAX_FIXED_VALUES} values in "
+                    f"fixed-size fields (fixed arrays multiply through nested types; field {fld.name!r})"
+                )
+        self._fixed_values[name] = total
         self._specs[name] = spec
         return spec
 
@@ -380,7 +405,7 @@ class MessageRegistry:
             roots = ", ".join(str(r) for r in self.roots)
             raise MsgError(f"unknown message type {name!r}{by}; searched {roots}")
         try:
-            text = path.read_bytes().decode("utf-8-sig")
+            text = _read_bounded(path).decode("utf-8-sig")
         except (OSError, UnicodeDecodeError) as exc:
             raise MsgError(f"{path}: cannot read message definition: {exc}") from exc
         return parse_msg(text, name, str(path))
@@ -578,6 +603,18 @@ class MessageRegistry:
             return self._build(name, data)
 
         return from_dict
+
+
+def _read_bounded(path: Path) -> bytes:
+    """Read a regular file of at most ``MAX_MSG_BYTES`` (non-blocking open: a FIFO cannot hang it)."""
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    with os.fdopen(fd, "rb") as handle:
+        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+            raise OSError(f"{path} is not a regular file")
+        data = handle.read(MAX_MSG_BYTES + 1)
+    if len(data) > MAX_MSG_BYTES:
+        raise OSError(f"larger than {MAX_MSG_BYTES >> 20} MiB")
+    return data
 
 
 def _join(path: str, name: str) -> str:

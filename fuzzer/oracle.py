@@ -12,8 +12,24 @@ compared after canonicalization, modulo true equivalence:
 
 A pair equal modulo equivalence but not as numbers (4.0 vs 4.0 - 2pi, q vs -q)
 is a *representation* difference: the paper's "positive and negative"
-inconsistency, reported as its own kind. IK outcomes compare by the pose they
-reach, never by joint vectors. Two IK failures agree.
+inconsistency, reported as its own kind, but only where the canonical form is
+unambiguous. Where the canonical form's own rule is decided by a quantity within
+tolerance of its boundary, two answers on either side of it are the same answer
+(agreement): quaternions whose ``w`` is within the orientation tolerance of 0 (the
+rule ``w >= 0`` and its tie-break on ``x, y, z`` are then decided by rounding noise),
+and continuous joints whose values both lie in (-pi, pi] within the tolerance of
++-pi. A value outside its canonical range (``-pi`` exactly, ``w`` clearly negative)
+is not ambiguous and stays reported.
+
+IK outcomes compare by the pose they reach, never by joint vectors. Two IK
+failures agree. Beside the differential check, ``ik_property`` checks one
+target's IK success on its own: joint values within the limits (continuous joints
+in (-pi, pi]) and residual within the solver's tolerance (docs/api.md).
+
+Each verdict has one headline difference with its unit (``m``, ``rad``, or
+``status``): the difference modulo equivalence of the first differing field in
+the order joint values, position, orientation (the later ones follow from the
+earlier ones), so the same bug is reported on the same field.
 """
 
 from __future__ import annotations
@@ -23,8 +39,11 @@ from dataclasses import dataclass
 
 from fuzzer.records import Comparison, Kind, Outcome, Status
 from fuzzer.tolerance import Tolerance
+from robot_api.constants import IK_EPS
 
 TWO_PI = 2.0 * math.pi
+IK_RESIDUAL = math.sqrt(3.0) * IK_EPS
+"""The solver's documented tolerance as a distance: every twist component within IK_EPS."""
 
 
 def bucket(difference: float) -> int:
@@ -58,49 +77,86 @@ class _FieldDiff:
     tolerance: float
     sign_flip: bool
     joints: tuple[int, ...] = ()
+    unit: str = "rad"
+
+
+def _near_pi(x: float, tol: float) -> bool:
+    """In the canonical range (-pi, pi] and within ``tol`` of its boundary."""
+    return -math.pi < x <= math.pi and math.pi - abs(x) <= tol
 
 
 def _joint_diff(
-    a: tuple[float, ...], b: tuple[float, ...], prismatic: tuple[bool, ...], tol: Tolerance
+    a: tuple[float, ...],
+    b: tuple[float, ...],
+    prismatic: tuple[bool, ...],
+    tol: Tolerance,
+    continuous: tuple[bool, ...] = (),
 ) -> _FieldDiff:
     raw = equivalent = 0.0
     joints: list[int] = []
     flip = False
     worst = -1.0
+    unit = "rad"
     for i, (x, y) in enumerate(zip(a, b, strict=True)):
         linear = i < len(prismatic) and prismatic[i]
         limit = tol.metres if linear else tol.radians
         gap = _finite_gap(x, y)
         eq = gap if linear or not math.isfinite(gap) else abs(_wrap(x - y))
+        if (
+            i < len(continuous)
+            and continuous[i]
+            and eq <= limit
+            and _near_pi(x, limit)
+            and _near_pi(y, limit)
+        ):
+            gap = eq  # either side of the (-pi, pi] boundary is the canonical answer
         raw, equivalent = max(raw, gap), max(equivalent, eq)
         if gap > limit:
             joints.append(i)
             if gap / limit > worst:
-                worst, flip = gap / limit, (x < 0) != (y < 0)
-    return _FieldDiff("joint_values", raw, equivalent, tol.radians, flip, tuple(joints))
+                worst, flip, unit = gap / limit, (x < 0) != (y < 0), "m" if linear else "rad"
+    return _FieldDiff("joint_values", raw, equivalent, tol.radians, flip, tuple(joints), unit)
 
 
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
     gap = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
     gap = gap if math.isfinite(gap) else math.inf
     flip = any((x < 0) != (y < 0) and abs(x - y) > tol.metres for x, y in zip(a, b, strict=True))
-    return _FieldDiff("position", gap, gap, tol.metres, flip)
+    return _FieldDiff("position", gap, gap, tol.metres, flip, unit="m")
+
+
+def rotation_distance(a: tuple[float, ...], b: tuple[float, ...]) -> float:
+    """Rotation angle (rad) between two unit quaternions, q and -q being one rotation."""
+    minus = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
+    plus = math.sqrt(sum((x + y) ** 2 for x, y in zip(a, b, strict=True)))
+    # atan2 gives half the 4-D angle between the quaternions; the rotation angle is twice that
+    distance = 4.0 * math.atan2(min(minus, plus), max(minus, plus))
+    return distance if math.isfinite(distance) else math.inf
 
 
 def _orientation_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
     raw = max((_finite_gap(x, y) for x, y in zip(a, b, strict=True)), default=0.0)
     minus = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
     plus = math.sqrt(sum((x + y) ** 2 for x, y in zip(a, b, strict=True)))
-    # atan2 gives half the 4-D angle between the quaternions; the rotation angle is twice that
-    distance = 4.0 * math.atan2(min(minus, plus), max(minus, plus))
-    if not math.isfinite(distance):
-        distance = math.inf
+    distance = rotation_distance(a, b)
     flip = plus < minus  # closer to -q than to q
+    if flip and len(a) == 4 and abs(a[3]) <= tol.radians and abs(b[3]) <= tol.radians:
+        # w within tolerance of 0: the sign rule (w >= 0, then the tie-break on x, y, z) is
+        # decided by rounding noise, so q and -q are both the canonical answer
+        raw = max((_finite_gap(x, -y) for x, y in zip(a, b, strict=True)), default=0.0)
     return _FieldDiff("orientation", raw, distance, tol.radians, flip)
 
 
+FIELD_ORDER = ("joint_values", "position", "orientation")
+
+
 def compare(
-    a: Outcome, b: Outcome, tol: Tolerance, prismatic: tuple[bool, ...] = (), op: str = ""
+    a: Outcome,
+    b: Outcome,
+    tol: Tolerance,
+    prismatic: tuple[bool, ...] = (),
+    op: str = "",
+    continuous: tuple[bool, ...] = (),
 ) -> Comparison:
     """The oracle's verdict on two outcomes of the same input.
 
@@ -114,6 +170,9 @@ def compare(
         Per joint, whether it is prismatic (compared in metres, not modulo 2pi).
     op : str
         ``ik`` compares only reached poses, and only when both converged.
+    continuous : tuple of bool
+        Per joint, whether it is continuous (canonical range (-pi, pi], whose boundary is
+        ambiguous within tolerance).
     """
     if Status.CRASHED in (a.status, b.status):
         return Comparison(Kind.CRASH, "status")
@@ -123,37 +182,115 @@ def compare(
         return Comparison(Kind.AGREE)
     for name in set(a.values) & set(b.values):
         if len(a.values[name]) != len(b.values[name]):
-            return Comparison(Kind.VALUE, name, math.inf, False, bucket(math.inf), largest=math.inf)
+            unit = "m" if name == "position" else "rad"
+            return Comparison(
+                Kind.VALUE, name, math.inf, False, bucket(math.inf), largest=math.inf, unit=unit, raw=math.inf
+            )
     diffs = []
     if "joint_values" in a.values and "joint_values" in b.values and op != "ik":
-        diffs.append(_joint_diff(a.values["joint_values"], b.values["joint_values"], prismatic, tol))
+        diffs.append(
+            _joint_diff(a.values["joint_values"], b.values["joint_values"], prismatic, tol, continuous)
+        )
     if "position" in a.values and "position" in b.values:
         diffs.append(_position_diff(a.values["position"], b.values["position"], tol))
     if "orientation" in a.values and "orientation" in b.values:
         diffs.append(_orientation_diff(a.values["orientation"], b.values["orientation"], tol))
     largest = max((d.raw for d in diffs), default=0.0)
-    value = [d for d in diffs if d.equivalent > d.tolerance]
-    if value:
-        worst = max(value, key=lambda d: d.equivalent / d.tolerance)
+    for kind in (Kind.VALUE, Kind.REPRESENTATION):
+        found = [d for d in diffs if (d.equivalent if kind is Kind.VALUE else d.raw) > d.tolerance]
+        if found:
+            first = min(found, key=lambda d: FIELD_ORDER.index(d.field))
+            return Comparison(
+                kind,
+                first.field,
+                first.equivalent,
+                first.sign_flip,
+                bucket(first.equivalent),
+                first.joints,
+                largest,
+                first.unit,
+                first.raw,
+            )
+    top = max(diffs, key=lambda d: d.equivalent / d.tolerance, default=None)
+    return Comparison(
+        Kind.AGREE,
+        difference=top.equivalent if top else 0.0,
+        largest=largest,
+        unit=top.unit if top else "status",
+    )
+
+
+@dataclass(frozen=True)
+class JointFacts:
+    """What the IK property check needs to know about one joint."""
+
+    continuous: bool
+    lower: float
+    upper: float
+
+
+def ik_property(
+    outcome: Outcome,
+    target: str,
+    requested: tuple[tuple[float, ...], tuple[float, ...]],
+    joints: tuple[JointFacts, ...],
+) -> Comparison | None:
+    """A property violation of one target's IK success, or None.
+
+    A success must have every joint value within its limits (continuous joints in
+    (-pi, pi]) and reach the requested pose within ``IK_RESIDUAL`` (m and rad): the
+    solver stops when every component of its error twist is within ``IK_EPS``.
+
+    Parameters
+    ----------
+    outcome : Outcome
+        The target's IK outcome (``joint_values`` and the pose they reach).
+    target : str
+        Its name, reported with the violation.
+    requested : (position, orientation)
+        The requested pose (the quaternion is normalized here).
+    joints : tuple of JointFacts
+        Per joint of the robot.
+    """
+    if outcome.status is not Status.OK:
+        return None
+    values = outcome.values.get("joint_values", ())
+    outside: list[tuple[int, float]] = []
+    for i, (x, facts) in enumerate(zip(values, joints, strict=False)):
+        if facts.continuous:
+            excess = 0.0 if -math.pi < x <= math.pi else max(abs(x) - math.pi, math.ulp(math.pi))
+        else:
+            excess = max(facts.lower - x, x - facts.upper, 0.0)
+        if excess > 0.0 or not math.isfinite(x):
+            outside.append((i, excess if math.isfinite(x) else math.inf))
+    if outside:
+        worst = max(e for _, e in outside)
         return Comparison(
-            Kind.VALUE,
-            worst.field,
-            worst.equivalent,
-            worst.sign_flip,
-            bucket(worst.equivalent),
-            worst.joints,
-            largest,
+            Kind.PROPERTY,
+            "joint_limits",
+            worst,
+            False,
+            bucket(worst),
+            tuple(i for i, _ in outside),
+            unit="rad",
+            raw=worst,
+            target=target,
         )
-    representation = [d for d in diffs if d.raw > d.tolerance]
-    if representation:
-        worst = max(representation, key=lambda d: d.raw / d.tolerance)
-        return Comparison(
-            Kind.REPRESENTATION,
-            worst.field,
-            worst.raw,
-            worst.sign_flip,
-            bucket(worst.raw),
-            worst.joints,
-            largest,
-        )
-    return Comparison(Kind.AGREE, difference=max((d.equivalent for d in diffs), default=0.0), largest=largest)
+    position, orientation = requested
+    reached_p = outcome.values.get("position", ())
+    reached_q = outcome.values.get("orientation", ())
+    norm = math.sqrt(sum(x * x for x in orientation))
+    for unit, gap in (
+        ("m", math.dist(reached_p, position) if len(reached_p) == len(position) else 0.0),
+        (
+            "rad",
+            rotation_distance(reached_q, tuple(x / norm for x in orientation))
+            if norm > 0.0 and math.isfinite(norm) and len(reached_q) == 4
+            else 0.0,
+        ),
+    ):
+        if gap > IK_RESIDUAL * (1.0 + 1e-6) or not math.isfinite(gap):
+            return Comparison(
+                Kind.PROPERTY, "residual", gap, False, bucket(gap), (), unit=unit, raw=gap, target=target
+            )
+    return None

@@ -86,6 +86,18 @@ class Kind(enum.StrEnum):
     """A status divergence that a 1e-9 change of the IK seed flips on one target by itself."""
     FLAKY = "flaky"
     """Re-running the same input gave a different verdict: nondeterminism."""
+    STATE_DEPENDENT = "state_dependent"
+    """Newly constructed targets agree on the input, the campaign's targets (with the calls
+    made before it) diverge again: the answer depends on earlier calls."""
+    PROPERTY = "property"
+    """One target's own answer breaks the contract (an IK success outside the joint limits,
+    or farther from the target than the solver's tolerance), whatever the other answered."""
+    KNOWN_LIMITATION = "known_limitation"
+    """A documented limitation of a target (docs/api.md, "Known limitations"), e.g. KDL's
+    rotation dead zone near pi: not counted as a detection."""
+
+
+UNITS = {"position": "m", "orientation": "rad", "joint_values": "rad", "residual": "m"}
 
 
 @dataclass(frozen=True)
@@ -96,19 +108,30 @@ class Comparison:
     ----------
     kind : Kind
     field : str
-        ``status``, ``joint_values``, ``position`` or ``orientation``.
+        ``status``, ``joint_values``, ``position``, ``orientation``, or for ``property``
+        ``joint_limits`` / ``residual``.
     difference : float
-        Largest difference found (m or rad), raw for representation differences,
-        after canonicalization for value differences; 0 for status divergences.
+        The headline difference, in ``unit``: for value divergences the difference modulo
+        equivalence (metres or radians); for representation divergences too (the numbers
+        differ by a representation only, see ``raw``), so a representation is never a
+        "large difference"; for property violations how far past the limit or tolerance;
+        0 for status divergences.
+    unit : str
+        ``m``, ``rad`` or ``status``.
     sign_flip : bool
-        The differing numbers have opposite signs (or the quaternions are q and -q).
+        Detail: the differing numbers have opposite signs (or the quaternions are q and -q).
     bucket : int
-        ``floor(log10(difference))`` clipped to [-16, 3]; -99 when difference is 0.
+        Detail: ``floor(log10(difference))`` clipped to [-16, 3]; -99 when difference is 0.
     joints : tuple of int
-        Joint indices that differ (joint values), else ().
+        Joint indices that differ (joint values, property), else ().
     largest : float
-        The paper's difference information: the largest raw difference over every
-        compared field, whatever the verdict (0 without values).
+        The paper's difference information: the largest raw difference (as numbers) over
+        every compared field, whatever the verdict (0 without values). Never a headline.
+    raw : float
+        Detail: the gap as numbers in the reported field (for a representation divergence,
+        e.g. 2pi for an angle, or a quaternion component gap for q vs -q).
+    target : str
+        The target a ``property`` violation belongs to, else ''.
     """
 
     kind: Kind
@@ -118,24 +141,73 @@ class Comparison:
     bucket: int = -99
     joints: tuple[int, ...] = ()
     largest: float = 0.0
+    unit: str = "status"
+    raw: float = 0.0
+    target: str = ""
 
     @property
     def divergent(self) -> bool:
         return self.kind is not Kind.AGREE
 
+    def headline(self, joint_names: tuple[str, ...] = ()) -> str:
+        """One line: kind, field, the headline difference with its unit, joint names."""
+        return describe(
+            str(self.kind),
+            self.field,
+            self.difference,
+            self.unit,
+            self.joints,
+            joint_names,
+            self.target,
+            self.raw,
+        )
+
+
+def joint_label(joints: tuple[int, ...] | list[int], joint_names: tuple[str, ...] | list[str] = ()) -> str:
+    """Joint names for people (``joint_2, joint_5``); ``joint #3`` when a name is unknown."""
+    return ", ".join(joint_names[j] if 0 <= j < len(joint_names) else f"joint #{j + 1}" for j in joints)
+
+
+def describe(
+    kind: str,
+    field_name: str,
+    difference: float,
+    unit: str,
+    joints: tuple[int, ...] | list[int] = (),
+    joint_names: tuple[str, ...] | list[str] = (),
+    target: str = "",
+    raw: float = 0.0,
+) -> str:
+    """The human-facing description of a divergence (summary, triage, report)."""
+    text = f"{kind} on {field_name or 'status'}"
+    if target:
+        text += f" of {target}"
+    if joints:
+        text += f" ({joint_label(joints, joint_names)})"
+    if unit and unit != "status" and kind != "flaky":
+        text += f", difference {difference:.3g} {unit}"
+        if kind == "representation" and raw > 0.0:
+            text += f" (same value written differently: {raw:.3g} apart as numbers)"
+    return text
+
 
 @dataclass(frozen=True)
 class Signature:
-    """What makes two divergences "the same problem" (dedup key)."""
+    """What makes two divergences "the same problem" (dedup key): what a person would call
+    one problem, i.e. op, outcome pair, kind, field, the kinds of the joints involved and,
+    for property violations, the target. The size of the difference and its sign are
+    details of one occurrence, not part of the key. For status and crash divergences the
+    outcome pair is coarse: ``completed`` stands for ok or failed beside a rejection or a
+    crash, and ok vs failed is ``failed``/``ok`` whichever target failed (the sidecar's
+    outcomes keep the exact labels)."""
 
     op: str
     outcome_a: str
     outcome_b: str
     kind: str
     field: str
-    sign_flip: bool
-    bucket: int
-    joints: tuple[int, ...]
+    joint_types: tuple[str, ...] = ()
+    target: str = ""
 
     @property
     def key(self) -> str:
@@ -144,30 +216,48 @@ class Signature:
         return hashlib.sha1(text.encode()).hexdigest()[:12]
 
     def to_json(self) -> dict[str, Any]:
-        return {**asdict(self), "joints": list(self.joints), "key": self.key}
+        return {**asdict(self), "joint_types": list(self.joint_types), "key": self.key}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Signature:
-        return cls(
-            data["op"],
-            data["outcome_a"],
-            data["outcome_b"],
-            data["kind"],
-            data["field"],
-            bool(data["sign_flip"]),
-            int(data["bucket"]),
-            tuple(int(j) for j in data["joints"]),
-        )
+        """Also reads the older format (with ``sign_flip``, ``bucket`` and joint indices,
+        which are no longer part of the key): its key is then the new one."""
+        fields = [data["op"], data["outcome_a"], data["outcome_b"], data["kind"], data["field"]]
+        if not all(isinstance(x, str) for x in fields):
+            raise TypeError("signature fields op, outcome_a, outcome_b, kind, field must be strings")
+        types = data.get("joint_types", [])
+        target = data.get("target", "")
+        if not isinstance(types, list) or not all(isinstance(t, str) for t in types):
+            raise TypeError("signature joint_types must be a list of strings")
+        if not isinstance(target, str):
+            raise TypeError("signature target must be a string")
+        op, outcome_a, outcome_b, kind, field_name = fields
+        return cls(op, outcome_a, outcome_b, kind, field_name, tuple(types), target)
 
 
-def signature_of(op: str, a: Outcome, b: Outcome, comparison: Comparison) -> Signature:
+COMPLETED = "completed"
+"""A call that returned (ok or failed), in a signature beside a rejection or a crash."""
+
+
+def _outcome_pair(field_name: str, a: str, b: str) -> tuple[str, str]:
+    """The outcome labels of a divergence on the status (a status or crash divergence, and
+    the kinds confirmation makes of them) as one problem: beside a rejection or a crash, ok
+    and failed are both "completed" (the problem is that one side rejected or crashed); ok
+    vs failed is one problem whichever side failed."""
+    finished = {str(Status.OK), str(Status.FAILED)}
+    if field_name == "status":
+        if a in finished and b in finished:
+            return (str(Status.FAILED), str(Status.OK))
+        return (COMPLETED if a in finished else a, COMPLETED if b in finished else b)
+    return a, b
+
+
+def signature_of(
+    op: str, a: Outcome, b: Outcome, comparison: Comparison, joint_types: tuple[str, ...] = ()
+) -> Signature:
+    """The signature of a divergence; ``joint_types`` gives each joint's type by index."""
+    types = sorted({joint_types[j] if j < len(joint_types) else "joint" for j in comparison.joints})
+    outcome_a, outcome_b = _outcome_pair(comparison.field, a.label, b.label)
     return Signature(
-        op,
-        a.label,
-        b.label,
-        str(comparison.kind),
-        comparison.field,
-        comparison.sign_flip,
-        comparison.bucket,
-        comparison.joints,
+        op, outcome_a, outcome_b, str(comparison.kind), comparison.field, tuple(types), comparison.target
     )

@@ -17,7 +17,8 @@ from typing import Any
 
 from fuzzer.artifacts import atomic_write, load_sidecar, sidecar_path
 from fuzzer.replay import Result, replay_file
-from fuzzer.session import RunConfig
+from fuzzer.session import ConfigError, RunConfig
+from fuzzer.sidecar import SidecarError, read_sidecar
 
 SUITE = Path(__file__).resolve().parents[1] / "tests" / "regressions"
 
@@ -32,19 +33,27 @@ class Promoted:
     expect: str
 
 
-def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE) -> Promoted:
+def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust: bool = False) -> Promoted:
     """Check the file's current verdict against what is asked, then add it to the suite.
 
     Raises
     ------
     PromoteError
-        No sidecar, or the verdict contradicts the expectation (``--fixed`` on a
-        file that still diverges, or a known divergence that no longer diverges).
+        No sidecar (or a damaged one, or one naming targets that may not be
+        imported without ``trust``), or the verdict contradicts the expectation
+        (``--fixed`` on a file that still diverges, or a known divergence that no
+        longer diverges).
     """
-    sidecar = load_sidecar(crash)
-    if sidecar is None or "signature" not in sidecar:
+    try:
+        sidecar = read_sidecar(crash)
+    except SidecarError as exc:
+        raise PromoteError(str(exc)) from None
+    if sidecar is None:
         raise PromoteError(f"{crash}: no sidecar; only divergence crash files can be promoted")
-    result = replay_file(crash, RunConfig(), {})
+    try:
+        result = replay_file(crash, RunConfig(), {}, trust=trust)
+    except ConfigError as exc:
+        raise PromoteError(str(exc)) from None
     if fixed and result.result is not Result.AGREES:
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:

@@ -2,21 +2,32 @@
 
 A crash file is replayed under the configuration its sidecar records (op,
 robot, targets, tolerance, message type), unless the command line overrides
-it. A crash file without a sidecar (a native crash or a timeout written by
-libFuzzer itself) replays under the command line's configuration.
+it. The sidecar is untrusted data (:mod:`fuzzer.sidecar`): it is validated
+strictly, and targets other than the builtins are imported only when the
+command line passes ``--targets`` or ``--trust-sidecar``.
+
+A file without a sidecar (a native crash or a timeout written by libFuzzer
+itself, or a corpus input) replays like libFuzzer replays an input: under the
+configuration of its folder's corpus manifest when there is one
+(:mod:`fuzzer.manifest`), else under the command line's (the defaults when none
+is given). Nothing is recorded to compare with, so the verdict says so instead
+of "now agrees", and the configuration used is named.
 """
 
 from __future__ import annotations
 
 import enum
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts import load_sidecar
+from fuzzer import manifest
+from fuzzer.artifacts import sidecar_path
 from fuzzer.evaluate import Evaluation, Verdict
-from fuzzer.session import RunConfig, Session
+from fuzzer.paths import crash_inputs
+from fuzzer.session import ConfigError, RunConfig, Session
+from fuzzer.sidecar import config_from, describe, read_sidecar
 from fuzzer.testcase import TestCaseError, decode
 
 
@@ -24,7 +35,8 @@ class Result(enum.StrEnum):
     SAME = "still diverges (same signature)"
     DIFFERENT = "diverges differently"
     AGREES = "now agrees"
-    NEW = "diverges"  # no sidecar to compare with
+    NEW = "diverges (no sidecar to compare with)"
+    UNRECORDED_AGREES = "the targets agree (no sidecar to compare with)"
     SKIPPED = "skipped"
 
 
@@ -35,6 +47,10 @@ class Replay:
     evaluation: Evaluation | None
     expected: str | None
     detail: str = ""
+    config: RunConfig | None = None
+    has_sidecar: bool = True
+    source: str = "sidecar"
+    """Where the configuration came from: sidecar, a corpus manifest's path, or command line."""
 
     @property
     def diverges(self) -> bool:
@@ -42,39 +58,100 @@ class Replay:
 
 
 def config_for(
-    path: Path, base: RunConfig, overrides: dict[str, Any]
+    path: Path, base: RunConfig, overrides: dict[str, Any], trust: bool = False
 ) -> tuple[RunConfig, dict[str, Any] | None]:
-    sidecar = load_sidecar(path)
-    config = RunConfig.from_json(sidecar["config"]) if sidecar else base
-    return (replace(config, **overrides) if overrides else config), sidecar
+    """The configuration to replay ``path`` under, and its validated sidecar (None without one).
+
+    ``base`` is the command line's configuration (``overrides`` applied), used as is
+    for a file without a sidecar.
+
+    Raises
+    ------
+    fuzzer.sidecar.SidecarError
+        A damaged sidecar, or one naming targets that may not be imported.
+    """
+    sidecar = read_sidecar(path)
+    if sidecar is None:
+        found = manifest.read(path.parent)
+        if found is None:
+            return base, None
+        return config_from(found.data, found.path, overrides, trust), None
+    return config_from(sidecar, sidecar_path(path), overrides, trust), sidecar
+
+
+def _phrase(source: str) -> str:
+    return {"sidecar": "its sidecar", "command line": "the command line"}.get(source, source)
+
+
+def source_of(path: Path) -> str:
+    """Where :func:`config_for` takes the configuration of ``path`` from (for messages)."""
+    if sidecar_path(path).exists():
+        return "sidecar"
+    found = manifest.path_of(path.parent)
+    return str(found) if found.exists() else "command line"
 
 
 def replay_file(
-    path: Path, base: RunConfig, overrides: dict[str, Any], sessions: dict[RunConfig, Session] | None = None
+    path: Path,
+    base: RunConfig,
+    overrides: dict[str, Any],
+    sessions: dict[RunConfig, Session] | None = None,
+    trust: bool = False,
 ) -> Replay:
-    """Replay one file; ``sessions`` caches targets between files of one configuration."""
-    config, sidecar = config_for(path, base, overrides)
+    """Replay one file; ``sessions`` caches targets between files of one configuration.
+
+    Raises
+    ------
+    fuzzer.session.ConfigError
+        The sidecar cannot be used, or its configuration cannot be opened.
+    """
+    config, sidecar = config_for(path, base, overrides, trust)
+    unrecorded = sidecar is None
     try:
         case = decode(path.read_bytes())
     except (OSError, TestCaseError) as exc:
-        return Replay(path, Result.SKIPPED, None, None, f"not a test case: {exc}")
+        return Replay(path, Result.SKIPPED, None, None, f"not a test case: {exc}", config, not unrecorded)
     cache = sessions if sessions is not None else {}
     if config not in cache:
-        cache[config] = Session.open(config)
+        try:
+            cache[config] = Session.open(config)
+        except ConfigError as exc:
+            raise ConfigError(
+                f"{path}: cannot replay under the configuration from {_phrase(source_of(path))}: {exc}"
+            ) from None
     session = cache[config]
     if case.msg_type != config.message_type:
         return Replay(
-            path, Result.SKIPPED, None, None, f"message type {case.msg_type} is not {config.message_type}"
+            path,
+            Result.SKIPPED,
+            None,
+            None,
+            f"message type {case.msg_type} is not {config.message_type}",
+            config,
+            not unrecorded,
         )
-    evaluation = session.evaluator().evaluate(case)
+    from fuzzer.evaluate import history_of
+
+    try:
+        history = history_of(sidecar)
+    except ValueError as exc:
+        return Replay(path, Result.SKIPPED, None, None, f"sidecar history: {exc}", config, not unrecorded)
+    # fresh targets for every file, and a state_dependent divergence's recorded calls first
+    evaluation = session.evaluator().evaluate(case, history=history)
     expected = sidecar["signature"]["key"] if sidecar else None
     if evaluation.verdict != Verdict.EVALUATED:
         return Replay(
-            path, Result.SKIPPED, evaluation, expected, f"{evaluation.verdict}: {evaluation.reason}"
+            path,
+            Result.SKIPPED,
+            evaluation,
+            expected,
+            f"{evaluation.verdict}: {evaluation.reason}",
+            config,
+            not unrecorded,
         )
     got = evaluation.signature.key if evaluation.signature else None
     if got is None:
-        result = Result.AGREES
+        result = Result.UNRECORDED_AGREES if unrecorded else Result.AGREES
     elif expected is None:
         result = Result.NEW
     else:
@@ -82,22 +159,12 @@ def replay_file(
     detail = ""
     if evaluation.signature is not None:
         cmp = evaluation.comparison
-        detail = f"signature {got}: {cmp.kind} on {cmp.field or 'status'}, difference {cmp.difference:.3g}"
-    return Replay(path, result, evaluation, expected, detail)
+        detail = f"signature {got}: {cmp.headline(tuple(session.reference.joint_names))}"
+    if unrecorded:
+        detail = "; ".join(filter(None, [detail, f"replayed under {describe(config)}"]))
+    return Replay(path, result, evaluation, expected, detail, config, not unrecorded)
 
 
 def expand(paths: Iterable[Path]) -> list[Path]:
-    """Files and the crash/test files inside folders (sidecars excluded)."""
-    out: list[Path] = []
-    for p in paths:
-        if p.is_dir():
-            out.extend(
-                sorted(
-                    f
-                    for f in p.iterdir()
-                    if f.is_file() and not f.name.endswith(".json") and not f.name.startswith(".")
-                )
-            )
-        else:
-            out.append(p)
-    return out
+    """Files and the test files inside folders; sidecars skipped (:func:`fuzzer.paths.crash_inputs`)."""
+    return crash_inputs(paths)

@@ -1,15 +1,15 @@
 """Everything the engine shows a person: progress, warnings, summaries, verdicts.
 
-The only module that writes to the terminal. Progress goes to stderr (next to
-libFuzzer's own status lines): a tqdm bar on a terminal, a plain line every few
-seconds otherwise.
+The only module that writes to the terminal. Progress goes to stderr: one tqdm
+line redrawn in place on a terminal, a plain line every few seconds otherwise
+(libFuzzer's own per-input lines are hidden unless ``--verbose``).
 """
 
 from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
@@ -67,10 +67,12 @@ class Progress:
             self._bar = tqdm(
                 total=total_seconds,
                 unit="s",
-                desc=PREFIX,
+                desc="starting",
                 leave=False,
-                dynamic_ncols=True,
-                bar_format="{desc} {elapsed} {bar} {postfix}" if total_seconds else None,
+                dynamic_ncols=True,  # one line, cut to the terminal's width
+                bar_format=f"{PREFIX} {{elapsed}} |{{bar:12}}| {{desc}}"
+                if total_seconds
+                else f"{PREFIX} {{elapsed}} {{desc}}",
             )
 
     def tick(self) -> None:
@@ -80,7 +82,7 @@ class Progress:
         line = status_line(self.stats, len(self.features.seen))
         if self._bar is not None:
             self._bar.n = min(self.stats.elapsed, self._bar.total or self.stats.elapsed)
-            self._bar.set_postfix_str(line, refresh=True)
+            self._bar.set_description_str(line, refresh=True)
         else:
             info(line)
 
@@ -90,9 +92,22 @@ class Progress:
             self._bar = None
 
 
-def summary(stats: Stats, features: int, artifacts: str, corpus: Iterable[str], new_files: list[str]) -> None:
+def summary(
+    stats: Stats,
+    features: int,
+    artifacts: str,
+    corpus: Iterable[str],
+    new_files: list[str],
+    *,
+    totals: dict[str, Any] | None = None,
+    timeouts: Sequence[str] = (),
+    crashes: Sequence[str] = (),
+    exit_code: int | None = None,
+) -> None:
     """The end-of-campaign report (stderr). ``new_files``: crash files written since the
-    start, by this process or by its -fork/-jobs workers."""
+    start, by this process or by its -fork/-jobs workers; ``totals``: the workers' counters
+    summed (``divlog.worker_totals``) when this process supervised them; ``timeouts`` and
+    ``crashes``: libFuzzer's timeout-/crash- files written since the start."""
     lines = [
         "campaign summary",
         f"  executions: {stats.execs} in {stats.elapsed:.1f} s "
@@ -105,15 +120,24 @@ def summary(stats: Stats, features: int, artifacts: str, corpus: Iterable[str], 
             else ""
         ),
         f"  unique signatures: {len(stats.signatures)}; behaviour features seen: {features}",
-        f"  largest difference: {stats.max_difference:.3g}",
+        "  largest value difference: "
+        + (
+            f"{stats.max_difference:.3g} {stats.max_difference_unit}"
+            if stats.max_difference_unit
+            else "none (no value divergence)"
+        ),
     ]
     if stats.by_strategy:
         lines.append(
             "  divergences by mutation strategy: "
             + ", ".join(f"{k} {n}" for k, n in stats.by_strategy.most_common())
         )
-    if not stats.execs:
-        lines = ["campaign summary (this process supervised workers; their logs hold their counts)"]
+    if totals is not None:
+        lines = _totals_lines(totals, stats.elapsed)
+    if timeouts:
+        lines.append(f"  timeouts: {len(timeouts)} input(s) ran past -timeout: {', '.join(timeouts[:5])}")
+    if crashes:
+        lines.append(f"  libFuzzer crashes: {len(crashes)}: {', '.join(crashes[:5])}")
     lines.append(f"  crash files ({len(new_files)} new this run) in: {artifacts}")
     for path in new_files[:20]:
         lines.append(f"    {path}")
@@ -121,8 +145,27 @@ def summary(stats: Stats, features: int, artifacts: str, corpus: Iterable[str], 
         lines.append(f"    ... and {len(new_files) - 20} more")
     lines.append(f"  corpus: {', '.join(corpus)}")
     lines.append("  replay one with: python fuzz_diff.py <crash file>")
+    if exit_code is not None:
+        meaning = {0: "no new divergence", 1: "new divergences found", 70: "timeouts"}.get(
+            exit_code, "libFuzzer's status"
+        )
+        lines.append(f"  exit status {exit_code} ({meaning})")
     for line in lines:
         info(line)
+
+
+def _totals_lines(totals: dict[str, Any], elapsed: float) -> list[str]:
+    """Summary lines of a -fork/-jobs campaign: the workers' counters summed."""
+    kinds = totals.get("divergent", {})
+    execs = totals.get("execs", 0)
+    return [
+        f"campaign summary (totals over {totals.get('processes', 0)} child process(es): jobs and merges)",
+        f"  executions: {execs} in {elapsed:.1f} s ({execs / max(elapsed, 1e-9):,.0f}/s); "
+        f"filtered {totals.get('filtered', 0)}, malformed {totals.get('malformed', 0)}",
+        f"  divergences: {totals.get('divergences', 0)} "
+        + (f"({', '.join(f'{k} {n}' for k, n in sorted(kinds.items()))})" if kinds else ""),
+        f"  unique signatures: {totals.get('signatures', 0)}",
+    ]
 
 
 def verdict(path: str, text: str, detail: str = "") -> None:

@@ -41,6 +41,10 @@ class RunConfig:
     msg_type: str = ""
     msg_path: tuple[str, ...] = ()
     filtering: bool = True
+    transport: str = "inprocess"
+    """How targets run: ``inprocess``, or ``ros`` (each a ROS node: ``fuzzer.ros.transport``).
+    Recorded in sidecars for information; a crash file replays in-process unless
+    ``--transport ros`` is given."""
 
     @property
     def message_type(self) -> str:
@@ -97,15 +101,32 @@ class Session:
             registry.get(config.message_type)
         except (ValueError, MsgError) as exc:
             raise ConfigError(f"--msg-type: {exc}") from None
-        runners = []
+        runners: list[Any] = []
+        create: Any = Runner.create
+        ros_failure: tuple[type[Exception], ...] = ()
+        if config.transport == "ros":
+            from fuzzer.ros import env as ros_env
+            from fuzzer.ros.transport import NodeStartError, RosRunner
+
+            create, ros_failure = RosRunner.create, (ros_env.RosUnavailableError, NodeStartError)
         for spec in config.targets:
             try:
-                runners.append(Runner.create(spec, urdf, config.tip_link))
+                runners.append(create(spec, urdf, config.tip_link))
             except TargetError as exc:
                 raise ConfigError(f"--targets: {exc}") from None
+            except RuntimeError as exc:
+                if isinstance(exc, ros_failure):
+                    raise ConfigError(f"--transport ros: {exc}") from None
+                raise ConfigError(
+                    f"target {spec!r}: its RobotModel({urdf.name}) raised {type(exc).__name__}: {exc}"
+                ) from None
             except RobotAPIError as exc:
                 raise ConfigError(
                     f"target {spec!r} cannot load {urdf}: {type(exc).__name__}: {exc}"
+                ) from None
+            except Exception as exc:  # noqa: BLE001 - a broken target's constructor is a usage error
+                raise ConfigError(
+                    f"target {spec!r}: its RobotModel({urdf.name}) raised {type(exc).__name__}: {exc}"
                 ) from None
         return cls(config, urdf, (runners[0], runners[1]), registry)
 

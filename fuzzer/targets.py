@@ -16,7 +16,8 @@ from fuzzer.mapping import Call, FkCall, IkCall, MoveCall
 from fuzzer.records import Outcome, Status
 from robot_api.errors import RobotAPIError
 
-BUILTIN = {"native": "native", "python": "python_impl"}
+BUILTIN = {"native": "native", "python": "python_impl", "ros_tf": "adapters.ros_tf:api"}
+"""Short target names: a module, or a ``module:attribute`` (``ros_tf``: robot_state_publisher + tf2)."""
 
 
 class TargetError(ValueError):
@@ -25,9 +26,7 @@ class TargetError(ValueError):
 
 def module_of(spec: str) -> str:
     """Top-level module a spec imports (for instrumentation)."""
-    if spec in BUILTIN:
-        return BUILTIN[spec]
-    return spec.split(":", 1)[0]
+    return BUILTIN.get(spec, spec).split(":", 1)[0]
 
 
 def load_target(spec: str) -> Any:
@@ -39,7 +38,8 @@ def load_target(spec: str) -> Any:
         With a message naming the spec and what is wrong.
     """
     if spec in BUILTIN:
-        module_name, attribute = BUILTIN[spec], None
+        module_name, _, name = BUILTIN[spec].partition(":")
+        attribute = name or None
     elif ":" in spec:
         module_name, attribute = spec.split(":", 1)
         if not module_name or not attribute:
@@ -70,11 +70,21 @@ class Runner:
     name: str
     impl: Any
     model: Any
+    urdf: str | os.PathLike[str] | None = None
+    tip_link: str | None = None
 
     @classmethod
     def create(cls, spec: str, urdf: str | os.PathLike[str], tip_link: str | None) -> Runner:
         impl = load_target(spec)
-        return cls(spec, impl, impl.RobotModel(urdf, tip_link))
+        return cls(spec, impl, impl.RobotModel(urdf, tip_link), urdf, tip_link)
+
+    def fresh(self) -> Runner:
+        """The same target newly constructed (new model; every call makes a new group):
+        no state from earlier calls. Without a known URDF, a copy sharing this model."""
+        if self.urdf is None:
+            return Runner(self.name, self.impl, self.model)
+        model = self.impl.RobotModel(self.urdf, self.tip_link)
+        return Runner(self.name, self.impl, model, self.urdf, self.tip_link)
 
     @property
     def home(self) -> tuple[float, ...]:
@@ -86,7 +96,9 @@ class Runner:
             return self._run(call, ik_seed)
         except RobotAPIError as exc:
             return Outcome(Status.REJECTED, type(exc).__name__, int(exc.code), str(exc)[:500])
-        except Exception as exc:  # noqa: BLE001 - a crash of the target is a finding, not ours
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - a crash of the target (SystemExit too) is a finding
             return Outcome(Status.CRASHED, type(exc).__name__, None, str(exc)[:500])
 
     def _run(self, call: Call, ik_seed: tuple[float, ...] | None) -> Outcome:

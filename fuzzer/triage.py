@@ -1,7 +1,10 @@
 """Dedup: group divergences into buckets by signature, most severe first.
 
-A bucket is one signature (op, outcome pair, kind, field, sign flip, magnitude
-bucket, joints). Its count comes from ``divergences.jsonl`` (every divergent
+A bucket is one signature: what a person would call one problem (op, outcome
+pair, kind, field, the kinds of the joints involved, and the target of a
+property violation). The size of the difference and its sign are details of the
+representative, shown with their unit, not parts of the key; joints are shown by
+name. Its count comes from ``divergences.jsonl`` (every divergent
 execution), its representative from the crash files (the first input of the
 signature, or its minimized form when ``minimize`` has made one). Crash files
 without a sidecar (native crashes, timeouts written by libFuzzer) form buckets
@@ -10,6 +13,7 @@ of their own.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections import Counter
 from dataclasses import dataclass
@@ -18,9 +22,19 @@ from typing import Any
 
 from fuzzer.artifacts import load_sidecar
 from fuzzer.divlog import DIVERGENCES, read_lines
-from fuzzer.records import Signature
+from fuzzer.records import Outcome, Signature, describe
 
-SEVERITY = {"crash": 0, "status": 1, "value": 2, "representation": 3, "ill_conditioned": 4, "flaky": 5}
+SEVERITY = {
+    "crash": 0,
+    "status": 1,
+    "property": 2,
+    "value": 3,
+    "state_dependent": 4,
+    "representation": 5,
+    "ill_conditioned": 6,
+    "known_limitation": 7,
+    "flaky": 8,
+}
 """Order of kinds, most severe first: a crash, then a different answer, then a
 different number, then a different representation, then the undecidable."""
 
@@ -48,9 +62,19 @@ class Bucket:
         )
 
     @property
-    def severity(self) -> tuple[int, int, int]:
-        bucket = self.signature.bucket if self.signature else 99
-        return (SEVERITY.get(self.kind, 0), -bucket, -self.count)
+    def difference(self) -> tuple[float, str]:
+        """The representative's headline difference and its unit (0, 'status' when unknown)."""
+        sidecar = self.sidecar or {}
+        comparison = sidecar.get("comparison") if isinstance(sidecar.get("comparison"), dict) else {}
+        assert isinstance(comparison, dict)
+        value: Any = sidecar.get("difference", comparison.get("difference", 0.0))
+        unit = comparison.get("unit", sidecar.get("unit", "status"))
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+        return (float(value) if ok else 0.0), (unit if isinstance(unit, str) else "status")
+
+    @property
+    def severity(self) -> tuple[int, float, int, str]:
+        return (SEVERITY.get(self.kind, 0), -self.difference[0], -self.count, self.key)
 
     @property
     def best(self) -> Path:
@@ -61,31 +85,77 @@ class Bucket:
         if self.signature is None:
             return f"{self.kind} without sidecar ({self.note or 'native crash or timeout'})"
         s = self.signature
-        where = f" on joints {list(s.joints)}" if s.joints else ""
-        size = f", difference ~1e{s.bucket}" if s.bucket > -99 else ""
-        flip = ", sign flip" if s.sign_flip else ""
-        return f"{s.kind} on {s.field}{where}{size}{flip}: {s.outcome_a} vs {s.outcome_b}"
+        sidecar = self.sidecar or {}
+        comparison = sidecar.get("comparison") if isinstance(sidecar.get("comparison"), dict) else {}
+        assert isinstance(comparison, dict)
+        joints = comparison.get("joints") or []
+        names = sidecar.get("joint_names") or []
+        if not (isinstance(joints, list) and all(isinstance(j, int) for j in joints)):
+            joints = []
+        if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
+            names = []
+        difference, unit = self.difference
+        raw = comparison.get("raw", 0.0)
+        raw = float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) else 0.0
+        text = describe(s.kind, s.field, difference, unit, joints, names, s.target, raw)
+        labels = [s.outcome_a, s.outcome_b]
+        outcomes = sidecar.get("outcomes")
+        if isinstance(outcomes, list) and len(outcomes) == 2:
+            # the representative's exact outcomes (the signature's pair may be coarse)
+            with contextlib.suppress(KeyError, TypeError, ValueError, AttributeError):
+                labels = [Outcome.from_json(o).label for o in outcomes]
+        return f"{text}: {labels[0]} vs {labels[1]}"
 
 
 def _artifacts(directory: Path) -> list[Path]:
-    return sorted(
-        p
-        for p in directory.iterdir()
-        if p.is_file()
-        and not p.name.endswith(".json")
-        and not p.name.startswith(".")
-        and p.name.split("-")[0] in ("crash", "timeout", "oom", "minimized")
-    )
+    """The artifacts of a folder; symlinks that lead outside it are ignored with a warning."""
+    from fuzzer.paths import contained
+    from fuzzer.reporting import warn
+
+    out = []
+    for p in sorted(directory.iterdir()):
+        if (
+            not p.name.endswith(".json")
+            and not p.name.startswith(".")
+            and p.name.split("-")[0] in ("crash", "timeout", "oom", "minimized")
+            and p.is_file()
+        ):
+            if contained(directory, p):
+                out.append(p)
+            else:
+                warn(f"ignoring {p}: a link to a file outside {directory}")
+    return out
 
 
-def collect(directory: Path) -> list[Bucket]:
-    """The buckets of an artifacts folder, most severe first."""
+def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
+    """The validated sidecar of an artifact (None and why when it has no usable one)."""
+    from fuzzer.artifacts import sidecar_path
+    from fuzzer.paths import contained
+    from fuzzer.reporting import warn
+    from fuzzer.sidecar import SidecarError, validate
+
+    side = sidecar_path(path)
+    if side.is_symlink() and not contained(directory, side):
+        warn(f"ignoring {side}: a link to a file outside {directory}")
+        return None, "its sidecar links outside the folder"
+    sidecar = load_sidecar(path)
+    if sidecar is None:
+        return None, "no readable sidecar"
+    try:
+        validate(sidecar, side)
+    except SidecarError as exc:
+        return None, f"damaged sidecar: {exc}"
+    return sidecar, ""
+
+
+def collect(directory: Path, files: list[Path] | None = None) -> list[Bucket]:
+    """The buckets of an artifacts folder (or of some of its ``files``), most severe first."""
     counts: Counter[str] = Counter(r["sig"] for r in read_lines(directory / DIVERGENCES) if "sig" in r)
     representatives: dict[str, tuple[Path, dict[str, Any]]] = {}
     minimized: dict[str, Path] = {}
     buckets: list[Bucket] = []
-    for path in _artifacts(directory):
-        sidecar = load_sidecar(path)
+    for path in _artifacts(directory) if files is None else files:
+        sidecar, why = _sidecar(directory, path)
         try:
             key = sidecar["signature"]["key"] if sidecar else None
             if sidecar is not None:
@@ -93,7 +163,7 @@ def collect(directory: Path) -> list[Bucket]:
         except (KeyError, TypeError, ValueError):
             key = None
         if sidecar is None or key is None:
-            buckets.append(Bucket(path.name, None, 1, path, None, note="no readable sidecar"))
+            buckets.append(Bucket(path.name, None, 1, path, None, note=why or "no readable sidecar"))
             continue
         if path.name.startswith("minimized-"):
             minimized[key] = path

@@ -1,6 +1,6 @@
 """The Python twin: the same API as ``native``, written independently.
 
-Pure Python + numpy: URDF via a hardened XML parser (defusedxml) with
+Pure Python + numpy: URDF via expat under the contract's XML rules, with
 urdfdom's rules, kinematics from textbook formulas; no KDL, urdfdom or other
 kinematics library. The contract is ``docs/api.md``.
 """

@@ -24,6 +24,8 @@ Array = NDArray[np.float64]
 
 def segment_values(chain: Chain, q: Array) -> Array:
     """Joint value of every segment, shape (S,) or (N, S) for q of shape (dof,) or (N, dof)."""
+    if q.shape[-1] == 0:  # no joint variable (a chain of fixed joints): nothing to index
+        return np.zeros((*q.shape[:-1], len(chain.value_index))) + chain.offset
     return q[..., chain.value_index] * chain.multiplier + chain.offset
 
 
@@ -100,7 +102,8 @@ def pinv_step(jac: Array, twist: Array) -> Array:
     u, s, vt = np.linalg.svd(jac, full_matrices=False)
     ut_twist = u.T @ twist
     inv = np.where(np.abs(s) < IK_PINV_EPS, 0.0, ut_twist / np.where(s == 0.0, 1.0, s))
-    return vt.T @ inv
+    step: Array = vt.T @ inv
+    return step
 
 
 def ik(

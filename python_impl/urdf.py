@@ -1,28 +1,33 @@
-"""URDF reading for the twin: hardened XML (defusedxml) and urdfdom's rules.
+"""URDF reading for the twin: hardened XML (expat, the contract's XML rules) and urdfdom's rules.
 
 What is accepted and what is an error follows urdfdom 3.0.1 (Debian 12) as
 documented in ``docs/api.md`` ("URDF rules"): the same defaults, the same
 number grammar, the first of repeated elements wins, the tree built over joints
-sorted by name. On top of that come the contract's own XML rules (well-formed,
-no entity declarations, limits on depth and size, valid ``<origin>`` vectors),
-checked in document order while streaming, as the native side's expat pass does.
+sorted by name. On top of that come the contract's own XML rules (size limit,
+UTF-8 only, well-formed, no DOCTYPE, no processing instructions, no '%' in
+attribute values but file names, limits on depth and links, valid ``<origin>`` vectors),
+checked in document order by an expat pass that mirrors the native side's
+(``native/src/xml_guard.cpp``) handler for handler. The same pass builds the
+tree, without namespace processing, as urdfdom's TinyXML reads it (``v:name``
+is a plain attribute name). No DOCTYPE means no entity expansion and no external
+entity, the attacks defusedxml exists to refuse.
 """
 
 from __future__ import annotations
 
-import io
 import os
 import re
+import stat
 from dataclasses import dataclass, field
-from xml.etree.ElementTree import Element, ParseError
-
-import defusedxml.ElementTree as SafeET
-from defusedxml import DefusedXmlException
+from xml.etree.ElementTree import Element, TreeBuilder
+from xml.parsers import expat
 
 from robot_api.errors import ErrorCode, URDFError
 
 MAX_XML_DEPTH = 1000
 MAX_LINKS = 10000
+MAX_URDF_BYTES = 16 << 20
+"""Largest URDF accepted, in bytes (a file, or text encoded as UTF-8): 16 MiB."""
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
@@ -95,52 +100,130 @@ def parse_vector3(text: str, what: str) -> tuple[float, float, float]:
 
 
 def _read_source(source: str, is_path: bool) -> bytes:
+    """The document's bytes: text as UTF-8, or at most ``MAX_URDF_BYTES + 1`` bytes of a regular file.
+
+    The file is opened non-blocking, so that a FIFO without a writer cannot hang
+    the open, and anything but a regular file is refused before a byte is read.
+    """
     if not is_path:
         return source.encode("utf-8")
+    where = f"cannot read URDF file '{source}'"
     try:
-        with open(source, "rb") as handle:
-            return handle.read()
-    except (OSError, ValueError) as exc:
-        raise _invalid(f"cannot read URDF file '{source}': {exc}") from None
+        fd = os.open(source, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except ValueError:  # an embedded NUL
+        raise _invalid(f"{where}: the path contains a NUL character") from None
+    except OSError as exc:
+        raise _invalid(f"{where}: {exc.strerror}") from None
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise _invalid(f"{where}: not a regular file")
+        chunks: list[bytes] = []
+        size = 0
+        while size <= MAX_URDF_BYTES:
+            chunk = os.read(fd, min(1 << 16, MAX_URDF_BYTES + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        return b"".join(chunks)
+    except OSError as exc:
+        raise _invalid(f"{where}: {exc.strerror}") from None
+    finally:
+        os.close(fd)
 
 
-def _stream(data: bytes) -> Element:
-    """Parse with the contract's streaming checks; return the root element."""
-    depth = 0
-    links = 0
-    root: Element | None = None
-    try:
-        for event, elem in SafeET.iterparse(io.BytesIO(data), events=("start", "end")):
-            if event == "end":
-                depth -= 1
-                continue
-            depth += 1
-            if depth > MAX_XML_DEPTH:
-                raise URDFError(
-                    f"URDF XML is nested deeper than {MAX_XML_DEPTH} elements", ErrorCode.URDF_UNSUPPORTED
+def _clip(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+class _Guard:
+    """The contract's XML rules, checked by expat in document order (native: xml_guard.cpp)."""
+
+    def __init__(self) -> None:
+        self.depth = 0
+        self.links = 0
+        self.root_is_robot = False
+        self.tree = TreeBuilder()
+        # "UTF-8" overrides the document's own declaration; on_xml_decl rejects any other.
+        self.parser = expat.ParserCreate("UTF-8")
+        self.parser.XmlDeclHandler = self.on_xml_decl
+        self.parser.StartDoctypeDeclHandler = self.on_doctype
+        self.parser.ProcessingInstructionHandler = self.on_processing_instruction
+        self.parser.EntityDeclHandler = self.on_entity_decl
+        self.parser.ExternalEntityRefHandler = self.on_external_entity
+        self.parser.StartElementHandler = self.on_start
+        self.parser.EndElementHandler = self.on_end
+
+    def fail(self, message: str, code: ErrorCode = ErrorCode.URDF_INVALID) -> URDFError:
+        return URDFError(f"URDF {message} (line {self.parser.CurrentLineNumber})", code)
+
+    def on_start(self, name: str, attrs: dict[str, str]) -> None:
+        self.depth += 1
+        if self.depth > MAX_XML_DEPTH:
+            raise self.fail(f"XML is nested deeper than {MAX_XML_DEPTH} elements", ErrorCode.URDF_UNSUPPORTED)
+        if self.depth == 1:
+            self.root_is_robot = name == "robot"
+        if self.depth == 2 and self.root_is_robot and name == "link":
+            self.links += 1
+            if self.links > MAX_LINKS:
+                raise self.fail(f"has more than {MAX_LINKS} links", ErrorCode.URDF_UNSUPPORTED)
+        for key, value in attrs.items():
+            # file names are never formatted by urdfdom; URL-encoded ones ("my%20arm.stl") are common
+            if "%" in value and key != "filename":
+                raise self.fail(
+                    f"<{_clip(name)} {_clip(key)}=\"{_clip(value)}\">: '%' is not allowed in attribute "
+                    "values (urdfdom would pass it to printf as a format directive)"
                 )
-            if depth == 1:
-                root = elem
-            elif depth == 2 and root is not None and root.tag == "robot" and elem.tag == "link":
-                links += 1
-                if links > MAX_LINKS:
-                    raise URDFError(f"URDF has more than {MAX_LINKS} links", ErrorCode.URDF_UNSUPPORTED)
-            if elem.tag == "origin":
-                for key in ("xyz", "rpy"):
-                    value = elem.get(key)
-                    if value is not None:
-                        try:
-                            parse_vector3(value, f"origin {key}")
-                        except URDFError:
-                            raise _invalid(
-                                f'URDF origin {key}="{value}" is not a vector of 3 numbers'
-                            ) from None
-    except ParseError as exc:
-        raise _invalid(f"URDF is not well-formed XML: {exc}") from None
-    except DefusedXmlException as exc:
-        raise _invalid(f"URDF uses a forbidden XML feature: {exc!r}") from None
-    if root is None:  # pragma: no cover - expat reports an empty document as a ParseError
-        raise _invalid("URDF document is empty")
+        if name == "origin":
+            for key in ("xyz", "rpy"):
+                vector = attrs.get(key)
+                if vector is not None:
+                    try:
+                        parse_vector3(vector, f"origin {key}")
+                    except URDFError:
+                        raise self.fail(
+                            f'origin {key}="{_clip(vector)}" is not a vector of 3 numbers'
+                        ) from None
+        self.tree.start(name, attrs)
+
+    def on_end(self, name: str) -> None:
+        self.depth -= 1
+        self.tree.end(name)
+
+    def on_xml_decl(self, version: str, encoding: str | None, standalone: int) -> None:
+        if encoding is not None and encoding.lower() != "utf-8":
+            raise self.fail(f"declares encoding '{_clip(encoding)}'; only UTF-8 is supported")
+
+    def on_doctype(self, name: str, *rest: object) -> None:
+        raise self.fail(f"DOCTYPE declarations are not allowed (<!DOCTYPE {_clip(name)}>)")
+
+    def on_processing_instruction(self, target: str, data: str) -> None:
+        raise self.fail(f"processing instructions are not allowed (<?{_clip(target)} ...?>)")
+
+    def on_entity_decl(self, name: str, *rest: object) -> None:
+        raise self.fail(f"entity declarations are not allowed (entity '{_clip(name)}')")
+
+    def on_external_entity(self, *rest: object) -> int:
+        raise self.fail("external entities are not allowed")
+
+
+def _parse_xml(data: bytes) -> Element:
+    """The root element, once the document passes the contract's XML rules (URDFError otherwise)."""
+    if len(data) > MAX_URDF_BYTES:
+        raise URDFError(f"URDF is larger than {MAX_URDF_BYTES >> 20} MiB", ErrorCode.URDF_UNSUPPORTED)
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        raise _invalid("URDF must be UTF-8 (it starts with a UTF-16/UTF-32 byte order mark)")
+    nul = data.find(b"\0")
+    if nul >= 0:  # expat reads "<\0" as UTF-16 whatever it is told; XML has no NUL character
+        raise _invalid(f"URDF must be UTF-8 text (NUL byte at offset {nul})")
+    guard = _Guard()
+    try:
+        guard.parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise _invalid(
+            f"URDF is not well-formed XML: {expat.ErrorString(exc.code)} (line {exc.lineno})"
+        ) from None
+    root: Element = guard.tree.close()
     return root
 
 
@@ -262,9 +345,9 @@ def _parse_joint(elem: Element) -> Joint:
 def _parse_materials(robot: Element) -> None:
     seen: set[str] = set()
     for material in robot.findall("material"):
-        name = material.get("name")
-        if name is None:
-            raise _invalid("Material without a name")
+        # urdfdom logs a nameless material but keeps it, under the name "" (model.cpp ignores
+        # parseMaterial's result): accepted, and a second one is "not unique".
+        name = material.get("name", "")
         if name in seen:
             raise _invalid(f"material '{name}' is not unique.")
         seen.add(name)
@@ -319,7 +402,7 @@ def load_urdf(source: str, is_path: bool) -> Urdf:
     URDFError
         With ``URDF_INVALID`` or ``URDF_UNSUPPORTED`` and a message naming the problem.
     """
-    root = _stream(_read_source(source, is_path))
+    root = _parse_xml(_read_source(source, is_path))
     if root.tag != "robot":
         raise _invalid("Could not find the 'robot' element in the xml file")
     name = root.get("name")

@@ -85,4 +85,6 @@ def resolve(spec: str | os.PathLike[str]) -> Path:
     path = Path(text)
     if path.is_file():
         return path
+    if path.exists():  # a FIFO, device or folder: never opened (a FIFO would block)
+        raise URDFError(f"robot {text!r} is not a regular file (a URDF must be one)")
     raise URDFError(f"robot {text!r} is neither a URDF file nor a known robot ({', '.join(known_robots())})")

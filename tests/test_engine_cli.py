@@ -43,7 +43,7 @@ def test_finds_a_planted_divergence_within_a_bounded_budget(tmp_path: Path) -> N
     which the seeds never contain, so mutation has to find them."""
     corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
     run = fuzz(str(corpus), "-runs=5000", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}")
-    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.returncode == 1, run.stderr[-2000:]  # new divergences: exit 1
     assert "campaign summary" in run.stderr
     found = sidecars(artifacts)
     assert found, run.stderr[-2000:]
@@ -67,13 +67,13 @@ def test_crash_files_replay_their_verdict(tmp_path: Path) -> None:
         f"--targets=native,{TIGHT}",
     )
     crash = sorted(p for p in artifacts.glob("crash-*") if not p.name.endswith(".json"))[0]
-    again = fuzz(str(crash))
+    again = fuzz(str(crash), "--trust-sidecar")  # its sidecar names a plugin target
     assert again.returncode == 1 and "still diverges (same signature)" in again.stdout
     fixed = fuzz(str(crash), "--targets=native,python")
     assert fixed.returncode == 0 and "now agrees" in fixed.stdout
-    folder = fuzz("replay", str(artifacts))
+    folder = fuzz("replay", str(artifacts), "--targets", f"native,{TIGHT}")
     assert folder.returncode == 1 and folder.stdout.count("still diverges") == len(sidecars(artifacts))
-    assert run.returncode == 0
+    assert run.returncode == 1  # the campaign found new divergences
 
 
 def test_a_third_implementation_plugs_in_as_module_attribute(tmp_path: Path) -> None:
@@ -86,14 +86,17 @@ def test_a_third_implementation_plugs_in_as_module_attribute(tmp_path: Path) -> 
         f"--artifacts={artifacts}",
         "--targets=native,tests.plugins.faults:wrap_continuous",
     )
-    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.returncode == 1, run.stderr[-2000:]
     found = sidecars(artifacts)
     assert found
     continuous = {0, 3, 5}  # Kinova's continuous joints
     for sidecar in found:  # the paper's "positive and negative" class
-        sig = sidecar["signature"]
-        assert (sig["kind"], sig["field"], sig["sign_flip"]) == ("representation", "joint_values", True)
-        assert set(sig["joints"]) <= continuous
+        # sign flip and joint indices are details of the comparison now, not of the signature,
+        # which keys on the joint types (issue 12, one bug one bucket)
+        sig, cmp = sidecar["signature"], sidecar["comparison"]
+        assert (sig["kind"], sig["field"], cmp["sign_flip"]) == ("representation", "joint_values", True)
+        assert sig["joint_types"] == ["continuous"] and set(cmp["joints"]) <= continuous
+    assert len(found) == 1  # one bug, one bucket
 
 
 def test_stop_on_divergence_is_a_libfuzzer_crash(tmp_path: Path) -> None:
@@ -207,7 +210,7 @@ def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
         stderr=subprocess.DEVNULL,
     )
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and len(list(artifacts.glob("crash-*"))) < 4:
+    while time.monotonic() < deadline and len(list(artifacts.glob("crash-*"))) < 2:  # a file + sidecar
         time.sleep(0.2)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
@@ -225,7 +228,7 @@ def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
         "--robot=kinova",
         "--targets=native,tests.plugins.faults:wrap_continuous",
     )
-    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.returncode in (0, 1), run.stderr[-2000:]  # 1 if it finds a signature not yet written
     assert not list(artifacts.glob(".tmp-*"))
 
 
@@ -254,6 +257,6 @@ def test_fork_mode_reexecutes_the_script(tmp_path: Path) -> None:
         f"--artifacts={artifacts}",
         f"--targets=native,{TIGHT}",
     )
-    assert run.returncode == 0, run.stderr[-3000:]
+    assert run.returncode == (1 if sidecars(artifacts) else 0), run.stderr[-3000:]
     assert "-fork=2: fuzzing in separate process" in run.stderr
     assert "job: " in run.stderr  # workers ran

@@ -61,6 +61,28 @@ def system() -> MessageRegistry:
     return MessageRegistry([SYSTEM_ROOT])
 
 
+def _resolvable(system: MessageRegistry, known: list[str]) -> list[str]:
+    """The known definitions that must resolve: every one of a ``*_msgs`` package.
+
+    Other packages' .msg files can lie under /usr/share without their dependencies (Debian's
+    libactionlib-dev ships actionlib/msg/*.msg that use actionlib_msgs/GoalID, whose .msg files
+    no Debian package ships); those must fail with a MsgError naming the missing type.
+    """
+    must = []
+    for name in known:
+        if name.split("/", 1)[0].endswith("_msgs"):
+            must.append(name)
+            continue
+        try:
+            system.get(name)
+            system.default(name)
+        except MsgError as exc:
+            assert "unknown message type" in str(exc), exc
+            continue
+        must.append(name)
+    return must
+
+
 # --------------------------------------------------------------------------- shipped definitions
 
 
@@ -130,7 +152,7 @@ def test_every_system_definition_parses_and_resolves(system: MessageRegistry) ->
         parse_msg(path.read_text(encoding="utf-8"), name, str(path))
     known = system.known()
     assert {f"{p.parent.parent.name}/{p.stem}" for p in SYSTEM_FILES} <= set(known)
-    for name in known:
+    for name in _resolvable(system, known):
         spec = system.get(name)
         system.validate(name, system.default(name))
         for fld in spec.fields:
@@ -551,7 +573,7 @@ def test_make_class_constants(system: MessageRegistry) -> None:
     cls = system.make_class("sensor_msgs/NavSatStatus")
     assert cls.STATUS_NO_FIX == -1 and cls.SERVICE_GALILEO == 8  # type: ignore[attr-defined]
     assert [f.name for f in dataclasses.fields(cls)] == ["status", "service"]
-    for name in system.known():
+    for name in _resolvable(system, system.known()):
         msg_cls = system.make_class(name)
         assert msg_cls().to_dict() == system.default(name)
 

@@ -72,7 +72,10 @@ def test_continuous_wrap_is_the_papers_positive_and_negative_inconsistency() -> 
     b = ok(joint_values=(4.0 - 2 * math.pi, 0.5))
     c = compare(a, b, TOL)
     assert c.kind is Kind.REPRESENTATION and c.field == "joint_values"
-    assert c.joints == (0,) and c.sign_flip and c.bucket == 0
+    # the headline difference is the one modulo equivalence (same angle: 0 rad); the 2pi gap
+    # as numbers is a detail (raw), never the headline (issue 12: one difference, with its unit)
+    assert c.joints == (0,) and c.sign_flip and c.unit == "rad"
+    assert c.difference == 0.0 and c.raw == pytest.approx(2 * math.pi)
 
 
 def test_prismatic_joints_are_not_periodic() -> None:

@@ -32,7 +32,7 @@ def test_regression(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     sidecar = load_sidecar(path)
     assert sidecar is not None
     expect = sidecar["regression"]["expect"]
-    result = replay_file(path, RunConfig(), {})
+    result = replay_file(path, RunConfig(), {}, trust=True)  # the project's own suite: trusted
     if expect == "agree":
         assert result.result is Result.AGREES, f"{path.name} diverges again: {result.detail}"
     else:
@@ -44,10 +44,10 @@ def test_regression(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 def test_promote_refuses_contradicting_claims(tmp_path: Path) -> None:
     fixed = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "agree")  # type: ignore[index]
     with pytest.raises(PromoteError, match="promote it with --fixed"):
-        promote(fixed, fixed=False, suite=tmp_path)
+        promote(fixed, fixed=False, suite=tmp_path, trust=True)
     known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
     with pytest.raises(PromoteError, match="not fixed yet"):
-        promote(known, fixed=True, suite=tmp_path)
-    done = promote(known, fixed=False, note="copy", suite=tmp_path)
+        promote(known, fixed=True, suite=tmp_path, trust=True)
+    done = promote(known, fixed=False, note="copy", suite=tmp_path, trust=True)
     assert done.expect == "diverge" and (tmp_path / known.name).is_file()
     assert load_sidecar(tmp_path / known.name)["regression"]["note"] == "copy"  # type: ignore[index]

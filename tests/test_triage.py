@@ -20,20 +20,37 @@ ROOT = Path(__file__).resolve().parents[1]
 TIGHT = ("native", "tests.plugins.faults:tight_tolerance")
 
 
-def fake_crash(directory: Path, name: str, kind: str, bucket: int = -99, count: int = 1) -> str:
-    sig = Signature("move", "ok", "ok", kind, "joint_values", False, bucket, (1,))
+def fake_crash(
+    directory: Path,
+    name: str,
+    kind: str,
+    difference: float = 0.0,
+    count: int = 1,
+    field: str = "joint_values",
+) -> str:
+    sig = Signature("move", "ok", "ok", kind, field, ("revolute",) if field == "joint_values" else ())
+    unit = {"joint_values": "rad", "position": "m"}.get(field, "status")
+    sidecar = {
+        "signature": sig.to_json(),
+        "config": {},
+        "difference": difference,
+        "comparison": {"joints": [1] if field == "joint_values" else [], "unit": unit},
+        "joint_names": ["shoulder", "elbow"],
+    }
     (directory / name).write_bytes(b"{}")
-    (directory / f"{name}.json").write_text(json.dumps({"signature": sig.to_json(), "config": {}}))
+    (directory / f"{name}.json").write_text(json.dumps(sidecar))
     for _ in range(count):
         append_line(directory / "divergences.jsonl", {"sig": sig.key})
     return sig.key
 
 
 def test_buckets_are_counted_and_ordered_by_severity(tmp_path: Path) -> None:
-    rep = fake_crash(tmp_path, "crash-aa", "representation", 0, count=50)
-    small = fake_crash(tmp_path, "crash-bb", "value", -6, count=3)
-    big = fake_crash(tmp_path, "crash-cc", "value", -1, count=1)
-    status = fake_crash(tmp_path, "crash-dd", "status", count=7)
+    # the size of a difference is no longer part of the signature (issue 12, one bug one
+    # bucket): the two value buckets differ by field here, and order by their difference
+    rep = fake_crash(tmp_path, "crash-aa", "representation", 0.0, count=50)
+    small = fake_crash(tmp_path, "crash-bb", "value", 2e-6, count=3)
+    big = fake_crash(tmp_path, "crash-cc", "value", 0.1, count=1, field="position")
+    status = fake_crash(tmp_path, "crash-dd", "status", count=7, field="status")
     (tmp_path / "crash-ee").write_bytes(b"native crash, no sidecar")
     (tmp_path / "divergences.jsonl").open("a").write("not json\n")
     buckets = triage.collect(tmp_path)
@@ -41,6 +58,9 @@ def test_buckets_are_counted_and_ordered_by_severity(tmp_path: Path) -> None:
     assert [b.count for b in buckets] == [1, 7, 1, 3, 50]
     lines = triage.table(buckets)
     assert lines[0].startswith("5 bucket(s), 62 divergent execution(s)")
+    # joint names and units in titles, never 0-based indices
+    assert "value on joint_values (elbow), difference 2e-06 rad: ok vs ok" in "\n".join(lines)
+    assert "value on position, difference 0.1 m" in "\n".join(lines)
     assert triage.table([]) == ["no divergences"]
     assert json.loads(triage.dumps(buckets))[1]["key"] == status
 
@@ -117,18 +137,18 @@ def test_cli_triage_minimize_and_coverage(tmp_path: Path) -> None:
         "--targets=" + ",".join(TIGHT),
         "--no-progress",
     )
-    assert fuzz.returncode == 0, fuzz.stderr[-2000:]
+    assert fuzz.returncode == 1, fuzz.stderr[-2000:]  # it finds new divergences
     listed = run("triage", str(artifacts))
     assert listed.returncode == 0 and "bucket(s)" in listed.stdout
     crash = next(p for p in artifacts.glob("crash-*") if not p.name.endswith(".json"))
-    shrunk = run("minimize", str(crash))
+    shrunk = run("minimize", str(crash), "--trust-sidecar")  # its sidecar names a plugin target
     assert shrunk.returncode == 0 and "minimized to" in shrunk.stdout, shrunk.stderr[-2000:]
     minimized = next(artifacts.glob("minimized-*[0-9a-f]"))
-    assert run(str(minimized)).stdout.count("still diverges (same signature)") == 1
+    assert run(str(minimized), "--trust-sidecar").stdout.count("still diverges (same signature)") == 1
     assert str(minimized) in run("triage", str(artifacts)).stdout
     cov = run("coverage", str(tmp_path / "corpus"), "--html", str(tmp_path / "html"))
     assert cov.returncode == 0, cov.stderr[-2000:]
     assert "python_impl coverage over" in cov.stdout and "branches" in cov.stdout
     assert (tmp_path / "html" / "index.html").is_file()
     bad = run("triage", str(tmp_path / "missing"))
-    assert bad.returncode == 2 and "not a folder" in bad.stderr
+    assert bad.returncode == 2 and "no such file" in bad.stderr

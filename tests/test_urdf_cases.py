@@ -1,4 +1,4 @@
-"""URDF edge cases: native (urdfdom + expat guard) and twin (defusedxml + mirrored rules)
+"""URDF edge cases: native (urdfdom + expat guard) and twin (expat guard + mirrored rules)
 accept and reject the same documents, with the same error class and code."""
 
 from __future__ import annotations

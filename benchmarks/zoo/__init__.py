@@ -5,9 +5,10 @@ what is wrong, cites a public source of the bug class, and gives the campaign
 in which the engine is expected to show it: the op, and a robot with the
 feature the bug needs (continuous joints, a mimic joint, URDF defaults...). A
 bug counts as *detected* when a campaign of ``native`` against the variant
-reports a divergence that is not ``ill_conditioned`` or ``flaky``. The
-``control`` entry is the unmodified twin: any detection there is a false
-positive.
+reports a divergence that is not ``ill_conditioned``, ``known_limitation`` or
+``flaky``. The ``control`` entry is the unmodified twin: any detection there is
+a false positive. ``CONTROLS`` runs it on every configuration a zoo bug uses,
+``fk`` on every known robot and ``ik`` on the default arm.
 """
 
 from __future__ import annotations
@@ -26,10 +27,16 @@ class Bug:
     op: str = "move"
     robot: str = "probot_anno"
     tip_link: str | None = None
+    variant: str = ""
+    """The variant in ``benchmarks/zoo/bugs.py`` (default: ``name``)."""
 
     @property
     def target(self) -> str:
-        return f"benchmarks.zoo.bugs:{self.name}"
+        return f"benchmarks.zoo.bugs:{self.variant or self.name}"
+
+    @property
+    def is_control(self) -> bool:
+        return (self.variant or self.name) == "control"
 
 
 ZOO: tuple[Bug, ...] = (
@@ -120,4 +127,23 @@ ZOO: tuple[Bug, ...] = (
 
 CONTROL = Bug("control", "the unmodified twin: no fault", "-")
 
-BY_NAME = {bug.name: bug for bug in (*ZOO, CONTROL)}
+
+def _controls() -> tuple[Bug, ...]:
+    from robot_api.robots import DEFAULT_ROBOT, known_robots
+
+    configs = {(b.op, b.robot, b.tip_link) for b in ZOO}
+    configs |= {("fk", robot, None) for robot in known_robots()}
+    configs.add(("ik", DEFAULT_ROBOT, None))
+    out = []
+    for op, robot, tip in sorted(configs, key=lambda c: (c[0], c[1], c[2] or "")):
+        where = Path(robot).stem if robot.endswith(".urdf") else robot
+        name = f"control@{op}/{where}" + (f"/{tip}" if tip else "")
+        out.append(Bug(name, "the unmodified twin: no fault", "-", op, robot, tip, variant="control"))
+    return tuple(out)
+
+
+CONTROLS: tuple[Bug, ...] = _controls()
+"""The control on every op and robot configuration a zoo bug uses, ``fk`` on every known
+robot (example-robot-data's included) and ``ik`` on the default arm."""
+
+BY_NAME = {bug.name: bug for bug in (*ZOO, CONTROL, *CONTROLS)}

@@ -14,6 +14,9 @@ from __future__ import annotations
 import re
 import time
 from pathlib import Path
+from typing import Any
+
+import matplotlib
 
 from fuzzer.report import figures
 from fuzzer.report.arm import ArmView, Sessions, render
@@ -45,7 +48,12 @@ FILE_NAMES = {
 }
 
 
-def write_report(directory: Path, out: Path | None = None) -> Path:
+PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}
+"""Strings from inputs (strategy names, robot names, targets) are drawn as they are:
+no mathtext, so ``$...$`` in a lineage cannot break (or style) a figure."""
+
+
+def write_report(directory: Path, out: Path | None = None, trust: bool = False) -> Path:
     """Write ``out/report.html`` and every figure as a PNG file in ``out``.
 
     Parameters
@@ -55,20 +63,25 @@ def write_report(directory: Path, out: Path | None = None) -> Path:
         an empty or missing folder gives a page saying there is nothing to show.
     out : Path, optional
         The output folder, ``directory / "report"`` by default.
+    trust : bool
+        Re-run buckets whose sidecar names targets other than the builtins
+        (``--trust-sidecar``); without it they get a note instead of a 3D view.
 
     Returns
     -------
     Path
         The HTML page. It is self-contained: images are data: URIs, CSS is inline,
-        there is no script and no network access.
+        there is no script and no network access. Nothing outside ``directory`` is
+        read: symlinks leading out of it are ignored (with a warning and a note).
     """
     directory = Path(directory)
     out = Path(out) if out is not None else directory / "report"
     out.mkdir(parents=True, exist_ok=True)
     data = gather(directory)
-    pictures = build_figures(data)
-    sessions = Sessions()
-    arms: dict[str, ArmView] = {b.key: render(b, sessions) for b in data.buckets if b.sidecar is not None}
+    with matplotlib.rc_context(PLAIN_TEXT):
+        pictures = build_figures(data)
+        sessions = Sessions(trust=trust)
+        arms: dict[str, ArmView] = {b.key: render(b, sessions) for b in data.buckets if b.sidecar is not None}
     for name, png in pictures.items():
         (out / FILE_NAMES[name]).write_bytes(png)
     for key, view in arms.items():

@@ -20,6 +20,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,7 +31,8 @@ from mpl_toolkits.mplot3d import Axes3D
 from fuzzer.evaluate import Verdict
 from fuzzer.mapping import FkCall, IkCall, MoveCall
 from fuzzer.records import Outcome, Status
-from fuzzer.session import RunConfig, Session
+from fuzzer.session import Session
+from fuzzer.sidecar import SidecarError, config_from, validate_config
 from fuzzer.targets import Runner
 from fuzzer.testcase import TestCase, TestCaseError, decode, from_json
 from fuzzer.triage import Bucket
@@ -69,16 +71,26 @@ class ArmScene:
 
 
 class Sessions:
-    """Sessions cached per configuration (a failure is cached as its message)."""
+    """Sessions cached per configuration (a failure is cached as its message).
 
-    def __init__(self) -> None:
+    A recorded configuration is untrusted (:mod:`fuzzer.sidecar`): targets other than
+    the builtins are imported only with ``trust``, robots only by shipped name or
+    existing file.
+    """
+
+    def __init__(self, trust: bool = False) -> None:
         self._cache: dict[str, Session | str] = {}
+        self.trust = trust
 
-    def get(self, config: Mapping[str, Any]) -> Session | str:
+    def get(self, config: Mapping[str, Any], source: Path = Path("sidecar")) -> Session | str:
         key = json.dumps(config, sort_keys=True, default=str)
         if key not in self._cache:
             try:
-                self._cache[key] = Session.open(RunConfig.from_json(dict(config)))
+                validate_config(dict(config), source)
+                recorded = config_from({"config": dict(config)}, source, {}, self.trust)
+                self._cache[key] = Session.open(recorded)
+            except SidecarError as exc:
+                self._cache[key] = str(exc)
             except Exception as exc:  # noqa: BLE001 - any failure becomes a note on the page
                 self._cache[key] = f"{type(exc).__name__}: {exc}"
         return self._cache[key]
@@ -140,7 +152,9 @@ def scene(bucket: Bucket, sessions: Sessions) -> ArmScene | str:
     sidecar = bucket.sidecar
     if sidecar is None or not isinstance(sidecar.get("config"), dict):
         return "No sidecar: the configuration of this file is unknown, so it cannot be re-run here."
-    session = sessions.get(sidecar["config"])
+    session = sessions.get(
+        sidecar["config"], bucket.representative.with_name(bucket.representative.name + ".json")
+    )
     if isinstance(session, str):
         return f"Cannot re-run under the recorded configuration: {session}"
     notes = []

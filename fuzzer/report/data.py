@@ -145,6 +145,10 @@ class Divergence:
         if not isinstance(sig, str) or not isinstance(kind, str):
             return None
         difference = _number(record.get("difference"))
+        if kind == "representation" and "raw" in record:
+            # Fig. 8 shows the paper's difference information: the gap as numbers (the
+            # headline "difference" of a representation divergence is modulo equivalence)
+            difference = _number(record.get("raw"))
         near_zero = record.get("near_zero")
         strategy, closer, field_ = record.get("strategy"), record.get("closer"), record.get("field")
         pid, sha1 = record.get("pid"), record.get("sha1")
@@ -750,6 +754,7 @@ class BucketView:
     sequence: int | None = None
     origin: str = ""
     difference: float | None = None
+    unit: str = ""
     written: str = ""
     call: dict[str, Any] | None = None
     """The call the sidecar recorded (``kind``: MoveCall, FkCall or IkCall)."""
@@ -814,6 +819,7 @@ def bucket_view(bucket: Bucket) -> BucketView:
         sequence=sequence if isinstance(sequence, int) else None,
         origin=str(testcase.get("origin", "")),
         difference=difference,
+        unit=bucket.difference[1] if bucket.difference[1] != "status" else "",
         written=str(sidecar.get("written", "")),
         call=call if isinstance(call, dict) else None,
     )
@@ -844,13 +850,26 @@ class ReportData:
         return not self.summary.executions and not self.summary.divergent and not self.buckets
 
 
+def outside_links(directory: Path) -> list[Path]:
+    """Entries of the folder that are symlinks leading outside it (never read by the report)."""
+    from fuzzer.paths import contained
+
+    if not directory.is_dir():
+        return []
+    return sorted(p for p in directory.iterdir() if p.is_symlink() and not contained(directory, p))
+
+
 def _sidecars(directory: Path) -> list[dict[str, Any]]:
     """Every readable sidecar of the folder (all crash files, not only representatives)."""
+    from fuzzer.paths import contained
+
     out = []
     for path in sorted(directory.glob("*.json")) if directory.is_dir() else []:
+        if not contained(directory, path):
+            continue
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
             continue
         if isinstance(data, dict) and "signature" in data:
             out.append(data)
@@ -860,8 +879,18 @@ def _sidecars(directory: Path) -> list[dict[str, Any]]:
 def gather(directory: Path) -> ReportData:
     """Read an artifacts folder: both logs, sidecars and triage's buckets."""
     notes: list[str] = []
-    div_records, div_skipped = read_records(directory / DIVERGENCES)
-    stat_records, stat_skipped = read_records(directory / STATS)
+    outside = outside_links(directory)
+    if outside:
+        names = ", ".join(p.name for p in outside[:10]) + (" ..." if len(outside) > 10 else "")
+        notes.append(
+            f"{len(outside)} symbolic link(s) in the folder lead outside it and were ignored: {names}."
+        )
+    div_records, div_skipped = (
+        read_records(directory / DIVERGENCES) if directory / DIVERGENCES not in outside else ([], 0)
+    )
+    stat_records, stat_skipped = (
+        read_records(directory / STATS) if directory / STATS not in outside else ([], 0)
+    )
     lines = [d for d in map(Divergence.parse, div_records) if d is not None]
     snaps = [s for s in map(Snapshot.parse, stat_records) if s is not None]
     div_skipped += len(div_records) - len(lines)

@@ -341,6 +341,11 @@ def _joints(view: BucketView) -> str:
     )
 
 
+def _subcommand(replay: str, command: str) -> str:
+    """The replay command line turned into another subcommand on the same file."""
+    return replay.replace(" fuzz_diff.py ", f" fuzz_diff.py {command} ", 1)
+
+
 def _bucket(index: int, view: BucketView, arm: ArmView | None) -> str:
     badge = f"<span class='badge {_kind_class(view.kind)}'>{_e(view.kind)}</span>"
     title = (
@@ -362,7 +367,7 @@ def _bucket(index: int, view: BucketView, arm: ArmView | None) -> str:
     sig = view.signature or {}
     sig_rows = "".join(
         f"<tr><th>{_e(k)}</th><td>{_e(sig.get(k))}</td></tr>"
-        for k in ("op", "kind", "field", "outcome_a", "outcome_b", "sign_flip", "bucket", "joints")
+        for k in ("op", "kind", "field", "outcome_a", "outcome_b", "joint_types", "target")
     )
     lineage = " → ".join(_e(s) for s in view.lineage) or "(none: a generated seed)"
     if view.lineage_length > len(view.lineage):
@@ -371,9 +376,11 @@ def _bucket(index: int, view: BucketView, arm: ArmView | None) -> str:
         ("divergent executions", f"{view.count:,}"),
         ("configuration", _e(config_label(view.config))),
         ("tolerance", _e(tolerance_label(view.config or {}))),
-        ("difference", "n/a" if view.difference is None else _e(_num(view.difference))),
+        ("difference", "n/a" if view.difference is None else _e(f"{_num(view.difference)} {view.unit}")),
         ("files", files),
         ("replay", f"<code>{_e(view.replay)}</code>"),
+        ("in RViz", f"<code>{_e(_subcommand(view.replay, 'view'))}</code>"),
+        ("as a bag", f"<code>{_e(_subcommand(view.replay, 'export-bag'))}</code>"),
         ("lineage", f"seed #{_e(view.sequence)} ({_e(view.origin)}) → {lineage}"),
         ("written", _e(view.written)),
     ]

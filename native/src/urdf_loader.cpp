@@ -3,12 +3,15 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
-#include <fstream>
-#include <limits>
+#include <cstring>
 #include <mutex>
-#include <sstream>
 #include <vector>
 
 #include "errors.hpp"
@@ -32,20 +35,39 @@ std::mutex& console_mutex() {
   return m;
 }
 
+// Reads at most kMaxUrdfBytes + 1 bytes of a regular file. Opened non-blocking,
+// so that a FIFO without a writer cannot hang the open; anything but a regular
+// file (FIFO, device, directory, socket) is refused before a byte is read.
 std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(ErrorCode::kUrdfInvalid, "cannot read URDF file '" + path + "'");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) fail(ErrorCode::kUrdfInvalid, "cannot read URDF file '" + path + "'");
-  return buffer.str();
+  const std::string where = "cannot read URDF file '" + valid_utf8(path) + "'";
+  if (path.find('\0') != std::string::npos) fail(ErrorCode::kUrdfInvalid, where + ": the path contains a NUL character");
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) fail(ErrorCode::kUrdfInvalid, where + ": " + std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) fail(ErrorCode::kUrdfInvalid, where + ": " + std::strerror(errno));
+  if (!S_ISREG(info.st_mode)) fail(ErrorCode::kUrdfInvalid, where + ": not a regular file");
+  std::string out;
+  char buffer[65536];
+  while (out.size() <= kMaxUrdfBytes) {
+    const std::size_t want = std::min(sizeof buffer, kMaxUrdfBytes + 1 - out.size());
+    const ssize_t got = ::read(fd, buffer, want);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) fail(ErrorCode::kUrdfInvalid, where + ": " + std::strerror(errno));
+    if (got == 0) break;
+    out.append(buffer, static_cast<std::size_t>(got));
+  }
+  return out;
 }
 
 std::string join(const std::vector<std::string>& parts) {
   std::string out;
   for (const auto& p : parts) {
     if (!out.empty()) out += "; ";
-    out += p;
+    out += valid_utf8(p);  // console_bridge cuts messages at 1023 bytes, maybe inside a character
   }
   return out;
 }
@@ -54,11 +76,13 @@ std::string join(const std::vector<std::string>& parts) {
 
 urdf::ModelInterfaceSharedPtr load_urdf(const std::string& source, bool is_path) {
   const std::string xml = is_path ? read_file(source) : source;
-  const std::string where = is_path ? "URDF file '" + source + "'" : "URDF";
-  if (xml.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-    fail(ErrorCode::kUrdfUnsupported, where + " is larger than 2 GiB");
-  }
+  const std::string where = is_path ? "URDF file '" + valid_utf8(source) + "'" : "URDF";
   check_urdf_xml(xml);
+  // A leading UTF-8 byte order mark puts TinyXML in UTF-8 mode; without it, a
+  // document with no encoding declaration is read as "legacy" bytes, and a
+  // character reference such as &#xE9; becomes the lone byte 0xE9 in a name.
+  static const std::string kBom = "\xEF\xBB\xBF";
+  const std::string for_urdfdom = xml.compare(0, kBom.size(), kBom) == 0 ? xml : kBom + xml;
 
   std::lock_guard<std::mutex> lock(console_mutex());
   CaptureHandler handler;
@@ -67,10 +91,10 @@ urdf::ModelInterfaceSharedPtr load_urdf(const std::string& source, bool is_path)
   urdf::ModelInterfaceSharedPtr out;
   std::string error;
   try {
-    out = urdf::parseURDF(xml);
+    out = urdf::parseURDF(for_urdfdom);
     if (!out) error = handler.messages.empty() ? "urdfdom rejected it" : join(handler.messages);
   } catch (const std::exception& e) {
-    error = std::string("urdfdom failed: ") + e.what();
+    error = std::string("urdfdom failed: ") + valid_utf8(e.what());
   }
   console_bridge::restorePreviousOutputHandler();
   if (!error.empty()) fail(ErrorCode::kUrdfInvalid, where + " is invalid: " + error);

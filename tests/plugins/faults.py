@@ -63,3 +63,21 @@ class _AbortsBeyondThree(python_impl.MoveGroup):
 
 hangs = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_HangsBeyondThree)
 aborts = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_AbortsBeyondThree)
+
+
+class _AlwaysHangs(python_impl.MoveGroup):
+    """Never returns from go() (a target stuck on every input: -timeout and -fork tests)."""
+
+    def go(self, joints=None, wait=True):  # type: ignore[no-untyped-def]
+        while True:
+            pass
+
+
+always_hangs = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_AlwaysHangs)
+
+
+def _model_without_arguments() -> None:
+    """A RobotModel that takes no URDF: calling it as the API does raises TypeError."""
+
+
+wrong_constructor = SimpleNamespace(RobotModel=_model_without_arguments, MoveGroup=python_impl.MoveGroup)

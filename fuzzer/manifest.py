@@ -1,0 +1,166 @@
+"""The corpus manifest: which robot, op and message type a corpus folder was made for.
+
+``CORPUS/.rrosfuzz/manifest.json`` is written when a campaign creates or uses a
+corpus folder (in a hidden sub-folder, because libFuzzer feeds every file at the
+top of a corpus folder to the target, but never enters folders whose name starts
+with a dot). It records the run configuration and the robot file's SHA-256.
+
+What it does:
+
+* options not given on the command line are taken from it (op, robot, tip link,
+  message type, tolerance, and targets when they are the builtins, see
+  :mod:`fuzzer.sidecar`), for campaigns, ``-merge`` and ``coverage``;
+* a corpus made for another op, message type or robot is refused (the robot
+  counts as the same when its name or its file's SHA-256 matches; the same name
+  with a changed file is a warning);
+* a corpus folder without a manifest (made before manifests existed) is adopted:
+  the campaign writes one.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fuzzer.artifacts import atomic_write
+from fuzzer.session import RunConfig
+from fuzzer.sidecar import SidecarError, read_json_file, validate_config
+from robot_api import robots
+
+MANIFEST = Path(".rrosfuzz") / "manifest.json"
+FORMAT = 1
+
+
+def path_of(corpus: Path) -> Path:
+    return corpus / MANIFEST
+
+
+def robot_digest(spec: str) -> str | None:
+    """SHA-256 of the robot file a spec resolves to, or None when it does not resolve."""
+    try:
+        return hashlib.sha256(robots.resolve(spec).read_bytes()).hexdigest()
+    except (OSError, ValueError):
+        return None
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A corpus manifest that was read and validated."""
+
+    path: Path
+    data: dict[str, Any]
+
+    @property
+    def config(self) -> dict[str, Any]:
+        config: dict[str, Any] = self.data["config"]
+        return config
+
+    @property
+    def robot_sha256(self) -> str | None:
+        digest = self.data.get("robot_sha256")
+        return digest if isinstance(digest, str) else None
+
+    def describe(self) -> str:
+        c = self.config
+        return f"op {c.get('op', 'move')}, robot {c.get('robot', '?')}, {c.get('msg_type', '?')}"
+
+
+def read(corpus: Path) -> Manifest | None:
+    """The manifest of a corpus folder, or None when it has none.
+
+    Raises
+    ------
+    SidecarError
+        A manifest that is damaged or has fields of the wrong type (naming it).
+    """
+    path = path_of(corpus)
+    if not path.exists() and not path.is_symlink():
+        return None
+    data = read_json_file(path, "corpus manifest")
+    if not isinstance(data.get("config"), dict):
+        raise SidecarError(f"{path}: field 'config' is missing or not an object (delete the file to adopt)")
+    validate_config(data["config"], path)
+    return Manifest(path, data)
+
+
+def check(manifest: Manifest, config: RunConfig) -> list[str]:
+    """Refuse a corpus made for another op, message type or robot; return warnings.
+
+    Raises
+    ------
+    SidecarError
+        Saying what the corpus was made for and what was asked.
+    """
+    corpus = manifest.path.parent.parent
+    recorded = manifest.config
+    hint = "use another corpus folder, or delete the manifest to reuse the inputs anyway"
+    op = recorded.get("op", "move")
+    if op != config.op:
+        raise SidecarError(f"corpus {corpus} was made for op {op}, not {config.op} ({manifest.path}); {hint}")
+    msg_type = recorded.get("msg_type") or ""
+    if msg_type and msg_type != config.message_type:
+        raise SidecarError(
+            f"corpus {corpus} holds {msg_type} inputs, not {config.message_type} ({manifest.path}); {hint}"
+        )
+    warnings = []
+    robot = recorded.get("robot")
+    digest = robot_digest(config.robot)
+    same_name = robot == config.robot
+    same_file = digest is not None and digest == manifest.robot_sha256
+    if not same_name and not same_file:
+        raise SidecarError(
+            f"corpus {corpus} was made for robot {robot}, not {config.robot} ({manifest.path}); {hint}"
+        )
+    if same_name and not same_file and manifest.robot_sha256:
+        warnings.append(f"corpus {corpus}: the file of robot {robot} changed since the corpus was made")
+    return warnings
+
+
+def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, str]:
+    """Options to take from the manifest (command-line spelling), for those not in ``given``.
+
+    Targets are taken only when they are builtins (or with ``trust``); the robot
+    only when it is a shipped name or an existing regular file.
+    """
+    from fuzzer.sidecar import foreign_targets, safe_robot
+
+    c = manifest.config
+    out: dict[str, str] = {}
+    if "op" not in given and "op" in c:
+        out["op"] = c["op"]
+    if "robot" not in given and "robot" in c:
+        out["robot"] = safe_robot(c["robot"], manifest.path)
+    if "tip_link" not in given and c.get("tip_link"):
+        out["tip_link"] = c["tip_link"]
+    if "msg_type" not in given and c.get("msg_type"):
+        out["msg_type"] = c["msg_type"]
+    if "tolerance" not in given and isinstance(c.get("tolerance"), dict):
+        tol = c["tolerance"]
+        out["tolerance"] = f"m={tol.get('m', 1e-6)!r},rad={tol.get('rad', 1e-6)!r}"
+    targets = c.get("targets")
+    if "targets" not in given and isinstance(targets, list) and (trust or not foreign_targets(targets)):
+        out["targets"] = ",".join(targets)
+    return out
+
+
+def write(corpus: Path, config: RunConfig) -> Path:
+    """Write the manifest of a corpus folder (left alone when it already says the same)."""
+    path = path_of(corpus)
+    data: dict[str, Any] = {
+        "rrosfuzz_corpus": FORMAT,
+        "config": config.to_json(),
+        "robot_sha256": robot_digest(config.robot),
+    }
+    try:
+        old = read(corpus)
+    except SidecarError:
+        old = None
+    if old is not None and all(old.data.get(k) == v for k, v in data.items()):
+        return path
+    data["written"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    atomic_write(path, (json.dumps(data, indent=1, sort_keys=True) + "\n").encode())
+    return path

@@ -1,0 +1,154 @@
+"""Paths given on the command line: checked before use, so bad ones give a message, not a traceback.
+
+* :func:`crash_inputs` expands what triage commands receive (files, folders, a shell
+  glob such as ``artifacts/crash-*`` that also matches the ``.json`` sidecars):
+  sidecars are skipped silently, a path that does not exist is an error.
+* :func:`prepare_folder` makes sure a corpus or artifacts folder exists, is a
+  folder, can be listed and (when asked) written: by trying it, which also works
+  as root, where permission bits do not apply.
+* :func:`contained` tells whether a path inside a folder really stays inside it
+  (symlinks resolved), for the report, which must never read outside.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+
+from fuzzer.session import ConfigError
+
+
+class PathError(ConfigError):
+    """A path that cannot be used; the message names it and the problem."""
+
+
+ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    return "a file"
+
+
+def is_sidecar(path: Path) -> bool:
+    """``X.json`` next to an existing file ``X`` (the sidecar of a crash file)."""
+    return path.name.endswith(".json") and path.with_name(path.name[: -len(".json")]).is_file()
+
+
+def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
+    """Files to work on: files as given, folders expanded to their files; sidecars skipped.
+
+    Raises
+    ------
+    PathError
+        A path that does not exist, is not a regular file or folder, or a folder
+        where ``folders`` is False; or nothing left to work on.
+    """
+    out: list[Path] = []
+    given = list(paths)
+    for path in given:
+        try:
+            mode = path.stat().st_mode
+        except FileNotFoundError:
+            raise PathError(f"{path}: no such file") from None
+        except OSError as exc:
+            raise PathError(f"{path}: {exc.strerror or exc}") from None
+        if stat.S_ISDIR(mode):
+            if not folders:
+                raise PathError(f"{path}: is a folder; give crash files")
+            try:
+                entries = sorted(path.iterdir())
+            except OSError as exc:
+                raise PathError(f"{path}: cannot list the folder: {exc.strerror or exc}") from None
+            out.extend(
+                f
+                for f in entries
+                if f.is_file() and not f.name.endswith((".json", ".jsonl")) and not f.name.startswith(".")
+            )
+        elif not stat.S_ISREG(mode):
+            raise PathError(f"{path}: is {_kind(mode)}, not a regular file")
+        elif not is_sidecar(path):
+            out.append(path)
+    if not out:
+        if given and all(is_sidecar(p) for p in given):
+            raise PathError("only sidecars (.json) given: give the crash files they describe")
+        raise PathError("no files to work on")
+    return list(dict.fromkeys(out))
+
+
+def prepare_folder(path: Path, role: str, *, writable: bool) -> None:
+    """Create ``path`` if needed and check it is a folder that can be listed (and written).
+
+    Raises
+    ------
+    PathError
+        ``"<role> <path>: <problem>"``.
+    """
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        mode = None
+    except NotADirectoryError:
+        blocker = next((p for p in path.parents if p.is_file()), path.parent)
+        raise PathError(f"{role} {path}: cannot be a folder, {blocker} is a file") from None
+    except OSError as exc:
+        raise PathError(f"{role} {path}: {exc.strerror or exc}") from None
+    if mode is not None and not stat.S_ISDIR(mode):
+        raise PathError(f"{role} {path}: is {_kind(mode)}, not a folder")
+    if mode is None:
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise PathError(f"{role} {path}: cannot create the folder: {exc.strerror or exc}") from None
+    try:
+        os.listdir(path)
+    except OSError as exc:
+        raise PathError(f"{role} {path}: cannot read the folder: {exc.strerror or exc}") from None
+    if writable:
+        try:
+            fd, probe = tempfile.mkstemp(prefix=".tmp-probe-", dir=path)
+        except OSError as exc:
+            raise PathError(f"{role} {path}: cannot write into the folder: {exc.strerror or exc}") from None
+        os.close(fd)
+        os.unlink(probe)
+
+
+def check_input_file(path: Path) -> None:
+    """A positional corpus entry that exists but is not a folder must be a regular file.
+
+    Raises
+    ------
+    PathError
+        For a FIFO, socket or device (reading it would hang or never end).
+    """
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return
+    if not (stat.S_ISDIR(mode) or stat.S_ISREG(mode)):
+        raise PathError(f"corpus {path}: is {_kind(mode)}, not a folder or a regular file")
+
+
+def contained(directory: Path, path: Path) -> bool:
+    """True when ``path`` (symlinks resolved) lies inside ``directory`` (resolved)."""
+    try:
+        root = directory.resolve(strict=True)
+        real = path.resolve(strict=True)
+    except (OSError, RuntimeError):
+        return False
+    return real == root or root in real.parents
+
+
+def looks_like_artifact(path: Path) -> bool:
+    """A name libFuzzer or RROSFuzz gives to artifacts (crash-, timeout-, minimized-...)."""
+    return path.name.startswith(ARTIFACT_PREFIXES)

@@ -1,0 +1,153 @@
+"""libFuzzer's child processes and the end of a campaign.
+
+``-fork``/``-jobs``/``-merge`` re-run ``fuzz_diff.py`` in child processes. This
+module holds what the parent and its children agree on: the time budget of a
+``-fork`` campaign (its children stop at the parent's deadline, since libFuzzer
+checks ``-max_total_time`` only between jobs and merges), the paths a ``-jobs``
+campaign makes absolute before it moves into its artifacts folder, and the
+campaign's exit status from what it wrote.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from fuzzer.artifacts import sidecar_path
+
+CHILD_ENV = "RROSFUZZ_CHILD"
+DEADLINE_ENV = "RROSFUZZ_DEADLINE"
+"""Set by a -fork campaign for its children: the epoch second at which -max_total_time ends."""
+TIMEOUT_EXIT = 70
+"""libFuzzer's -timeout_exitcode default."""
+PATH_FLAGS = (
+    "-dict",
+    "-exact_artifact_path",
+    "-artifact_prefix",
+    "-merge_control_file",
+    "-features_dir",
+    "-stop_file",
+    "-data_flow_trace",
+)
+"""libFuzzer flags naming a path: made absolute when -jobs moves the campaign into its artifacts."""
+
+
+def deadline() -> float | None:
+    """The end of a -fork campaign's time budget, in a child process (None elsewhere)."""
+    if os.environ.get(CHILD_ENV) != "1":
+        return None
+    try:
+        value = float(os.environ.get(DEADLINE_ENV, ""))
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
+
+
+def supervises(flags: tuple[str, ...]) -> bool:
+    """Whether libFuzzer runs this campaign in child processes (-fork, -jobs)."""
+    return any(int_flag(flags, name, 0) > 0 for name in ("-fork", "-jobs"))
+
+
+def is_number(text: str) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def int_flag(flags: tuple[str, ...], name: str, default: int) -> int:
+    value = flag_value(flags, name)
+    return int(value) if value is not None and value.lstrip("-").isdigit() else default
+
+
+@dataclass(frozen=True)
+class Found:
+    """Files written into the artifacts folder since a campaign started."""
+
+    divergences: list[Path]
+    """Crash files with a sidecar: divergences (not the kinds in ``NOT_FINDINGS``)."""
+    crashes: list[Path]
+    """libFuzzer's crash-/oom-/leak- files without a sidecar: the targets crashed."""
+    timeouts: list[Path]
+
+
+NOT_FINDINGS = frozenset({"known_limitation", "ill_conditioned"})
+"""Kinds that are written as crash files for triage but do not make a campaign fail: a
+documented limitation of a target, and IK seeds where the answer is chaotic (docs/engine.md)."""
+
+
+def _sidecar_kind(path: Path) -> str | None:
+    """The divergence kind a sidecar records (None when it cannot be read: counted as a finding)."""
+    try:
+        data = json.loads(path.read_bytes()[: 32 << 20])
+    except (OSError, ValueError):
+        return None
+    signature = data.get("signature") if isinstance(data, dict) else None
+    kind = signature.get("kind") if isinstance(signature, dict) else None
+    return kind if isinstance(kind, str) else None
+
+
+def new_artifacts(directory: Path, since: float) -> Found:
+    divergences, crashes, timeouts = [], [], []
+    for path in sorted(directory.iterdir()) if directory.is_dir() else ():
+        name = path.name
+        if name.endswith(".json") or not path.is_file():
+            continue
+        try:
+            if path.stat().st_mtime < since:
+                continue
+        except OSError:
+            continue
+        if name.startswith("timeout-"):
+            timeouts.append(path)
+        elif name.startswith("crash-") and sidecar_path(path).is_file():
+            if _sidecar_kind(sidecar_path(path)) not in NOT_FINDINGS:
+                divergences.append(path)
+        elif name.startswith(("crash-", "oom-", "leak-")):
+            crashes.append(path)
+    return Found(divergences, crashes, timeouts)
+
+
+def exit_status(status: int | None, found: Found, supervisor: bool, timeout_code: int = TIMEOUT_EXIT) -> int:
+    """The campaign's exit status, given the one libFuzzer exits with.
+
+    libFuzzer's own non-zero status (a crash, a timeout, a -fork job's status) is kept.
+    Otherwise: ``timeout_code`` if a -fork/-jobs worker timed out (libFuzzer's fork
+    mode ignores timeouts by default), 1 if new divergences were written, else 0.
+    """
+    if status:
+        return status
+    if supervisor and found.timeouts:
+        return timeout_code
+    return 1 if found.divergences else 0
+
+
+def flag_value(flags: tuple[str, ...], name: str) -> str | None:
+    for flag in flags:
+        key, _, value = flag.partition("=")
+        if key == name:
+            return value
+    return None
+
+
+def absolute_flag(flag: str) -> str:
+    name, sep, value = flag.partition("=")
+    if sep and value and name in PATH_FLAGS:
+        slash = "/" if value.endswith("/") else ""
+        return f"{name}={os.path.abspath(value)}{slash}"
+    if sep and value and name == "-seed_inputs" and not value.startswith("@"):
+        return f"{name}={','.join(os.path.abspath(v) for v in value.split(','))}"
+    if sep and value.startswith("@") and name == "-seed_inputs":
+        return f"{name}=@{os.path.abspath(value[1:])}"
+    return flag
+
+
+def absolute_option(option: str) -> str:
+    """--robot=<file> and --msg-path=<folder> made absolute (a robot name stays a name)."""
+    name, sep, value = option.partition("=")
+    if sep and name in ("--robot", "--msg-path") and os.path.exists(value):
+        return f"{name}={os.path.abspath(value)}"
+    return option

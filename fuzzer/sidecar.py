@@ -1,0 +1,262 @@
+"""Reading a crash file's sidecar as untrusted data: strict schema, safe settings.
+
+A crash file is something people mail to each other and open in CI, so its
+sidecar is validated field by field (a wrong type names the file and the field)
+and nothing it names is imported or opened without the user's say-so:
+
+* **targets**: only the builtins (``native``, ``python``) are taken from a
+  sidecar. A sidecar naming any other ``module:attribute`` is refused unless the
+  command line passes ``--targets`` (which then replaces the sidecar's) or
+  ``--trust-sidecar`` (the user vouches for the file).
+* **robot**: a shipped robot by name, or a path to an existing regular file
+  (relative paths are taken from the working directory, as recorded). Anything
+  else (missing, a folder, a FIFO, a device) is refused; pass ``--robot``.
+* **message paths** (``msg_path``): only existing folders; .msg files are parsed
+  as data, never executed.
+
+The same rules apply to a corpus manifest (:mod:`fuzzer.manifest`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import stat
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from fuzzer.artifacts import sidecar_path
+from fuzzer.mapping import OPS
+from fuzzer.session import ConfigError, RunConfig
+from fuzzer.tolerance import Tolerance
+from robot_api import robots
+
+BUILTIN_TARGETS = ("native", "python")
+MAX_SIDECAR_BYTES = 32 * 1024 * 1024
+CONFIG_FIELDS: dict[str, type | tuple[type, ...]] = {
+    "op": str,
+    "robot": str,
+    "tip_link": (str, type(None)),
+    "targets": list,
+    "tolerance": dict,
+    "msg_type": str,
+    "msg_path": list,
+    "filtering": bool,
+}
+
+
+class SidecarError(ConfigError):
+    """A sidecar (or manifest) that cannot be used as it is; the message names file and field."""
+
+
+def _type_name(value: Any) -> str:
+    return "null" if value is None else type(value).__name__
+
+
+def read_json_file(path: Path, what: str = "sidecar") -> dict[str, Any]:
+    """A JSON object from a regular file of at most MAX_SIDECAR_BYTES.
+
+    Raises
+    ------
+    SidecarError
+        Not a regular file, unreadable, too large, not UTF-8 JSON, or not an object.
+    """
+    try:
+        info = path.stat()
+    except OSError as exc:
+        raise SidecarError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise SidecarError(f"{path}: the {what} is not a regular file")
+    if info.st_size > MAX_SIDECAR_BYTES:
+        raise SidecarError(f"{path}: the {what} is larger than {MAX_SIDECAR_BYTES} bytes")
+    try:
+        data = json.loads(path.read_bytes().decode("utf-8"))
+    except OSError as exc:
+        raise SidecarError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise SidecarError(f"{path}: the {what} is not UTF-8 text") from None
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise SidecarError(f"{path}: the {what} is not valid JSON ({exc})") from None
+    if not isinstance(data, dict):
+        raise SidecarError(f"{path}: the {what} is a JSON {_type_name(data)}, expected an object")
+    return data
+
+
+def read_sidecar(crash: Path) -> dict[str, Any] | None:
+    """The validated sidecar of ``crash``, or None when it has none.
+
+    Raises
+    ------
+    SidecarError
+        The sidecar exists but is damaged or has a field of the wrong type.
+    """
+    path = sidecar_path(crash)
+    if not path.exists() and not path.is_symlink():
+        return None
+    data = read_json_file(path)
+    validate(data, path)
+    return data
+
+
+def validate(data: dict[str, Any], path: Path) -> None:
+    """Check the fields replay, minimize and triage rely on (unknown extra fields are allowed).
+
+    Raises
+    ------
+    SidecarError
+        Naming ``path`` and the first field that is missing or of the wrong type.
+    """
+
+    def fail(field: str, problem: str) -> SidecarError:
+        return SidecarError(f"{path}: field {field!r} {problem}")
+
+    for name in ("config", "signature"):
+        if name not in data:
+            raise fail(name, "is missing (not a divergence sidecar of RROSFuzz)")
+        if not isinstance(data[name], dict):
+            raise fail(name, f"must be an object, not {_type_name(data[name])}")
+    validate_config(data["config"], path)
+    signature = data["signature"]
+    if not isinstance(signature.get("key"), str) or not signature["key"]:
+        raise fail("signature.key", "must be a non-empty string")
+    for name, kind in (("op", str), ("kind", str), ("field", str), ("outcome_a", str), ("outcome_b", str)):
+        if name in signature and not isinstance(signature[name], kind):
+            raise fail(f"signature.{name}", f"has the wrong type ({_type_name(signature[name])})")
+    if "joints" in signature and not (
+        isinstance(signature["joints"], list)
+        and all(isinstance(j, int | str) and not isinstance(j, bool) for j in signature["joints"])
+    ):
+        raise fail("signature.joints", "must be a list of joint indices or names")
+    for name in ("testcase", "comparison", "call", "versions"):
+        if name in data and not isinstance(data[name], dict):
+            raise fail(name, f"must be an object, not {_type_name(data[name])}")
+    for name in ("lineage", "outcomes", "joint_names"):
+        if name in data and not isinstance(data[name], list):
+            raise fail(name, f"must be a list, not {_type_name(data[name])}")
+
+
+def validate_config(config: dict[str, Any], path: Path) -> None:
+    """Check the ``config`` object of a sidecar or manifest.
+
+    Raises
+    ------
+    SidecarError
+        Naming ``path`` and the first field of the wrong type.
+    """
+
+    def fail(field: str, problem: str) -> SidecarError:
+        return SidecarError(f"{path}: field {field!r} {problem}")
+
+    for name, kind in CONFIG_FIELDS.items():
+        if name in config and not isinstance(config[name], kind):
+            raise fail(f"config.{name}", f"has the wrong type ({_type_name(config[name])})")
+    if "op" in config and config["op"] not in OPS:
+        raise fail("config.op", f"is {config['op']!r}, expected one of {', '.join(OPS)}")
+    targets = config.get("targets", list(BUILTIN_TARGETS))
+    if len(targets) != 2 or not all(isinstance(t, str) and t for t in targets):
+        raise fail("config.targets", "must be a list of two target names")
+    for name in ("m", "rad"):
+        value = config.get("tolerance", {}).get(name, 1e-6)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+            or value <= 0
+        ):
+            raise fail(f"config.tolerance.{name}", f"must be a positive finite number, not {value!r}")
+    if not all(isinstance(p, str) for p in config.get("msg_path", [])):
+        raise fail("config.msg_path", "must be a list of folder names")
+
+
+def foreign_targets(targets: tuple[str, ...] | list[str]) -> list[str]:
+    """The targets that are not builtins (importing them runs their code)."""
+    from fuzzer.targets import BUILTIN  # shipped aliases (ros_tf) import only shipped code
+
+    return [t for t in targets if t not in BUILTIN_TARGETS and t not in BUILTIN]
+
+
+def safe_robot(spec: str, source: Path) -> str:
+    """A robot named by a file: a shipped name, or an existing regular file.
+
+    Raises
+    ------
+    SidecarError
+        Naming ``source`` and what was chosen.
+    """
+    if spec in robots.known_robots():
+        return spec
+    path = Path(spec)
+    try:
+        info = path.stat()
+    except (OSError, ValueError):
+        raise SidecarError(
+            f"{source}: robot {spec!r} is neither a shipped robot nor an existing file; "
+            "pass --robot NAME_OR_URDF to choose one"
+        ) from None
+    if not stat.S_ISREG(info.st_mode):
+        raise SidecarError(f"{source}: robot {spec!r} is not a regular file; pass --robot NAME_OR_URDF")
+    return spec
+
+
+def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust: bool = False) -> RunConfig:
+    """The run configuration a validated sidecar (or manifest) records, with ``given`` on top.
+
+    Parameters
+    ----------
+    data : dict
+        A validated sidecar (``data["config"]`` is used).
+    source : Path
+        The file it came from (for messages).
+    given : dict
+        Options given on the command line; they replace the recorded ones.
+    trust : bool
+        ``--trust-sidecar``: import whatever targets the file names.
+
+    Raises
+    ------
+    SidecarError
+        Foreign targets without ``--targets``/``--trust-sidecar``, or an unusable robot
+        or message path.
+    """
+    config = data["config"]
+    targets = tuple(config.get("targets", BUILTIN_TARGETS))
+    if "targets" not in given and not trust:
+        foreign = foreign_targets(targets)
+        if foreign:
+            modules = ", ".join(sorted({t.split(":", 1)[0] for t in foreign}))
+            raise SidecarError(
+                f"{source} names target {', '.join(foreign)} (module {modules}); code named by a file "
+                "is never imported on its own. To run it, pass --targets "
+                f"{','.join(targets)} (or --trust-sidecar if you trust where the file came from), "
+                "or --targets native,python to replay it on the builtins"
+            )
+    robot = config.get("robot", robots.DEFAULT_ROBOT)
+    if "robot" not in given:
+        robot = safe_robot(robot, source)
+    msg_path = tuple(config.get("msg_path", ()))
+    if "msg_path" not in given:
+        for root in msg_path:
+            if not Path(root).is_dir():
+                raise SidecarError(f"{source}: msg_path {root!r} is not a folder; pass --msg-path")
+    tol = config.get("tolerance", {})
+    recorded = RunConfig(
+        op=config.get("op", "move"),
+        robot=robot,
+        tip_link=config.get("tip_link"),
+        targets=(targets[0], targets[1]),
+        tolerance=Tolerance(float(tol.get("m", 1e-6)), float(tol.get("rad", 1e-6))),
+        msg_type=config.get("msg_type", ""),
+        msg_path=msg_path,
+        filtering=config.get("filtering", True),
+    )
+    fields = {k: v for k, v in given.items() if k in RunConfig.__dataclass_fields__}
+    return replace(recorded, **fields) if fields else recorded
+
+
+def describe(config: RunConfig) -> str:
+    """One line naming a configuration (for messages)."""
+    return (
+        f"op {config.op}, robot {config.robot}, targets {','.join(config.targets)}, "
+        f"{config.message_type}, tolerance {config.tolerance.metres:g} m / {config.tolerance.radians:g} rad"
+    )

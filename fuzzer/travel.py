@@ -1,0 +1,178 @@
+"""Settings that travel with files: filling command-line options from a sidecar or a corpus manifest.
+
+The CLI calls these on its parsed options (an :class:`argparse.Namespace`)
+before building the run configuration, so what is filled in is also what
+libFuzzer's child processes receive (``-fork``, ``-merge``, ``-minimize_crash``).
+Options given on the command line always win.
+
+* :func:`adopt_sidecar`: a campaign whose inputs are crash files
+  (``fuzz_diff.py -minimize_crash=1 artifacts/crash-X``) runs under the first
+  sidecar's configuration.
+* :func:`adopt_manifest`: a campaign, ``-merge`` or ``coverage`` over corpus
+  folders runs under their manifest's configuration.
+* :func:`check_manifests`: refuses a corpus made for another robot or op;
+  :func:`record_corpus` (called by the campaign once its configuration has
+  opened) writes the manifest of the first corpus folder.
+* :func:`prepare_campaign`: the path checks of a campaign (exit 2, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+from fuzzer import manifest, reporting
+from fuzzer.artifacts import sidecar_path
+from fuzzer.paths import check_input_file, prepare_folder
+from fuzzer.session import RunConfig
+from fuzzer.sidecar import config_from, read_sidecar
+
+OPTIONS = ("op", "robot", "tip_link", "msg_type", "tolerance", "targets")
+CHILD_ENV = "RROSFUZZ_CHILD"
+
+
+def is_child() -> bool:
+    """True in libFuzzer's child processes (-fork, -jobs, -merge, -minimize_crash)."""
+    return os.environ.get(CHILD_ENV) == "1"
+
+
+def _given(args: argparse.Namespace) -> set[str]:
+    return {name for name in OPTIONS if getattr(args, name, None) is not None}
+
+
+def _is_default(name: str, value: str, op: str) -> bool:
+    from fuzzer.mapping import DEFAULT_MSG_TYPE
+    from fuzzer.tolerance import Tolerance, default_tolerance
+    from robot_api import robots
+
+    if name == "tolerance":
+        try:
+            return Tolerance.parse(value) == default_tolerance(op)
+        except ValueError:
+            return False
+    defaults = {
+        "op": "move",
+        "robot": robots.DEFAULT_ROBOT,
+        "msg_type": DEFAULT_MSG_TYPE.get(op, ""),
+        "targets": "native,python",
+    }
+    return defaults.get(name) == value
+
+
+def _apply(args: argparse.Namespace, values: dict[str, str], source: Path) -> None:
+    """Set the options; say so when any differs from the default."""
+    for name, value in values.items():
+        setattr(args, name, value)
+    op = getattr(args, "op", None) or "move"
+    if any(not _is_default(k, v, op) for k, v in values.items()):
+        shown = ", ".join(f"--{k.replace('_', '-')}={v}" for k, v in values.items())
+        reporting.info(f"settings from {source}: {shown}")
+
+
+def adopt_sidecar(args: argparse.Namespace, files: Sequence[Path]) -> bool:
+    """Fill options from the sidecar of the first crash file among ``files``; True if one was used.
+
+    Raises
+    ------
+    fuzzer.sidecar.SidecarError
+        A damaged sidecar, or one naming targets that may not be imported.
+    """
+    for path in files:
+        sidecar = read_sidecar(path)
+        if sidecar is None:
+            continue
+        given = _given(args)
+        trust = bool(getattr(args, "trust_sidecar", False))
+        # options given on the command line are not checked here (only their names matter)
+        chosen = {k: getattr(args, k) for k in given & {"robot", "targets"}}
+        config = config_from(sidecar, sidecar_path(path), chosen, trust)
+        values = {
+            "op": config.op,
+            "robot": config.robot,
+            "tip_link": config.tip_link,
+            "msg_type": config.message_type,
+            "tolerance": f"m={config.tolerance.metres!r},rad={config.tolerance.radians!r}",
+            "targets": ",".join(config.targets),
+        }
+        _apply(
+            args,
+            {k: v for k, v in values.items() if k not in given and v is not None},
+            sidecar_path(path),
+        )
+        return True
+    return False
+
+
+def adopt_manifest(args: argparse.Namespace, folders: Sequence[Path]) -> None:
+    """Fill options from the manifest of the first corpus folder that has one.
+
+    Raises
+    ------
+    fuzzer.sidecar.SidecarError
+        A damaged manifest, or an unusable robot in it.
+    """
+    for folder in folders:
+        found = manifest.read(folder)
+        if found is None:
+            continue
+        if getattr(args, "op", None) not in (None, found.config.get("op", "move")):
+            return  # made for another op: check_manifests refuses it
+        trust = bool(getattr(args, "trust_sidecar", False))
+        values = manifest.fill(found, _given(args), trust)
+        targets: list[str] = found.config.get("targets") or []
+        unused = "targets" not in values and getattr(args, "targets", None) is None
+        if unused and targets and list(targets) != ["native", "python"]:
+            reporting.warn(
+                f"{found.path} names targets {','.join(targets)}; not imported from a file "
+                "(pass --targets or --trust-sidecar to use them): fuzzing native vs python"
+            )
+        _apply(args, values, found.path)
+        return
+
+
+def check_manifests(folders: Sequence[Path], config: RunConfig) -> None:
+    """Refuse corpus folders made for another robot, op or message type.
+
+    Raises
+    ------
+    fuzzer.sidecar.SidecarError
+        Saying what the corpus was made for.
+    """
+    for folder in folders:
+        found = manifest.read(folder)
+        if found is not None:
+            for warning in manifest.check(found, config):
+                reporting.warn(warning)
+
+
+def record_corpus(corpus: Sequence[Path], config: RunConfig) -> None:
+    """Write the manifest of the first corpus folder (called once the configuration has opened,
+    so a configuration that cannot run is never recorded); a corpus without one is adopted."""
+    folders = [p for p in corpus if p.is_dir()]
+    if folders:
+        try:
+            manifest.write(folders[0], config)
+        except OSError as exc:
+            reporting.warn(f"cannot write the corpus manifest of {folders[0]}: {exc.strerror or exc}")
+
+
+def prepare_campaign(corpus: Sequence[Path], artifacts: Path) -> list[Path]:
+    """Check and create a campaign's folders; return the corpus folders.
+
+    Raises
+    ------
+    fuzzer.paths.PathError
+        A corpus entry that is a FIFO or device, a folder that cannot be created,
+        listed or written, an artifacts path that is a file.
+    """
+    folders: list[Path] = []
+    for path in corpus:
+        check_input_file(path)
+        if path.is_file():
+            continue
+        prepare_folder(path, "corpus", writable=not folders)
+        folders.append(path)
+    prepare_folder(artifacts, "artifacts", writable=True)
+    return folders

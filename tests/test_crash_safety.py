@@ -1,0 +1,293 @@
+"""No lost divergence: kill -9 anywhere, concurrent workers, -fork runs (issue 12, item 3).
+
+The store's contract: every claimed signature (a marker under ``.signatures/``)
+ends with its crash file and sidecar, after recovery at the next start, however
+the writer died; a temporary file of a live writer is never removed by another
+process. Kills inside the write window use the store's test-only hook
+(``RROSFUZZ_TEST_KILL_AT``); kills elsewhere are SIGKILLs at seeded random
+moments. Nothing here asserts on timing.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from fuzzer.artifacts import KILL_HOOK, STALE_SECONDS, ArtifactStore, clean_temporaries, crash_name
+from fuzzer.testcase import decode
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = str(ROOT / "fuzz_diff.py")
+WRAP = "tests.plugins.faults:wrap_continuous"
+TIGHT = "tests.plugins.faults:tight_tolerance"
+
+
+def assert_every_claim_complete(artifacts: Path) -> int:
+    """Every marker names a crash file that exists with a parseable sidecar; returns the count."""
+    markers = [m for m in (artifacts / ".signatures").iterdir() if not m.name.startswith(".")]
+    for marker in markers:
+        name = marker.read_text()
+        assert name.startswith("crash-"), (marker, name)
+        crash = artifacts / name
+        assert crash.is_file(), f"signature {marker.name} claimed, {name} missing"
+        sidecar = json.loads((artifacts / (name + ".json")).read_text())
+        assert sidecar["signature"]["key"] == marker.name
+    return len(markers)
+
+
+# -- the store, in-process and in killed child processes ------------------------------------
+
+
+def _sidecar(key: str) -> dict[str, object]:
+    return {"signature": {"key": key}, "note": "x" * 2000}
+
+
+RECORD_SCRIPT = """
+import sys
+from pathlib import Path
+from fuzzer.artifacts import ArtifactStore
+store = ArtifactStore(Path(sys.argv[1]))
+for i in range(int(sys.argv[2])):
+    key = f"sig{i:03d}"
+    store.record(key, f"input {i}".encode(), {"signature": {"key": key}})
+"""
+
+
+def _record_in_child(directory: Path, n: int, kill_at: str | None) -> int:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop(KILL_HOOK, None)
+    if kill_at:
+        env[KILL_HOOK] = kill_at
+    run = subprocess.run(
+        [sys.executable, "-c", RECORD_SCRIPT, str(directory), str(n)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    return run.returncode
+
+
+@pytest.mark.parametrize("point", ["temp", "claim", "sidecar"])
+def test_a_kill_inside_the_write_window_loses_nothing(tmp_path: Path, point: str) -> None:
+    assert _record_in_child(tmp_path, 5, f"{point}:3") == -signal.SIGKILL
+    # the third record died at `point`; the next start completes or releases it
+    store = ArtifactStore(tmp_path)
+    claimed = assert_every_claim_complete(tmp_path)
+    if point == "temp":  # killed before claiming: not claimed, so the signature is still open
+        assert claimed == 2 and not store.recovered
+        assert store.record("sig002", b"input 2", _sidecar("sig002")) is not None
+    else:  # claimed: completed from the dead writer's temporaries
+        assert claimed == 3 and store.recovered == [crash_name(b"input 2")]
+    assert not list(tmp_path.glob(".tmp-*")) and not list((tmp_path / ".signatures").glob(".tmp-*"))
+    assert_every_claim_complete(tmp_path)
+
+
+def test_a_claim_without_file_or_temporaries_is_released(tmp_path: Path) -> None:
+    store = ArtifactStore(tmp_path)
+    assert store.record("lost", b"data", _sidecar("lost")) is not None
+    (tmp_path / crash_name(b"data")).unlink()  # as if the file had never been written
+    again = ArtifactStore(tmp_path)
+    assert not (tmp_path / ".signatures" / "lost").exists()
+    assert again.record("lost", b"other data", _sidecar("lost")) is not None
+    assert assert_every_claim_complete(tmp_path) == 1
+
+
+def test_older_empty_markers_are_matched_to_their_sidecars(tmp_path: Path) -> None:
+    store = ArtifactStore(tmp_path)
+    store.write(b"legacy", _sidecar("old"))
+    (tmp_path / ".signatures" / "old").write_bytes(b"")  # the former O_EXCL marker: empty
+    ArtifactStore(tmp_path)
+    assert (tmp_path / ".signatures" / "old").exists()
+    assert store.record("old", b"again", _sidecar("old")) is None
+
+
+def test_without_hard_links_claims_still_name_their_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_links(*_: object) -> None:
+        raise PermissionError("hard links not supported")
+
+    monkeypatch.setattr(os, "link", no_links)
+    store = ArtifactStore(tmp_path)
+    assert store.record("k", b"data", _sidecar("k")) is not None
+    assert store.record("k", b"more", _sidecar("k")) is None
+    assert (tmp_path / ".signatures" / "k").read_text() == crash_name(b"data")
+    assert assert_every_claim_complete(tmp_path) == 1
+
+
+def test_hostile_markers_and_planted_fifos_are_left_alone(tmp_path: Path) -> None:
+    ArtifactStore(tmp_path)
+    (tmp_path / ".signatures" / "evil").write_text("../../etc/passwd")
+    (tmp_path / ".signatures" / "nul").write_bytes(b"crash-\x00")
+    (tmp_path / ".signatures" / "empty").write_bytes(b"")  # its crash file is gone
+    os.mkfifo(tmp_path / "crash-fifo.json")  # reading it would block forever
+    os.mkfifo(tmp_path / ".signatures" / "fifo")
+    store = ArtifactStore(tmp_path)  # returns: nothing is opened that could block
+    assert not store.recovered
+    assert (tmp_path / ".signatures" / "evil").exists() and (tmp_path / ".signatures" / "nul").exists()
+    assert not (tmp_path / ".signatures" / "empty").exists()  # released: can be written again
+
+
+def test_clean_up_removes_only_temporaries_of_dead_or_stale_writers(tmp_path: Path) -> None:
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        finished = subprocess.run(
+            [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True
+        )
+        dead_pid = int(finished.stdout)
+        live = tmp_path / f".tmp-crash-a.{sleeper.pid}.00000000"
+        dead = tmp_path / f".tmp-crash-b.{dead_pid}.00000000"
+        stale = tmp_path / f".tmp-crash-c.{sleeper.pid}.11111111"
+        unnamed = tmp_path / ".tmp-crash-d"
+        for path in (live, dead, stale, unnamed):
+            path.write_bytes(b"x")
+        old = time.time() - STALE_SECONDS - 60
+        os.utime(stale, (old, old))
+        removed = set(clean_temporaries(tmp_path))
+        assert removed == {dead, stale, unnamed}
+        assert live.exists()
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+
+
+def _writer(directory: str, prefix: str, n: int) -> None:
+    store = ArtifactStore(Path(directory))
+    for i in range(n):
+        key = f"{prefix}{i % (n // 2)}"  # every key twice, and the other writer's keys too
+        store.record(key, f"{prefix} {i}".encode(), _sidecar(key))
+
+
+def _starter(directory: str, n: int) -> None:
+    for _ in range(n):  # a worker starting up: recovery and clean-up, again and again
+        ArtifactStore(Path(directory))
+
+
+def test_concurrent_writers_and_start_ups_never_break_each_other(tmp_path: Path) -> None:
+    """What -fork=2 does: workers record while new workers start (recover, clean up)."""
+    ctx = multiprocessing.get_context("spawn")
+    procs = [
+        ctx.Process(target=_writer, args=(str(tmp_path), "k", 300)),
+        ctx.Process(target=_writer, args=(str(tmp_path), "k", 300)),
+        ctx.Process(target=_starter, args=(str(tmp_path), 300)),
+    ]
+    for proc in procs:
+        proc.start()
+    for proc in procs:
+        proc.join(120)
+    assert [p.exitcode for p in procs] == [0, 0, 0]
+    assert assert_every_claim_complete(tmp_path) == 150
+    assert not list(tmp_path.glob(".tmp-*"))
+
+
+# -- whole campaigns --------------------------------------------------------------------------
+
+
+def fuzz(
+    *args: str, env: dict[str, str] | None = None, timeout: float = 120
+) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, SCRIPT, *args, "--no-progress"],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT), **(env or {})),
+        text=True,
+        capture_output=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
+def test_campaigns_killed_at_random_points_lose_no_divergence(tmp_path: Path) -> None:
+    rng = random.Random(12)
+    campaigns = [
+        ("--robot=kinova", f"--targets=native,{WRAP}"),  # killed inside the write window
+        ("--robot=probot_anno", f"--targets=native,{TIGHT}"),  # killed inside the write window
+        ("--robot=kinova", f"--targets=native,{WRAP}"),  # killed inside the write window
+        ("--robot=kinova", f"--targets=native,{WRAP}"),  # killed from outside, at a random moment
+    ]
+    points = rng.sample(["temp", "claim", "sidecar"], 3)  # each point once, in a seeded order
+    for i, options in enumerate(campaigns):
+        corpus, artifacts = tmp_path / f"corpus{i}", tmp_path / f"artifacts{i}"
+        common = (str(corpus), f"--artifacts={artifacts}", *options)
+        if i < 3:
+            point = points[i]
+            killed = fuzz(*common, "-runs=20000", f"-seed={i + 1}", env={KILL_HOOK: f"{point}:1"})
+            assert killed.returncode == -signal.SIGKILL, (point, killed.stderr[-2000:])
+        else:
+            proc = subprocess.Popen(
+                [sys.executable, SCRIPT, *common, "-max_total_time=60", "-seed=7", "--no-progress"],
+                cwd=ROOT,
+                env=dict(os.environ, PYTHONPATH=str(ROOT)),
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+            assert proc.stderr is not None
+            for line in proc.stderr:  # wait until libFuzzer runs
+                if "fuzzing move on" in line:
+                    break
+            time.sleep(rng.uniform(0.2, 2.0))
+            proc.send_signal(signal.SIGKILL)
+            proc.wait()
+        # the next run completes what the killed one claimed, and runs on
+        again = fuzz(*common, "-runs=300", "-seed=9")
+        if i < 3:  # the divergence the killed run died writing is reported now: exit 1
+            assert again.returncode == 1, (point, again.stderr[-2000:])
+            if point != "temp":
+                assert "completed 1 crash file(s) that an interrupted run had claimed" in again.stderr
+        else:
+            assert again.returncode in (0, 1), again.stderr[-2000:]
+        assert "Traceback" not in again.stderr
+        assert assert_every_claim_complete(artifacts) >= 1, again.stderr[-2000:]
+        for crash in artifacts.glob("crash-*"):
+            if not crash.name.endswith(".json"):
+                decode(crash.read_bytes())
+        assert not list(artifacts.glob(".tmp-*"))
+
+
+def test_fork_2_with_a_planted_divergence_completes(tmp_path: Path) -> None:
+    """Both workers find the planted divergence over and over, and start while the other
+    writes: no worker's clean-up breaks another's write, the campaign ends normally."""
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-fork=2",
+        "-max_total_time=12",
+        "-seed=4",
+        "--robot=kinova",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{WRAP}",
+    )
+    assert run.returncode == 1, run.stderr[-3000:]  # new divergences
+    assert "Traceback" not in run.stderr and "INFO: log from the inner process" not in run.stderr
+    assert "campaign summary (totals over" in run.stderr
+    assert "exit status 1 (new divergences found)" in run.stderr
+    assert assert_every_claim_complete(artifacts) >= 1
+    divergences = [line for line in run.stderr.splitlines() if "  divergences: " in line]
+    assert divergences and int(divergences[-1].split("divergences: ")[1].split()[0]) > 1
+
+
+def test_fork_mode_reports_timeouts_of_a_target_that_always_hangs(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-fork=1",
+        "-timeout=2",
+        "-max_total_time=6",
+        f"--artifacts={artifacts}",
+        "--targets=native,tests.plugins.faults:always_hangs",
+    )
+    assert run.returncode == 70, run.stderr[-3000:]
+    assert "timeouts: " in run.stderr and list(artifacts.glob("timeout-*"))
+    assert "exit status 70 (timeouts)" in run.stderr

@@ -1,0 +1,69 @@
+"""A bounded, seeded fuzz campaign over the native URDF loader (tests/fuzz_urdf_loader.py).
+
+Two flavours, each in a subprocess so that a native crash fails the test instead of
+killing pytest:
+
+* ``regular``: the installed module (no sanitizer, no native coverage; the twin's
+  Python edges guide the search). Always runs.
+* ``asan``: the clang build with AddressSanitizer and libFuzzer's counters
+  (``make native-cov``, ``build/coverage/``), under Atheris' ``asan_with_fuzzer.so``.
+  Skipped, saying so, when that build is missing or older than ``native/src``;
+  ``make fuzz-urdf`` builds it and runs for 10 minutes.
+
+A fixed ``-runs`` count and ``-seed`` keep the campaign bounded and repeatable.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+HARNESS = REPO / "tests" / "fuzz_urdf_loader.py"
+RUNS = {"regular": 40_000, "asan": 20_000}
+
+
+def _asan_env() -> dict[str, str] | None:
+    """Environment running the ASan build, or None when there is no fresh one."""
+    modules = sorted((REPO / "build" / "coverage").glob("_native*.so"))
+    if not modules:
+        return None
+    sources = [p for p in (REPO / "native" / "src").rglob("*") if p.suffix in (".cpp", ".hpp")]
+    if max(p.stat().st_mtime for p in sources) > modules[0].stat().st_mtime:
+        return None
+    import atheris
+
+    preload = Path(atheris.path()) / "asan_with_fuzzer.so"
+    if not preload.is_file():
+        return None
+    return {
+        "LD_PRELOAD": str(preload),
+        "ASAN_OPTIONS": "detect_leaks=0",
+        "RROSFUZZ_NATIVE_MODULE": str(modules[0]),
+    }
+
+
+@pytest.mark.parametrize("flavour", ["regular", "asan"])
+def test_native_loader_survives_fuzzing(tmp_path: Path, flavour: str) -> None:
+    env = dict(os.environ)
+    env.pop("RROSFUZZ_NATIVE_MODULE", None)
+    if flavour == "asan":
+        extra = _asan_env()
+        if extra is None:
+            pytest.skip("no ASan build newer than native/src (make native-cov)")
+        env.update(extra)
+    cmd = [
+        sys.executable, str(HARNESS), f"-runs={RUNS[flavour]}", "-seed=1", "-timeout=30",
+        f"-artifact_prefix={tmp_path}/", str(tmp_path / "corpus"),
+    ]  # fmt: skip
+    proc = subprocess.run(
+        cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900, check=False
+    )
+    tail = proc.stderr[-4000:]
+    assert proc.returncode == 0, tail
+    assert f"Done {RUNS[flavour]} runs" in proc.stderr, tail
+    assert not list(tmp_path.glob("crash-*")) and not list(tmp_path.glob("timeout-*")), tail

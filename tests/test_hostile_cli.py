@@ -1,0 +1,150 @@
+"""Hostile and mistaken command lines (issue 12): a clear message, the documented exit
+status, never a traceback. Also ``--help`` and the exit status of campaigns."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = str(ROOT / "fuzz_diff.py")
+TIGHT = "tests.plugins.faults:tight_tolerance"
+
+
+def fuzz(*args: str, cwd: Path = ROOT, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, SCRIPT, *args],
+        cwd=cwd,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        text=True,
+        capture_output=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
+HOSTILE = [
+    # --targets
+    (["--targets=native,native"], "names 'native' twice"),
+    (["--targets=python,python"], "names 'python' twice"),
+    (["--targets=native"], "exactly two targets, got 1"),
+    (["--targets=native,python,python"], "exactly two targets, got 3"),
+    (["--targets=,"], "exactly two targets, got 0"),
+    (["--targets=native,no_such_module_xyz:impl"], "cannot import no_such_module_xyz"),
+    (["--targets=native,os:path"], "no callable RobotModel"),
+    (["--targets=native,justaname"], "expected native, python or module:attribute"),
+    (["--targets=native,:x"], "expected module:attribute"),
+    (["--targets=native,tests.plugins.faults:nothing"], "has no attribute"),
+    (
+        ["--targets=native,tests.plugins.faults:wrong_constructor"],
+        "target 'tests.plugins.faults:wrong_constructor': its RobotModel(probot_anno.urdf) raised TypeError",
+    ),
+    # --progress-interval
+    (["--progress-interval=-1"], "--progress-interval: '-1': must be a positive, finite number"),
+    (["--progress-interval=nan"], "--progress-interval: 'nan': must be a positive, finite number"),
+    (["--progress-interval=NaN"], "--progress-interval: 'NaN': must be a positive, finite number"),
+    (["--progress-interval=inf"], "--progress-interval: 'inf': must be a positive, finite number"),
+    (["--progress-interval=0"], "--progress-interval: '0': must be a positive, finite number"),
+    (["--progress-interval=soon"], "'soon' is not a number of seconds"),
+    (["--progress-interval"], "expected one argument"),
+    # other options
+    (["--op=jump"], "invalid choice: 'jump'"),
+    (["--mutator=afl"], "invalid choice: 'afl'"),
+    (["--tolerance=-1"], "--tolerance"),
+    (["--tolerance=nan"], "--tolerance"),
+    (["--seeds=-1"], "--seeds must be >= 0"),
+    (["--seeds=many"], "invalid int value: 'many'"),
+    (["--seed=x"], "invalid int value: 'x'"),
+    (["--robot=/nonexistent/robot.urdf"], "--robot"),
+    (["--robot=ur5", "--tip-link=nope"], "tip link 'nope'"),
+    (["--msg-type=sensor_msgs/Nope"], "--msg-type"),
+    (["--op=ik", "--msg-type=sensor_msgs/JointState"], "supported: geometry_msgs/PoseStamped"),
+    (["--msg-path=/nonexistent/msgs"], "--msg-path /nonexistent/msgs: not a folder"),
+    (["-dict=/nonexistent.dict"], "-dict=/nonexistent.dict: no such file"),
+    (["--no-such-option"], "unrecognized arguments: --no-such-option"),
+]
+
+
+@pytest.mark.parametrize(("args", "message"), HOSTILE, ids=[" ".join(a) for a, _ in HOSTILE])
+def test_hostile_command_lines_exit_2_with_a_message(tmp_path: Path, args: list[str], message: str) -> None:
+    run = fuzz(str(tmp_path / "corpus"), "-runs=10", f"--artifacts={tmp_path / 'a'}", "--no-progress", *args)
+    assert run.returncode == 2, (run.returncode, run.stderr[-1500:])
+    assert message in run.stderr, run.stderr[-1500:]
+    assert "Traceback" not in run.stderr + run.stdout
+    assert not list((tmp_path / "a").glob("crash-*"))  # nothing ran
+
+
+def test_help_lists_the_subcommands_and_exit_statuses() -> None:
+    run = fuzz("--help")
+    assert run.returncode == 0, run.stderr
+    for command in ("replay", "triage", "minimize", "report", "promote", "coverage"):
+        assert f"\n  {command} " in run.stdout, command
+    assert "exit status of a campaign" in run.stdout and "--verbose" in run.stdout
+
+
+def test_a_campaign_that_finds_new_divergences_exits_1_and_then_0(tmp_path: Path) -> None:
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    args = (str(corpus), f"--artifacts={artifacts}", f"--targets=native,{TIGHT}", "--no-progress")
+    first = fuzz(*args, "-runs=5000", "-seed=1")
+    assert first.returncode == 1, first.stderr[-2000:]
+    assert "exit status 1 (new divergences found)" in first.stderr
+    # libFuzzer's own lines are hidden without --verbose; the empty input is not "malformed"
+    assert " NEW " not in first.stderr and "REDUCE" not in first.stderr
+    assert "malformed 0" in first.stderr
+    # the same signature again: nothing new, so 0
+    second = fuzz(*args, "-runs=300", "-seed=1")
+    assert second.returncode == 0, second.stderr[-2000:]
+    assert "crash files (0 new this run)" in second.stderr
+
+
+def test_verbose_shows_libfuzzer_lines(tmp_path: Path) -> None:
+    run = fuzz(str(tmp_path / "c"), "-runs=400", "-seed=2", f"--artifacts={tmp_path / 'a'}", "--verbose")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert " NEW " in run.stderr or "INITED" in run.stderr
+
+
+def test_jobs_run_in_parallel_and_keep_their_logs_in_the_artifacts_folder(tmp_path: Path) -> None:
+    from fuzzer.divlog import STATS, read_lines
+
+    work = tmp_path / "work"
+    work.mkdir()
+    run = fuzz("corpus", "-jobs=2", "-runs=3000", "-seed=5", "--artifacts=art", "--no-progress", cwd=work)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert not list(work.glob("fuzz-*.log")), "libFuzzer's job logs belong in the artifacts folder"
+    assert sorted(p.name for p in (work / "art").glob("fuzz-*.log")) == ["fuzz-0.log", "fuzz-1.log"]
+    assert "campaign summary (totals over 2 child process(es)" in run.stderr
+    spans: dict[int, list[float]] = {}
+    for record in read_lines(work / "art" / STATS):
+        spans.setdefault(record["pid"], []).append(record["t"])
+    (a_first, a_last), (b_first, b_last) = ((min(v), max(v)) for v in spans.values())
+    assert a_first < b_last and b_first < a_last, "the two jobs ran one after the other"
+
+
+def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
+    from fuzzer.campaign import CampaignOptions, libfuzzer_argv
+
+    options = CampaignOptions(
+        corpus=(Path("corpus"),),
+        artifacts=Path("art"),
+        libfuzzer_flags=("-jobs=3", "-dict=my.dict"),
+        forwarded=("--robot=ur5", f"--msg-path={tmp_path}"),
+        seeds=None,
+        seed=0,
+        stop_on_divergence=False,
+        progress=False,
+        progress_interval=5.0,
+        dictionary_file=None,
+    )
+    argv = libfuzzer_argv(options)
+    assert "-workers=3" in argv and "-verbosity=0" in argv
+    assert f"-dict={os.path.abspath('my.dict')}" in argv
+    assert "--robot=ur5" in argv  # a robot name stays a name
+    assert argv[-1] == str(Path("corpus").resolve())
+    given = libfuzzer_argv(
+        CampaignOptions(**{**options.__dict__, "libfuzzer_flags": ("-jobs=3", "-workers=1")})
+    )
+    assert "-workers=1" in given and "-workers=3" not in given

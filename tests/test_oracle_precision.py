@@ -1,0 +1,430 @@
+"""Oracle precision (issue 15) and one bug, one bucket (issue 12).
+
+Correct implementations must agree where the canonical form is ambiguous; real
+faults must still be reported, confirmed on fresh targets, with one headline
+difference in m or rad and joint names for people.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fuzzer.evaluate import Evaluator, history_of
+from fuzzer.mapping import CallError, FkCall, IkCall, call_from_json, call_to_json, mapping_for
+from fuzzer.oracle import compare
+from fuzzer.records import Comparison, Kind, Outcome, Signature, Status, describe, signature_of
+from fuzzer.session import RunConfig, Session
+from fuzzer.testcase import TestCase
+from fuzzer.tolerance import Tolerance, default_tolerance
+
+ROOT = Path(__file__).resolve().parents[1]
+TOL = Tolerance(1e-6, 1e-6)
+PLUGINS = "tests.plugins.stateful_faults"
+
+
+def ok(**values: tuple[float, ...]) -> Outcome:
+    return Outcome(Status.OK, values=values)
+
+
+# -- 1. representation only where the canonical form is unambiguous ---------------------------------
+
+
+def test_panda_finger_half_turn_is_agreement() -> None:
+    """The false positive of issue 15: FK of Panda's finger at a rotation of about pi, where
+    each implementation's rounding noise put w on the positive side (w >= 0 is canonical for
+    both) and the tie then flipped x: q and -q, both canonical within tolerance."""
+    y = math.sqrt(1.0 - 0.898**2)
+    native = (-0.898, y, 0.0, 9.8e-17)
+    twin = (0.898, -y, 0.0, 2.5e-17)
+    c = compare(
+        ok(position=(0.1, 0.2, 0.3), orientation=native), ok(position=(0.1, 0.2, 0.3), orientation=twin), TOL
+    )
+    assert c.kind is Kind.AGREE and c.difference < 1e-15
+
+
+@pytest.mark.parametrize("w", [0.5, 0.01, 2e-6])
+def test_q_minus_q_away_from_the_boundary_stays_a_representation_divergence(w: float) -> None:
+    s = math.sqrt(1.0 - w * w)
+    q = (s, 0.0, 0.0, w)
+    c = compare(ok(orientation=q), ok(orientation=tuple(-x for x in q)), TOL)
+    assert c.kind is Kind.REPRESENTATION and c.field == "orientation"
+    # the headline is the rotation between them (none), in rad; the raw gap is a detail
+    assert c.unit == "rad" and c.difference < 1e-6 and c.raw == pytest.approx(2 * s)
+
+
+def test_continuous_joint_at_the_pi_boundary() -> None:
+    near, other = math.pi - 1e-12, -math.pi + 1e-12
+    a, b = ok(joint_values=(near, 0.1)), ok(joint_values=(other, 0.1))
+    assert compare(a, b, TOL, continuous=(True, False)).kind is Kind.AGREE
+    # not continuous: no canonical (-pi, pi] range to be ambiguous about
+    assert compare(a, b, TOL, continuous=(False, False)).kind is Kind.REPRESENTATION
+    # -pi is outside (-pi, pi]: not ambiguous, the pi_boundary bug of the zoo stays reported
+    exact = compare(
+        ok(joint_values=(math.pi, 0.1)), ok(joint_values=(-math.pi, 0.1)), TOL, continuous=(True, False)
+    )
+    assert exact.kind is Kind.REPRESENTATION and exact.joints == (0,)
+    # away from the boundary (the wrap_positive bug): reported
+    far = compare(
+        ok(joint_values=(-1.0, 0.1)), ok(joint_values=(2 * math.pi - 1.0, 0.1)), TOL, continuous=(True, False)
+    )
+    assert far.kind is Kind.REPRESENTATION
+
+
+# -- 7. one difference, with its unit; joint names ---------------------------------------------------
+
+
+def test_headline_difference_has_a_unit() -> None:
+    c = compare(ok(joint_values=(0.0, 0.0)), ok(joint_values=(0.0, 0.02)), TOL, prismatic=(False, True))
+    assert (c.kind, c.field, c.unit) == (Kind.VALUE, "joint_values", "m")
+    assert c.difference == pytest.approx(0.02)
+    p = compare(ok(position=(0.0, 0.0, 0.0)), ok(position=(7e-6, 0.0, 0.0)), TOL)
+    assert p.unit == "m" and p.difference == pytest.approx(7e-6)
+    status = compare(ok(), Outcome(Status.FAILED), TOL)
+    assert status.unit == "status" and status.difference == 0.0
+
+
+def test_value_field_precedence_is_stable() -> None:
+    """joint values, then position, then orientation: the same bug lands on one field."""
+    q1, q2 = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, math.sin(0.1), math.cos(0.1))
+    small_pos = compare(
+        ok(position=(0, 0, 0), orientation=q1), ok(position=(2e-6, 0, 0), orientation=q2), TOL
+    )
+    big_pos = compare(ok(position=(0, 0, 0), orientation=q1), ok(position=(1.0, 0, 0), orientation=q2), TOL)
+    assert small_pos.field == big_pos.field == "position"
+
+
+def test_describe_uses_joint_names_and_units() -> None:
+    text = describe(
+        "value", "joint_values", 0.0123, "rad", (1, 4), ("joint_1", "joint_2", "j3", "j4", "joint_5")
+    )
+    assert text == "value on joint_values (joint_2, joint_5), difference 0.0123 rad"
+    assert describe("status", "status", 0.0, "status") == "status on status"
+    c = Comparison(Kind.PROPERTY, "joint_limits", 2.64, joints=(0,), unit="rad", target="twin")
+    assert c.headline(("joint_1",)) == "property on joint_limits of twin (joint_1), difference 2.64 rad"
+
+
+# -- 6. one bug, one bucket -----------------------------------------------------------------------------
+
+
+def test_signature_ignores_size_and_sign_of_the_difference() -> None:
+    a = ok(joint_values=(0.0, 0.0, 0.0))
+    small = compare(a, ok(joint_values=(0.0, 1e-4, 0.0)), TOL)
+    large = compare(a, ok(joint_values=(0.0, 0.0, -0.5)), TOL)
+    assert small.bucket != large.bucket and small.joints != large.joints
+    types = ("revolute", "revolute", "revolute")
+    keys = {signature_of("move", a, a, c, types).key for c in (small, large)}
+    assert len(keys) == 1
+    other = signature_of("move", a, a, large, ("revolute", "revolute", "continuous"))
+    assert other.key not in keys  # a continuous joint is another problem
+    assert other.joint_types == ("continuous",)
+
+
+def test_old_signatures_still_read() -> None:
+    old = {
+        "op": "fk",
+        "outcome_a": "ok",
+        "outcome_b": "ok",
+        "kind": "value",
+        "field": "position",
+        "sign_flip": False,
+        "bucket": -3,
+        "joints": [],
+        "key": "9aacff7e3a3a",
+    }
+    sig = Signature.from_json(old)
+    assert sig == Signature("fk", "ok", "ok", "value", "position")
+    with pytest.raises(TypeError):
+        Signature.from_json({**old, "kind": 3})
+
+
+# -- 3. per-target IK properties ------------------------------------------------------------------------
+
+
+def session(targets: tuple[str, str], op: str, robot: str = "probot_anno") -> Session:
+    return Session.open(RunConfig(op=op, robot=robot, targets=targets, tolerance=default_tolerance(op)))
+
+
+def evaluator(s: Session) -> Evaluator:
+    ev = s.evaluator()
+    assert isinstance(ev, Evaluator)
+    return ev
+
+
+def ik_case(position: tuple[float, ...], orientation: tuple[float, ...]) -> TestCase:
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "pose": {
+            "position": dict(zip("xyz", position, strict=True)),
+            "orientation": dict(zip("xyzw", orientation, strict=True)),
+        },
+    }
+    return TestCase("geometry_msgs/PoseStamped", message)
+
+
+def reachable_pose(s: Session, q: list[float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    pose = s.reference.forward_kinematics(q)
+    return tuple(pose.position), tuple(pose.orientation)
+
+
+def test_ik_success_outside_the_limits_is_reported_naming_the_target() -> None:
+    s = session(("native", f"{PLUGINS}:ik_out_of_limits"), "ik")
+    ev = evaluator(s)
+    result = ev.evaluate(ik_case(*reachable_pose(s, [-0.503, 0.3, 0.4, 0.2, 0.5, 0.1])))
+    assert result.outcomes[1].values["joint_values"][0] == pytest.approx(-0.503 + 2 * math.pi, abs=1e-3)
+    native, twin = result.outcomes
+    assert compare(native, twin, ev.tolerance, op="ik").kind is Kind.AGREE  # same pose
+    c = result.comparison
+    assert (c.kind, c.field, c.target, c.joints, c.unit) == (
+        Kind.PROPERTY,
+        "joint_limits",
+        f"{PLUGINS}:ik_out_of_limits",
+        (0,),
+        "rad",
+    )
+    assert c.difference == pytest.approx(-0.503 + 2 * math.pi - 3.1416, abs=1e-3)
+    assert result.signature is not None and result.signature.target == c.target
+
+
+def test_ik_of_correct_targets_has_no_property_violation() -> None:
+    s = session(("native", "python"), "ik")
+    ev = evaluator(s)
+    for q in ([0.2, 0.3, 0.4, 0.2, 0.5, 0.1], [-1.0, 0.5, 1.0, -0.4, 1.2, 2.0]):
+        assert not ev.evaluate(ik_case(*reachable_pose(s, q))).divergent
+
+
+# -- 4. ill-conditioning judged for what it is ----------------------------------------------------------
+
+# A requested orientation a half turn from where home puts the tool (found by
+# rotating home's orientation by pi about random axes: 33 of 137 such targets at
+# 1e-9 or less from pi split native and the twin, none of 163 at 1e-6 or more).
+DEAD_ZONE_POSE = (
+    (0.22885535000000004, -1.471118577552194e-06, 0.4319999999972982),
+    (-0.7425064239734345, 0.6575042177781192, 0.12795473402850951, 1.3636948769302101e-06),
+)
+
+
+def test_kdl_rotation_dead_zone_is_a_known_limitation() -> None:
+    s = session(("native", "python"), "ik")
+    result = evaluator(s).evaluate(ik_case(*DEAD_ZONE_POSE))
+    assert {o.status for o in result.outcomes} == {Status.OK, Status.FAILED}
+    assert result.comparison.kind is Kind.KNOWN_LIMITATION
+
+
+def test_a_different_default_seed_is_not_masked_as_ill_conditioned() -> None:
+    s = session(("python", f"{PLUGINS}:ik_other_default_seed"), "ik")
+    ev = evaluator(s)
+    kinds = []
+    for i in range(40):
+        q = [0.9 * math.sin(1.7 * i + j) for j in range(6)]
+        pose = reachable_pose(s, q)
+        result = ev.evaluate(ik_case(*pose))
+        if result.divergent:
+            kinds.append(result.comparison.kind)
+    assert kinds and set(kinds) <= {Kind.STATUS}
+
+
+# -- 2. confirmed on fresh targets; state-dependent divergences replay ---------------------------------
+
+
+def fk_case(q: list[float]) -> TestCase:
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [],
+        "position": q,
+        "velocity": [],
+        "effort": [],
+    }
+    return TestCase("sensor_msgs/JointState", message)
+
+
+def test_a_stateful_fault_is_state_dependent_and_replays_from_its_history() -> None:
+    s = session(("native", f"{PLUGINS}:fk_cache"), "fk")
+    ev = evaluator(s)
+    first = ev.evaluate(fk_case([0.1, 0.2, 0.3, 0.4, 0.5, 0.6]))
+    assert not first.divergent  # a fresh cache is right
+    second = ev.evaluate(fk_case([0.12, 0.2, 0.3, 0.4, 0.5, 0.6]))  # within the cache radius
+    assert second.comparison.kind is Kind.STATE_DEPENDENT and second.history
+    assert second.signature is not None
+    # the history is data: it round-trips through JSON and replays on fresh targets
+    stored = json.loads(json.dumps({"history": list(second.history)}))
+    again = evaluator(session(("native", f"{PLUGINS}:fk_cache"), "fk")).evaluate(
+        fk_case([0.12, 0.2, 0.3, 0.4, 0.5, 0.6]), history=history_of(stored)
+    )
+    assert again.signature == second.signature
+    # without its history the same input agrees: the history is what reproduces it
+    alone = evaluator(session(("native", f"{PLUGINS}:fk_cache"), "fk")).evaluate(
+        fk_case([0.12, 0.2, 0.3, 0.4, 0.5, 0.6]), history=[]
+    )
+    assert not alone.divergent
+
+
+def test_stored_calls_are_validated_data() -> None:
+    call = IkCall((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 1.0), "link_6")
+    assert call_from_json(json.loads(json.dumps(call_to_json(call, (0.0,) * 6)))) == (call, (0.0,) * 6)
+    assert call_from_json({"kind": "FkCall", "joint_values": [1, 2]}) == (FkCall((1.0, 2.0)), None)
+    bad: Any
+    for bad in (
+        [],
+        {"kind": "os.system"},
+        {"kind": "FkCall", "joint_values": "rm -rf"},
+        {"kind": "MoveCall", "names": [1], "positions": []},
+        {"kind": "IkCall", "position": [0, 0, 0], "orientation": [0, 0, 0, 1], "link": 3},
+    ):
+        with pytest.raises(CallError):
+            call_from_json(bad)
+    with pytest.raises(ValueError, match="history"):
+        history_of({"history": {"kind": "FkCall"}})
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_a_campaign_reports_the_stateful_fault_and_its_file_replays(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    done = run_cli(
+        str(tmp_path / "corpus"),
+        "-runs=600",
+        "-seed=1",
+        "--op=fk",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{PLUGINS}:fk_cache",
+        "--no-progress",
+    )
+    assert done.returncode in (0, 1), done.stderr[-2000:]
+    sidecars: list[tuple[Path, dict[str, Any]]] = []
+    for p in sorted(artifacts.glob("crash-*.json")):
+        sidecars.append((p, json.loads(p.read_text())))
+    stateful = [(p, d) for p, d in sidecars if d["signature"]["kind"] == "state_dependent"]
+    assert stateful, [d["signature"]["kind"] for _, d in sidecars]
+    path, sidecar = stateful[0]
+    assert 0 < len(sidecar["history"]) <= 32
+    crash = path.with_suffix("")
+    replayed = run_cli(str(crash), f"--targets=native,{PLUGINS}:fk_cache")
+    assert "still diverges (same signature)" in replayed.stdout, replayed.stdout + replayed.stderr
+
+
+def test_mapping_is_used_for_fk_cases() -> None:
+    assert mapping_for("fk", "sensor_msgs/JointState")(fk_case([0.0] * 6).message) == FkCall((0.0,) * 6)
+
+
+def test_fk_of_a_chain_without_joint_variables_agrees() -> None:
+    """Found by the fk control on baxter (its default chain has no joint variable): the twin
+    raised IndexError on ``forward_kinematics([])`` where native returns the identity."""
+    s = session(("native", "python"), "fk", robot="baxter")
+    assert s.reference.dof == 0
+    result = evaluator(s).evaluate(fk_case([]))
+    assert result.verdict == "evaluated" and not result.divergent
+
+
+def test_status_signatures_name_the_problem_not_the_side_effect() -> None:
+    """silent_clamp: native rejects, the twin then moves (ok) or fails planning (failed):
+    one problem, one key; ok vs failed is one problem whichever target failed."""
+    rejected = Outcome(Status.REJECTED, "OutOfBoundsError", 30)
+    status = Comparison(Kind.STATUS, "status")
+    after_ok = signature_of("move", rejected, ok(), status)
+    after_failed = signature_of("move", rejected, Outcome(Status.FAILED), status)
+    assert after_ok == after_failed and after_ok.outcome_b == "completed"
+    assert signature_of("ik", ok(), Outcome(Status.FAILED), status) == signature_of(
+        "ik", Outcome(Status.FAILED), ok(), status
+    )
+    other_error = signature_of("move", Outcome(Status.REJECTED, "InvalidArgumentError", 2), ok(), status)
+    assert other_error != after_ok
+
+
+def test_bench_controls_cover_every_zoo_configuration_and_report_false_positives() -> None:
+    from benchmarks import bench_zoo
+    from benchmarks.zoo import CONTROLS, ZOO
+    from robot_api.robots import DEFAULT_ROBOT, known_robots
+
+    configs = {(c.op, c.robot, c.tip_link) for c in CONTROLS}
+    assert {(b.op, b.robot, b.tip_link) for b in ZOO} <= configs
+    assert {("fk", r, None) for r in known_robots()} <= configs and ("ik", DEFAULT_ROBOT, None) in configs
+    assert all(c.target == "benchmarks.zoo.bugs:control" and c.is_control for c in CONTROLS)
+
+    def run(bug: str, divergences: int, signatures: int = 0) -> dict[str, Any]:
+        return {
+            "bug": bug,
+            "engine": "full",
+            "seed": 1,
+            "budget": 10.0,
+            "detected_at": 1.0 if divergences else None,
+            "signatures": signatures,
+            "executions": 100,
+            "elapsed": 30.0,
+            "op": "fk",
+            "returncode": 0,
+            "divergences": divergences,
+            "replayed": signatures,
+            "replay_same": signatures,
+            "replay_misses": [],
+        }
+
+    runs = [
+        run(CONTROLS[0].name, 0),
+        run(CONTROLS[1].name, 6),
+        run("wrap_positive", 40, 1),
+        run("silent_clamp", 9, 3),
+    ]
+    bugs = [CONTROLS[0].name, CONTROLS[1].name, "wrap_positive", "silent_clamp"]
+    result: dict[str, Any] = {
+        "mode": "t",
+        "bugs": bugs,
+        "engines": ["full"],
+        "seeds": 1,
+        "budget": 10.0,
+        "jobs": 1,
+        "cpus": 2,
+        "machine": "x",
+        "command": "c",
+        "runs": runs,
+    }
+    result["cells"] = bench_zoo.summarize([bench_zoo.Run(**r) for r in runs], ("full",), tuple(bugs))
+    text = bench_zoo.markdown(result)
+    assert f"| {CONTROLS[1].name} | {CONTROLS[1].op} | 1/1 | 12.0 |" in text
+    assert "1 of 2 control runs reported a divergence; 6 divergences in 1.0 min (6.0 per minute)" in text
+    assert "median 2, max 3 (silent_clamp) over 2 bugs" in text
+    assert "Replay fidelity: 4 of 4 crash files (100%)" in text
+
+
+def test_panda_finger_half_turn_agrees_on_the_real_targets() -> None:
+    """The same false positive on the real targets: each flips its own rounding noise of w."""
+    s = Session.open(
+        RunConfig(op="fk", robot="panda", tip_link="panda_rightfinger", tolerance=default_tolerance("fk"))
+    )
+    q = [math.pi / 4, math.pi / 2, math.pi / 4, 0.0, 0.5, -math.pi / 2, 0.0, 0.5]
+    result = evaluator(s).evaluate(fk_case(q))
+    native, twin = (o.values["orientation"] for o in result.outcomes)
+    assert abs(native[3]) < 1e-15 and abs(twin[3]) < 1e-15
+    assert max(abs(x + y) for x, y in zip(native, twin, strict=True)) < 1e-12  # q and -q
+    assert not result.divergent and result.comparison.kind is Kind.AGREE
+
+
+def test_the_summary_shows_the_largest_value_difference_with_its_unit(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Never a representation gap, never an agreement's rounding: the largest headline
+    difference of a value divergence, with its unit."""
+    from fuzzer import reporting
+    from fuzzer.harness import Stats
+
+    stats = Stats(execs=10)
+    reporting.summary(stats, 0, "a", ["c"], [])
+    assert "largest value difference: none (no value divergence)" in capsys.readouterr().err
+    stats.max_difference, stats.max_difference_unit = 7e-3, "m"
+    reporting.summary(stats, 0, "a", ["c"], [])
+    assert "largest value difference: 0.007 m" in capsys.readouterr().err
