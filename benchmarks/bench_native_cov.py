@@ -82,7 +82,7 @@ def run_one(config: str, mode: str, seed: int, budget: float) -> Run:
         workdir = Path(tmp)
         started = time.time()
         done = subprocess.run(
-            command(bug, "full", seed, budget, workdir),
+            [*command(bug, "full", seed, budget, workdir), "--verbose"],  # libFuzzer's cov: lines
             cwd=ROOT,
             env=env,
             capture_output=True,

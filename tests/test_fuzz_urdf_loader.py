@@ -7,8 +7,9 @@ killing pytest:
   Python edges guide the search). Always runs.
 * ``asan``: the clang build with AddressSanitizer and libFuzzer's counters
   (``make native-cov``, ``build/coverage/``), under Atheris' ``asan_with_fuzzer.so``.
-  Skipped, saying so, when that build is missing or older than ``native/src``;
-  ``make fuzz-urdf`` builds it and runs for 10 minutes.
+  The test runs ``make native-cov`` first (a no-op when the build is current; on a
+  fresh clone it installs clang and builds), and fails if that fails;
+  ``make fuzz-urdf`` runs the same harness for 10 minutes.
 
 A fixed ``-runs`` count and ``-seed`` keep the campaign bounded and repeatable.
 """
@@ -52,9 +53,12 @@ def test_native_loader_survives_fuzzing(tmp_path: Path, flavour: str) -> None:
     env = dict(os.environ)
     env.pop("RROSFUZZ_NATIVE_MODULE", None)
     if flavour == "asan":
+        build = subprocess.run(
+            ["make", "-s", "native-cov"], cwd=REPO, capture_output=True, text=True, timeout=1200, check=False
+        )
+        assert build.returncode == 0, (build.stdout + build.stderr)[-4000:]
         extra = _asan_env()
-        if extra is None:
-            pytest.skip("no ASan build newer than native/src (make native-cov)")
+        assert extra is not None, "make native-cov left no ASan build newer than native/src"
         env.update(extra)
     cmd = [
         sys.executable, str(HARNESS), f"-runs={RUNS[flavour]}", "-seed=1", "-timeout=30",
