@@ -30,7 +30,7 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
-from benchmarks.bench_zoo import NOT_DETECTIONS, command
+from benchmarks.bench_zoo import NOT_DETECTIONS, command, replace_section
 from benchmarks.zoo import BY_NAME, CONTROL
 from fuzzer.divlog import DIVERGENCES, STATS, read_lines
 
@@ -161,19 +161,6 @@ def markdown(runs: list[Run], seeds: int, budget: float, cmd: str) -> str:
     return "\n".join(lines)
 
 
-def write_markdown(text: str, path: Path = ROOT / "BENCHMARKS.md") -> None:
-    """Replace this benchmark's marked section of BENCHMARKS.md (or append one)."""
-    begin, end = MARKS
-    content = path.read_text(encoding="utf-8")
-    block = f"{begin}\n{text}\n{end}"
-    if begin in content:
-        head, rest = content.split(begin, 1)
-        content = head + block + rest.split(end, 1)[1]
-    else:
-        content = content.rstrip() + "\n\n## Native-coverage mode against in-process mode\n\n" + block + "\n"
-    path.write_text(content, encoding="utf-8")
-
-
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -201,7 +188,7 @@ def main(argv: list[str] | None = None) -> None:
     text = markdown(runs, args.seeds, args.budget, cmd.strip())
     print(text)
     if args.write_md:
-        write_markdown(text)
+        replace_section(text, MARKS, "## Native-coverage mode against in-process mode")
 
 
 if __name__ == "__main__":

@@ -421,13 +421,20 @@ def write_markdown(text: str, path: Path = ROOT / "BENCHMARKS.md", mode: str = "
     begin, end = MARK_BEGIN, MARK_END
     if mode in SECTIONS:
         begin, end = f"<!-- bench_zoo_{mode}:begin -->", f"<!-- bench_zoo_{mode}:end -->"
+    replace_section(text, (begin, end), SECTIONS.get(mode, "## Bug-finding power (the bug zoo)"), path)
+
+
+def replace_section(
+    text: str, marks: tuple[str, str], title: str, path: Path = ROOT / "BENCHMARKS.md"
+) -> None:
+    """Put ``text`` between the ``marks`` comments of ``path``; append it under ``title`` if absent."""
+    begin, end = marks
     content = path.read_text(encoding="utf-8")
     block = f"{begin}\n{text}\n{end}"
     if begin in content:
         head, rest = content.split(begin, 1)
         content = head + block + rest.split(end, 1)[1]
     else:
-        title = SECTIONS.get(mode, "## Bug-finding power (the bug zoo)")
         content = content.rstrip() + f"\n\n{title}\n\n" + block + "\n"
     path.write_text(content, encoding="utf-8")
 
