@@ -13,9 +13,10 @@ $(STAMP): $(BUILD_INPUTS)
 	scripts/setup.sh
 	@touch $(STAMP)
 
-## The main job: fuzz the shipped default robot for a bounded time.
+## The main job: fuzz scenarios (scripts of calls on one live MoveGroup) on the shipped default
+## robot for a bounded time. The paper's single-move experiment: $(PY) fuzz_diff.py corpus/ -max_total_time=60
 run: setup
-	$(PY) fuzz_diff.py corpus/ -max_total_time=60
+	$(PY) fuzz_diff.py --op scenario corpus-scenario/ -max_total_time=60
 
 ## The test suite (what CI runs).
 test: setup

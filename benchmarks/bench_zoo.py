@@ -4,6 +4,7 @@
     .venv/bin/python -m benchmarks.bench_zoo --mode full      # all bugs + controls, 5 seeds
     .venv/bin/python -m benchmarks.bench_zoo --mode controls  # false positives only
     .venv/bin/python -m benchmarks.bench_zoo --mode buckets   # buckets per injected bug only
+    .venv/bin/python -m benchmarks.bench_zoo --mode ops       # stateful bugs: --op move vs scenario
 
 Engines, each a subprocess started the same way (the clock starts at launch):
 
@@ -19,6 +20,11 @@ arm; full engine only) give the false-positive rate: control runs that reported
 any divergence, and divergences per minute. Results go to
 ``benchmarks/results/zoo-<mode>.json`` and a plot ``zoo-<mode>.png``; with
 ``--write-md`` the tables replace the marked section of BENCHMARKS.md.
+
+A zoo bug runs with its own op (``--op scenario`` for the stateful ones, which only
+the full and libFuzzer engines run: the baselines have no scenario op). ``--mode ops``
+runs each stateful bug under both ``--op move`` and ``--op scenario`` (full engine) and
+writes the section "Which ops detect the stateful bugs".
 """
 
 from __future__ import annotations
@@ -32,20 +38,26 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, ZOO, Bug
+from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from fuzzer.divlog import DIVERGENCES, STATS, read_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 ENGINES = ("full", "libfuzzer", "paper", "hypothesis", "uniform")
+ALL_ENGINES = (*ENGINES, "weights")
+"""``weights``: the full engine without its bandit, space-filling inputs and float features
+(``--mutator weights``, the engine before issue 11), for ``benchmarks.bench_deep``."""
 NOT_DETECTIONS = {"ill_conditioned", "known_limitation", "flaky"}
 CONTROL_ENGINES = ("full",)
 """Engines run on the control configurations (the plain ``control`` entry runs them all)."""
+SCENARIO_ENGINES = ("full", "libfuzzer")
+"""Engines that have ``--op scenario`` (the baselines do not)."""
 
 
 @dataclass(frozen=True)
@@ -55,6 +67,8 @@ class Mode:
     budget: float  # seconds per run
     engines: tuple[str, ...] = ENGINES
     replay: bool = False
+    ops: tuple[str, ...] = ()
+    """When given, every bug runs under each of these ops instead of its own."""
 
 
 MODES = {
@@ -62,6 +76,13 @@ MODES = {
     "full": Mode(bugs=tuple(b.name for b in (*ZOO, CONTROL, *CONTROLS)), seeds=5, budget=20.0, replay=True),
     "controls": Mode(bugs=tuple(b.name for b in CONTROLS), seeds=1, budget=15.0, engines=("full",)),
     "buckets": Mode(bugs=tuple(b.name for b in ZOO), seeds=1, budget=10.0, engines=("full",), replay=True),
+    "ops": Mode(
+        bugs=tuple(b.name for b in (*STATEFUL, *CONTROLS) if b.op == "scenario"),
+        seeds=3,
+        budget=30.0,
+        engines=("full",),
+        ops=("move", "scenario"),
+    ),
 }
 MARK_BEGIN, MARK_END = "<!-- bench_zoo:begin -->", "<!-- bench_zoo:end -->"
 
@@ -86,6 +107,8 @@ class Run:
     """Of those, the ones that replayed with the same signature."""
     replay_misses: tuple[str, ...] = ()
     """Kind and verdict of each file that did not."""
+    fields: tuple[str, ...] = ()
+    """Per field that diverged: ``kind field: largest difference unit`` (what was found)."""
 
 
 def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
@@ -93,7 +116,7 @@ def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> l
     common = [f"--robot={bug.robot}", f"--op={bug.op}", f"--targets=native,{bug.target}"]
     if bug.tip_link:
         common.append(f"--tip-link={bug.tip_link}")
-    if engine in ("full", "libfuzzer"):
+    if engine in ("full", "libfuzzer", "weights"):
         cmd = [
             sys.executable,
             str(ROOT / "fuzz_diff.py"),
@@ -104,7 +127,7 @@ def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> l
             "--no-progress",
             *common,
         ]
-        return [*cmd, "--mutator=libfuzzer"] if engine == "libfuzzer" else cmd
+        return cmd if engine == "full" else [*cmd, f"--mutator={engine}"]
     return [
         sys.executable,
         "-m",
@@ -182,7 +205,19 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = Fals
         done.returncode,
         len(hits),
         *fidelity,
+        found_fields(hits),
     )
+
+
+def found_fields(hits: list[dict[str, Any]]) -> tuple[str, ...]:
+    """``kind field: largest difference unit`` per (kind, field) of the logged divergences."""
+    largest: dict[tuple[str, str], tuple[float, str]] = {}
+    for r in hits:
+        key = (str(r.get("kind")), str(r.get("field")))
+        diff = float(r.get("difference") or 0.0)
+        if key not in largest or diff > largest[key][0]:
+            largest[key] = (diff, str(r.get("unit") or ""))
+    return tuple(f"{k} {f}: {d:.2g} {u}".rstrip() for (k, f), (d, u) in sorted(largest.items()))
 
 
 def summarize(runs: list[Run], engines: tuple[str, ...], bugs: tuple[str, ...]) -> dict[str, Any]:
@@ -275,7 +310,73 @@ def controls_markdown(result: dict[str, Any]) -> list[str]:
     return lines
 
 
+def summarize_ops(runs: list[Run], bugs: tuple[str, ...], ops: tuple[str, ...]) -> dict[str, Any]:
+    """Per ``bug/op``: the cells of :func:`summarize` (one engine), keyed by the op run."""
+    cells = {}
+    for op in ops:
+        mine = [replace(r, engine=op) for r in runs if r.op == op]
+        for key, cell in summarize(mine, (op,), bugs).items():
+            cells[key] = cell
+    return cells
+
+
+def _largest_by_field(runs: Iterable[dict[str, Any]]) -> list[str]:
+    """``--op OP kind field: largest difference unit`` over the runs' ``fields``, one per field."""
+    largest: dict[tuple[str, str], tuple[float, str]] = {}
+    for run in runs:
+        for entry in run.get("fields", ()):
+            name, _, rest = entry.partition(": ")
+            number, _, unit = rest.partition(" ")
+            key = (str(run["op"]), name)
+            if key not in largest or float(number) > largest[key][0]:
+                largest[key] = (float(number), unit)
+    return [f"`--op {op}` {name}: {d:.2g} {u}".rstrip() for (op, name), (d, u) in sorted(largest.items())]
+
+
+def ops_markdown(result: dict[str, Any]) -> str:
+    """The table of ``--mode ops``: which op detects each stateful bug."""
+    ops, budget, cells = result["ops"], result["budget"], result["cells"]
+    lines = [
+        "Each stateful zoo bug (`benchmarks/zoo/stateful.py`: it needs a second call on a live group, or "
+        "shows only in a trajectory) against native, full engine, under each op: "
+        f"{result['seeds']} seed(s) x {budget:.0f} s per (bug, op), "
+        f"{result['jobs']} runs at a time on {result['cpus']} CPUs. "
+        f"Command: `{result['command']}`.",
+        "",
+        "Median time to first detection in seconds from launch (runs that detected it); `-`: not detected. "
+        "Expected: `--op move` (one call on a fresh group) misses every one, `--op scenario` finds them; "
+        "the `control@` rows (the unmodified twin) give the false positives of the same campaigns.",
+        "",
+        "| bug | robot | " + " | ".join(f"`--op {op}`" for op in ops) + " | median buckets (scenario) "
+        "| what was found (all runs; kind field: largest difference) |",
+        "|---|---|" + "---|" * len(ops) + "---|---|",
+    ]
+    for bug in result["bugs"]:
+        row = [cells.get(f"{bug}/{op}") for op in ops]
+        scenario = cells.get(f"{bug}/scenario")
+        buckets = f"{scenario['median_signatures']:g}" if scenario and scenario["detected"] else "-"
+        cols = " | ".join(_fmt_ttd(c, budget) if c else "" for c in row)
+        what = _largest_by_field(r for r in result["runs"] if r["bug"] == bug)
+        lines.append(
+            f"| {bug} | {Path(BY_NAME[bug].robot).stem} | {cols} | {buckets} | {'; '.join(what) or '-'} |"
+        )
+    lines.append("")
+    bugs = [b for b in result["bugs"] if not BY_NAME[b].is_control]
+    for op in ops:
+        hit = sum(1 for b in bugs if (cells.get(f"{b}/{op}") or {}).get("detected"))
+        lines.append(f"- `--op {op}`: {hit} of {len(bugs)} stateful bugs detected in at least one run.")
+    if result.get("load"):
+        lines.append(
+            f"\nLoad average (1, 5, 15 min) before / after the sweep: {result['load']} "
+            f"on {result['cpus']} CPUs "
+            "(above the CPU count, other work shared the machine: times to detection are longer than idle)."
+        )
+    return "\n".join(lines)
+
+
 def markdown(result: dict[str, Any]) -> str:
+    if result.get("ops"):
+        return ops_markdown(result)
     engines, budget = result["engines"], result["budget"]
     bugs = [b for b in result["bugs"] if not _is_config_control(b)]
     cells = result["cells"]
@@ -340,7 +441,7 @@ def markdown(result: dict[str, Any]) -> str:
         "| op | " + " | ".join(engines) + " |",
         "|---|" + "---|" * len(engines),
     ]
-    for op in ("fk", "move", "ik"):
+    for op in ("fk", "move", "ik", "scenario"):
         values = []
         for e in engines:
             rates = [
@@ -384,7 +485,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
 
     engines, bugs, budget, cells = result["engines"], result["bugs"], result["budget"], result["cells"]
     bugs = [b for b in bugs if not BY_NAME[b].is_control]
-    if not bugs:
+    if not bugs or result.get("ops"):
         return
     fig = Figure(figsize=(10, 0.45 * len(bugs) + 1.8))
     ax = fig.add_subplot()
@@ -412,6 +513,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
 SECTIONS = {
     "controls": "## False positives (controls, short sweep)",
     "buckets": "## One bug, one bucket, and replay fidelity (short sweep)",
+    "ops": "## Which ops detect the stateful bugs",
 }
 
 
@@ -437,6 +539,27 @@ def replace_section(
     else:
         content = content.rstrip() + f"\n\n{title}\n\n" + block + "\n"
     path.write_text(content, encoding="utf-8")
+
+
+def plan_jobs(
+    bugs: tuple[str, ...], engines: tuple[str, ...], seeds: int, ops: tuple[str, ...] = ()
+) -> list[tuple[Bug, str, int]]:
+    """The runs of a sweep, as (bug, engine, seed): each bug under its own op, or under each
+    of ``ops``; controls only with CONTROL_ENGINES; scenario runs only with SCENARIO_ENGINES."""
+    return [
+        (bug, e, s)
+        for b in bugs
+        for bug in ([replace(BY_NAME[b], op=op) for op in ops] if ops else [BY_NAME[b]])
+        for e in engines
+        if (not _is_config_control(b) or e in CONTROL_ENGINES)
+        and (bug.op != "scenario" or e in SCENARIO_ENGINES)
+        for s in range(1, seeds + 1)
+    ]
+
+
+def _load() -> str:
+    """The 1, 5 and 15 minute load averages, as ``uptime`` shows them."""
+    return ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -474,13 +597,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     budget = args.budget or mode.budget
     engines = tuple(args.engines or mode.engines)
     replay = args.replay or mode.replay
-    jobs = [
-        (BY_NAME[b], e, s)
-        for b in bugs
-        for e in engines
-        if not _is_config_control(b) or e in CONTROL_ENGINES
-        for s in range(1, seeds + 1)
-    ]
+    jobs = plan_jobs(bugs, engines, seeds, mode.ops)
+    load_before = _load()
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], budget, replay), jobs))
     result = {
@@ -494,7 +612,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "machine": platform.machine(),
         "command": "python -m benchmarks.bench_zoo " + " ".join(argv if argv is not None else sys.argv[1:]),
         "runs": [asdict(r) for r in runs],
-        "cells": summarize(runs, engines, bugs),
+        "cells": summarize_ops(runs, bugs, mode.ops) if mode.ops else summarize(runs, engines, bugs),
+        "ops": list(mode.ops),
+        "load": f"{load_before} / {_load()}",
     }
     out = args.out or RESULTS / f"zoo-{args.mode}.json"
     out.parent.mkdir(parents=True, exist_ok=True)

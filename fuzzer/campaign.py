@@ -38,7 +38,7 @@ from fuzzer.processes import (
     supervises,
 )
 from fuzzer.processes import deadline as child_deadline
-from fuzzer.session import RunConfig, Session, outcome_json, versions
+from fuzzer.session import ConfigError, RunConfig, Session, outcome_json, versions
 from fuzzer.targets import module_of
 from fuzzer.testcase import TestCase, TestCaseError, decode
 
@@ -120,18 +120,23 @@ def interesting_values(session: Session) -> list[float]:
 
 
 def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
-    """n seeds from Hypothesis strategies of the message definition, with robot-aware hints."""
-    from fuzzer.mapping import seed_hints
+    """n seeds from Hypothesis strategies of the message definition, with robot-aware hints
+    (for ``--op scenario`` a sequence strategy over the topics' step strategies)."""
+    from fuzzer.mapping import scenario_strategy, seed_hints
     from fuzzer.seeds import generate_seeds
     from fuzzer.strategies import strategy_for
 
     msg_type = session.config.message_type
-    strategy = strategy_for(
-        session.registry,
-        msg_type,
-        hints=seed_hints(msg_type, session.facts()),
-        allow_special_floats=not session.config.filtering,
-    )
+    special = not session.config.filtering
+    if session.config.op == "scenario":
+        strategy = scenario_strategy(session.registry, session.facts(), session.config.max_steps, special)
+    else:
+        strategy = strategy_for(
+            session.registry,
+            msg_type,
+            hints=seed_hints(msg_type, session.facts()),
+            allow_special_floats=special,
+        )
     messages = generate_seeds(strategy, n, seed)
     return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
 
@@ -141,7 +146,9 @@ def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
     from fuzzer.ros.bags import read_seeds
 
     msg_type = session.config.message_type
-    messages = read_seeds(bag, msg_type, lambda m: session.registry.validate(msg_type, m))
+    if session.config.op == "scenario":
+        raise ConfigError("--seeds-from-bag with --op scenario is not supported yet")
+    messages = read_seeds(bag, msg_type, session.validate)
     return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
 
 
@@ -166,7 +173,7 @@ def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestC
                 case = decode(path.read_bytes())
                 if case.msg_type != msg_type:
                     raise TestCaseError(f"message type {case.msg_type}, this campaign fuzzes {msg_type}")
-                session.registry.validate(msg_type, case.message)
+                session.validate(case.message)
             except (OSError, ValueError) as exc:
                 reporting.warn(f"skipping corpus file {path}: {exc}")
                 continue
@@ -240,7 +247,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     limits = session.reference.joint_limits
     lower = tuple(lim.lower for lim in limits)
     upper = tuple(lim.upper for lim in limits)
-    types = field_types(session, config.message_type)
+    # a scenario's steps have their own types (the scenario mutators know them)
+    types = {} if config.op == "scenario" else field_types(session, config.message_type)
     interesting = interesting_values(session)
     dictionary: list[str | float] = [*session.reference.joint_names, *session.reference.link_names]
     if options.dictionary_file:
@@ -267,6 +275,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     features = Features()
     harness = Harness(
+        **_scenario_mutators(session),
+        **_search(session, options, features),
         evaluator=session.evaluator(),
         store=store,
         features=features,
@@ -423,6 +433,44 @@ def build_sidecar(
         "versions": recorded,
         "written": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
+
+
+def _scenario_mutators(session: Session) -> dict[str, Any]:
+    """For ``--op scenario``: the Harness's sequence mutator and crossover
+    (``fuzzer.scenario.mutate.for_registry``); {} for the other ops."""
+    if session.config.op != "scenario":
+        return {}
+    from fuzzer.scenario import mutate
+
+    mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps)
+    return {"mutate_message": mutate_message, "crossover_message": crossover_message}
+
+
+def _search(session: Session, options: CampaignOptions, features: Any) -> dict[str, Any]:
+    """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
+    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither."""
+    if options.mutator != "rrosfuzz":
+        return {}
+    from fuzzer import mutators
+    from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
+    from fuzzer.harness import MUTATE, SPACEFILL, Sources
+    from fuzzer.selection.bandit import Bandit
+    from fuzzer.selection.floatcmp import FloatCompareTracer
+
+    config = session.config
+    weights: dict[str, float] = dict(mutators.WEIGHTS)
+    if config.op == "scenario":
+        from fuzzer.scenario.mutate import SEQ_WEIGHTS
+
+        weights = dict(SEQ_WEIGHTS)
+    limits = session.reference.joint_limits
+    facts = session.facts()
+    stream = SpaceFill([lim.lower for lim in limits], [lim.upper for lim in limits], seed=options.seed)
+    fresh = fresh_inputs(
+        config.op, config.message_type, stream, facts.joint_names, facts.reachable, config.max_steps
+    )
+    sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(tuple(weights), weights), fresh)
+    return {"sources": sources, "float_tracer": FloatCompareTracer(features)}
 
 
 def _transport_note(config: RunConfig) -> str:

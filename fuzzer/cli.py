@@ -26,6 +26,7 @@ from typing import Any
 
 from fuzzer import reporting
 from fuzzer.mapping import DEFAULT_MSG_TYPE, OPS
+from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT
 from fuzzer.session import ConfigError, RunConfig
 from fuzzer.tolerance import Tolerance, default_tolerance
 from robot_api import robots
@@ -87,7 +88,17 @@ def _config_options(parser: argparse.ArgumentParser) -> None:
         "--tip-link", default=None, help="last link of the chain (default: the contract's rule)"
     )
     parser.add_argument(
-        "--op", choices=OPS, default=None, help="operation to fuzz (default move: the paper's arm.go())"
+        "--op",
+        choices=OPS,
+        default=None,
+        help="operation to fuzz (default move: the paper's arm.go(); scenario: scripts of calls on "
+        "one live MoveGroup, docs/engine.md)",
+    )
+    parser.add_argument(
+        "--max-steps",
+        default=None,
+        metavar="N",
+        help=f"--op scenario: at most N steps per test case, 1..{MAX_STEPS_LIMIT} (default {MAX_STEPS})",
     )
     parser.add_argument(
         "--targets",
@@ -174,10 +185,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--mutator",
-        choices=("rrosfuzz", "libfuzzer"),
+        choices=("rrosfuzz", "weights", "libfuzzer"),
         default="rrosfuzz",
-        help="rrosfuzz: the structured mutators (default); libfuzzer: libFuzzer's own byte "
-        "mutator only (a baseline)",
+        help="rrosfuzz: the structured mutators, chosen by a bandit beside fresh space-filling "
+        "inputs, with float comparisons of the Python targets as features (default); weights: "
+        "the structured mutators by fixed weights only (a baseline: the engine before the "
+        "bandit); libfuzzer: libFuzzer's own byte mutator only (a baseline)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
@@ -239,10 +252,23 @@ def _config(args: argparse.Namespace, *, overrides_only: bool = False) -> tuple[
         given["filtering"] = False
     if args.transport is not None:
         given["transport"] = args.transport
+    if args.max_steps is not None:
+        given["max_steps"] = _max_steps(args.max_steps)
     config = RunConfig(**given)
     if "tolerance" not in given:
         config = replace(config, tolerance=default_tolerance(config.op))
     return config, given
+
+
+def _max_steps(text: Any) -> int:
+    """``--max-steps``: an integer in 1..MAX_STEPS_LIMIT."""
+    try:
+        value = int(str(text), 10)
+    except ValueError:
+        raise UsageError(f"--max-steps {text!r}: not an integer") from None
+    if not 1 <= value <= MAX_STEPS_LIMIT:
+        raise UsageError(f"--max-steps {value}: must be from 1 to {MAX_STEPS_LIMIT}")
+    return value
 
 
 def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
@@ -259,6 +285,7 @@ def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
         "progress_interval",
         "mutator",
         "transport",
+        "max_steps",
     ):
         value = getattr(args, name)
         if value is not None:
@@ -299,6 +326,8 @@ def replay_main(argv: Sequence[str]) -> int:
             )
         diverging += result.diverges
         reporting.verdict(str(path), str(result.result), result.detail)
+        for line in result.steps[1:]:
+            reporting.out("    " + line)
     return 2 if errors else (1 if diverging else 0)
 
 
@@ -417,6 +446,16 @@ def minimize_main(argv: Sequence[str]) -> int:
                 "complete": shrunk.complete,
             },
         )
+        # the call, outcomes and comparison of the minimized input, not the original's (a
+        # scenario's step list shrinks; the sidecar's schema checks they match the test case)
+        from fuzzer.campaign import build_sidecar
+
+        again = session.evaluator().evaluate(shrunk.case, history=history)
+        if again.signature is not None:
+            versions, digest = sidecar.get("versions", {}), sidecar.get("robot_sha256", "")
+            fresh = build_sidecar(session, shrunk.case, data, again, versions, digest)
+            for name in ("sha1", "comparison", "difference", "call", "outcomes", "lineage", "strategy"):
+                out[name] = fresh[name]
         folder = args.output or path.parent
         try:
             written = ArtifactStore(folder).write(data, out)
@@ -528,6 +567,10 @@ def campaign_main(argv: Sequence[str]) -> int:
     # settings travel: from a crash file's sidecar (-minimize_crash), else the corpus manifest
     if not travel.is_child() and not travel.adopt_sidecar(args, [p for p in args.corpus if p.is_file()]):
         travel.adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
+    if not travel.is_child() and args.max_steps is None:
+        from fuzzer.manifest import recorded_max_steps
+
+        args.max_steps = recorded_max_steps(args.corpus, args.op)
     config, _ = _config(args)
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)

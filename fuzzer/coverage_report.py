@@ -62,7 +62,12 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
         for path in files:
             try:
                 case = decode(path.read_bytes())
-                registry.validate(msg_type, case.message)
+                if config.op == "scenario":
+                    from fuzzer.scenario.steps import validate as validate_scenario
+
+                    validate_scenario(case.message, registry, config.max_steps)
+                else:
+                    registry.validate(msg_type, case.message)
             except (OSError, TestCaseError, ValueError):
                 skipped += 1
                 continue

@@ -18,6 +18,17 @@ it counts:
   it ``ill_conditioned``. A divergence inside KDL's rotation dead zone (the
   requested orientation within ``DEAD_ZONE`` of a half turn from where the seed
   puts the link) is a ``known_limitation`` (docs/api.md).
+
+A scenario (``--op scenario``) is one call: the whole scenario is run again on fresh
+targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
+``fuzzer.scenario.oracle.compare_scenario``; its signature is built from the divergent
+step's outcomes (the field names the step kind, the step index is not in the key). A status
+or value divergence at a step that solves IK (``go``/``plan`` with a pose or position
+target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1e-9 (both
+ways) and 1e-7 just before that step (``run_scenario``'s ``nudge``): a target whose own
+answer at that step changes (status, fraction, point count, or the IK answer - the state
+after ``go``, the last point of a plan, any point of a path - beyond the campaign tolerance)
+makes it ``ill_conditioned``.
 """
 
 from __future__ import annotations
@@ -31,9 +42,15 @@ from typing import Any
 from fuzzer import oracle
 from fuzzer.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.records import Comparison, Kind, Outcome, Signature, Status, signature_of
+from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
+from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
+from fuzzer.scenario.oracle_properties import first_property
+from fuzzer.scenario.steps import ScenarioCall, ScenarioError, to_call, to_message
 from fuzzer.targets import Runner
 from fuzzer.testcase import TestCase
 from fuzzer.tolerance import Tolerance
+from robot_api.errors import RobotAPIError
 from robot_api.records import JointType
 
 ABSURD = 1e6
@@ -52,6 +69,7 @@ undefined at a half turn, so a target within this of pi from the seed's orientat
 reached by one solver and not by the other (docs/api.md, "Known limitations")."""
 
 Seeds = tuple[tuple[float, ...] | None, ...]
+AnyCall = Call | ScenarioCall
 
 
 class Verdict:
@@ -65,7 +83,7 @@ class Evaluation:
     """Everything known about one executed test case."""
 
     verdict: str
-    call: Call | None = None
+    call: AnyCall | None = None
     outcomes: tuple[Outcome, ...] = ()
     comparison: Comparison = field(default_factory=lambda: Comparison(Kind.AGREE))
     signature: Signature | None = None
@@ -103,14 +121,15 @@ class Evaluator:
 
     op: str
     runners: tuple[Runner, Runner]
-    mapping: Callable[[dict[str, Any]], Call]
+    mapping: Callable[[dict[str, Any]], AnyCall]
     tolerance: Tolerance
     validate: Callable[[dict[str, Any]], None]
     filtering: bool = True
     prismatic: tuple[bool, ...] = ()
-    _history: deque[tuple[Call, Seeds]] = field(default_factory=lambda: deque(maxlen=HISTORY))
+    _history: deque[tuple[AnyCall, Seeds]] = field(default_factory=lambda: deque(maxlen=HISTORY))
     _stateless: set[str] = field(default_factory=set)
     """Live signatures already confirmed on fresh targets (later ones skip the construction)."""
+    _facts: ScenarioFacts | None = None
 
     def __post_init__(self) -> None:
         limits = list(getattr(self.runners[0].model, "joint_limits", []))
@@ -120,16 +139,33 @@ class Evaluator:
             oracle.JointFacts(lim.type == JointType.CONTINUOUS, lim.lower, lim.upper) for lim in limits
         )
 
+    @property
+    def scenario_facts(self) -> ScenarioFacts:
+        """What the scenario oracle knows of the robot (the first target's model)."""
+        if self._facts is None:
+            names = (self.runners[0].name, self.runners[1].name)
+            self._facts = ScenarioFacts.of(self.runners[0].model, names)
+        return self._facts
+
     def run_both(
-        self, call: Call, seeds: Seeds = (None, None), runners: Sequence[Runner] | None = None
+        self,
+        call: AnyCall,
+        seeds: Seeds = (None, None),
+        runners: Sequence[Runner] | None = None,
+        nudge: tuple[int, float] | None = None,
     ) -> tuple[Outcome, ...]:
-        """Run ``call`` on both targets (the campaign's unless ``runners`` is given)."""
+        """Run ``call`` on both targets (the campaign's unless ``runners`` is given); ``nudge``
+        is passed to ``run_scenario`` for a scenario."""
         if runners is None:
             runners = self.runners
             self._history.append((call, seeds))
+        if isinstance(call, ScenarioCall):
+            return tuple(scenario_outcome(r, call, nudge) for r in runners)
         return tuple(r.run(call, s) for r, s in zip(runners, seeds, strict=True))
 
-    def judge(self, outcomes: tuple[Outcome, ...], call: Call | None = None) -> Comparison:
+    def judge(self, outcomes: tuple[Outcome, ...], call: AnyCall | None = None) -> Comparison:
+        if isinstance(call, ScenarioCall):
+            return compare_scenario(call, outcomes[0], outcomes[1], self.tolerance, self.scenario_facts)
         comparison = oracle.compare(
             outcomes[0], outcomes[1], self.tolerance, self.prismatic, self.op, self.continuous
         )
@@ -158,7 +194,7 @@ class Evaluator:
         self,
         case: TestCase,
         validated: bool = False,
-        history: Sequence[tuple[Call, tuple[float, ...] | None]] | None = None,
+        history: Sequence[tuple[AnyCall, tuple[float, ...] | None]] | None = None,
     ) -> Evaluation:
         """Judge one test case.
 
@@ -191,19 +227,27 @@ class Evaluator:
         if comparison.divergent:
             comparison, outcomes = self._confirm(call, outcomes, comparison)
             if comparison.kind is Kind.STATE_DEPENDENT:
-                recorded = tuple(call_to_json(c, s[0]) for c, s in before)
+                recorded = tuple(stored_call(c, s[0]) for c, s in before)
         a, b = outcomes
-        signature = (
-            signature_of(self.op, a, b, comparison, self.joint_types) if comparison.divergent else None
-        )
+        signature = self.signature(a, b, comparison) if comparison.divergent else None
         return Evaluation(
             Verdict.EVALUATED, call, outcomes, comparison, signature, comparison.difference, history=recorded
         )
 
+    def signature(self, a: Outcome, b: Outcome, comparison: Comparison) -> Signature:
+        """A divergence's signature; for a scenario from the divergent step's outcomes."""
+        if comparison.step is None:
+            return signature_of(self.op, a, b, comparison, self.joint_types)
+        step = comparison.step
+        sa = a.steps[step] if step < len(a.steps) else a
+        sb = b.steps[step] if step < len(b.steps) else b
+        # a "<kind>.status" field coarsens the outcome pair as a single call's status does
+        return signature_of(self.op, sa, sb, comparison, self.joint_types)
+
     def _confirm(
-        self, call: Call, outcomes: tuple[Outcome, ...], comparison: Comparison
+        self, call: AnyCall, outcomes: tuple[Outcome, ...], comparison: Comparison
     ) -> tuple[Comparison, tuple[Outcome, ...]]:
-        live_key = signature_of(self.op, outcomes[0], outcomes[1], comparison, self.joint_types).key
+        live_key = self.signature(outcomes[0], outcomes[1], comparison).key
         fresh: tuple[Runner, Runner] | None = None
         if live_key in self._stateless:
             if self.judge(self.run_both(call), call) != comparison:
@@ -214,6 +258,14 @@ class Evaluator:
                 same = self.judge(self.run_both(call), call) == comparison
                 return replace(comparison, kind=Kind.STATE_DEPENDENT if same else Kind.FLAKY), outcomes
             self._stateless.add(live_key)
+        if isinstance(call, ScenarioCall):
+            if self._at_ik_step(call, outcomes, comparison):
+                judged = self._scenario_ik(call, outcomes, comparison, fresh or self.fresh())
+                if judged.kind is Kind.ILL_CONDITIONED:
+                    pair = (outcomes[0], outcomes[1])
+                    judged = prefer(judged, first_property(call, pair, self.scenario_facts))
+                return judged, outcomes
+            return comparison, outcomes
         if (
             isinstance(call, IkCall)
             and comparison.kind is Kind.STATUS
@@ -242,6 +294,58 @@ class Evaluator:
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         return comparison
 
+    def _at_ik_step(self, call: ScenarioCall, outcomes: tuple[Outcome, ...], comparison: Comparison) -> bool:
+        """A status or value divergence at a step that solves IK (what the nudge check is for)."""
+        step = comparison.step
+        if comparison.kind not in (Kind.STATUS, Kind.VALUE) or step is None:
+            return False
+        before = contexts(call, outcomes[0], self.scenario_facts)
+        return step < len(before) and solves_ik(call, step, before[step])
+
+    def _scenario_ik(
+        self,
+        call: ScenarioCall,
+        outcomes: tuple[Outcome, ...],
+        comparison: Comparison,
+        runners: Sequence[Runner],
+    ) -> Comparison:
+        """A divergence at a step that solves IK, re-run with the state nudged before it."""
+        step = comparison.step
+        facts = self.scenario_facts
+        assert step is not None
+        kind = call.steps[step].kind
+        for shift in IK_PERTURBATIONS:
+            nudged = self.run_both(call, runners=runners, nudge=(step, shift))
+            if any(NUDGE_FAILED in o.values for o in nudged):
+                continue  # a target refused the nudge itself: no evidence either way
+            for first, second in zip(outcomes, nudged, strict=True):
+                if step >= len(first.steps):
+                    continue
+                if step >= len(second.steps) or ik_answer_changed(
+                    kind, first.steps[step], second.steps[step], self.tolerance, facts
+                ):
+                    return replace(comparison, kind=Kind.ILL_CONDITIONED)
+        return comparison
+
+
+def scenario_outcome(runner: Runner, call: ScenarioCall, nudge: tuple[int, float] | None = None) -> Outcome:
+    """``run_scenario``, never raising: a group that cannot be constructed is the outcome."""
+    try:
+        return run_scenario(runner, call, nudge)
+    except RobotAPIError as exc:
+        return Outcome(Status.REJECTED, type(exc).__name__, int(exc.code), str(exc)[:500])
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a crash of the target is a finding
+        return Outcome(Status.CRASHED, type(exc).__name__, None, str(exc)[:500])
+
+
+def stored_call(call: AnyCall, seed: tuple[float, ...] | None = None) -> dict[str, Any]:
+    """A call as plain JSON data (a scenario as its message)."""
+    if isinstance(call, ScenarioCall):
+        return {"kind": "ScenarioCall", "message": to_message(call)}
+    return call_to_json(call, seed)
+
 
 def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
     """Whether the requested orientation is within ``DEAD_ZONE`` of a half turn from the
@@ -257,7 +361,7 @@ def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
     return oracle.rotation_distance(start, target) >= math.pi - DEAD_ZONE
 
 
-def history_of(sidecar: dict[str, Any] | None) -> list[tuple[Call, tuple[float, ...] | None]]:
+def history_of(sidecar: dict[str, Any] | None) -> list[tuple[AnyCall, tuple[float, ...] | None]]:
     """The call history a sidecar records (``[]`` without one).
 
     Raises
@@ -270,4 +374,17 @@ def history_of(sidecar: dict[str, Any] | None) -> list[tuple[Call, tuple[float, 
         raise ValueError("'history' must be a list of calls")
     if len(raw) > 10 * HISTORY:
         raise ValueError(f"'history' holds {len(raw)} calls, more than {10 * HISTORY}")
-    return [call_from_json(item) for item in raw]
+    return [_stored(item) for item in raw]
+
+
+def _stored(item: Any) -> tuple[AnyCall, tuple[float, ...] | None]:
+    if isinstance(item, dict) and item.get("kind") == "ScenarioCall":
+        from fuzzer.msgdef import MessageRegistry
+        from fuzzer.scenario.steps import MAX_STEPS_LIMIT, validate
+
+        try:
+            validate(item.get("message"), MessageRegistry(), MAX_STEPS_LIMIT)
+        except ScenarioError as exc:
+            raise ValueError(f"a stored scenario in 'history': {exc}") from None
+        return to_call(item["message"]), None
+    return call_from_json(item)

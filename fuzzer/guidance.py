@@ -4,7 +4,8 @@ Edge coverage barely moves in branch-free kinematics, so the harness also tells
 libFuzzer about *behaviour*. Each feature is a named event: an outcome pair, a
 divergence kind with its field and log-magnitude bucket (NEZHA's
 delta-diversity), and, in input space, how close each joint value sits to its
-limits and to multiples of pi. A feature maps (by CRC-32, stable across
+limits and to multiples of pi; for scenarios, each pair of consecutive steps
+as (step kind, step status label) bigrams. A feature maps (by CRC-32, stable across
 processes) onto one of ``COUNTERS`` 8-bit counters reserved from Atheris before
 fuzzing starts. An input that bumps a counter libFuzzer has not seen (or in a
 new hit-count bucket) counts as new coverage and joins the corpus.
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 COUNTERS = 4096
 
@@ -81,3 +82,28 @@ def input_features(
                 out.append((INPUT, j, INSIDE if lo <= v <= hi else OUTSIDE, _decade(gap)))
         out.append((INPUT, j, NEAR_PI, _decade(abs(v - math.pi * round(v / math.pi)))))
     return out
+
+
+START = "^"
+"""The token before a scenario's first step (so a scenario's first call is a bigram too)."""
+
+
+def step_bigrams(kinds: Sequence[str], labels: Sequence[str]) -> list[str]:
+    """Bigrams of consecutive scenario steps as feature names.
+
+    Parameters
+    ----------
+    kinds : sequence of str, shape (N,)
+        Step kinds in order (``go``, ``plan``...).
+    labels : sequence of str, shape (M,)
+        The step outcomes' labels on one target (``ok``, ``rejected:OutOfBoundsError:30``);
+        M < N when a step crashed and ended the scenario.
+
+    Returns
+    -------
+    list of str, shape (min(N, M),)
+        ``"<prev kind>:<prev label>><kind>:<label>"`` for each executed step, the first one
+        after :data:`START`: ``"^>joint_target:ok"``, ``"joint_target:ok>go:failed"``...
+    """
+    tokens = [f"{kind}:{label}" for kind, label in zip(kinds, labels, strict=False)]
+    return [f"{before}>{after}" for before, after in zip([START, *tokens], tokens, strict=False)]

@@ -8,9 +8,12 @@ default the campaign goes on past divergences. With ``stop_on_divergence`` the
 first one raises, libFuzzer writes ``crash-<sha1>`` and exits.
 
 The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
-a high-difference one), applies one registered mutator (``fuzzer.mutators``)
-with an RNG seeded by libFuzzer, records it in the lineage, and encodes. It
-never raises: an exception there would hang Atheris.
+a high-difference one), applies one registered mutator (``fuzzer.mutators``,
+or for ``--op scenario`` the sequence mutators of ``fuzzer.scenario.mutate``,
+given as ``mutate_message``/``crossover_message``) with an RNG seeded by
+libFuzzer, records it in the lineage, and encodes. It never raises: an
+exception there would hang Atheris. Scenario outcomes also feed bigrams of
+consecutive (step kind, step status) to libFuzzer (``guidance.step_bigrams``).
 """
 
 from __future__ import annotations
@@ -23,14 +26,16 @@ import time
 from collections import Counter, OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from fuzzer import mutators
 from fuzzer.artifacts import ArtifactStore
 from fuzzer.divlog import CampaignLog, closer_to_command, near_zero_count
 from fuzzer.evaluate import Evaluation, Evaluator, Verdict
-from fuzzer.guidance import Features, input_features
+from fuzzer.guidance import Features, input_features, step_bigrams
 from fuzzer.mapping import FkCall, MoveCall
+from fuzzer.selection.bandit import Bandit
+from fuzzer.selection.floatcmp import FloatCompareTracer
 from fuzzer.testcase import TestCase, TestCaseError, decode
 
 SNAPSHOT_SECONDS = 5.0
@@ -41,6 +46,66 @@ DECODE_CACHE = 4096
 
 class DivergenceFound(Exception):
     """Raised from TestOneInput with --stop-on-divergence: libFuzzer turns it into a crash."""
+
+
+class MessageMutator(Protocol):
+    """``fuzzer.mutators.mutate``'s signature: ``(message, ctx, name=None) -> (message, name)``."""
+
+    def __call__(
+        self, message: dict[str, Any], ctx: mutators.MutationContext, name: str | None = None
+    ) -> tuple[dict[str, Any], str]: ...
+
+
+class MessageCrossover(Protocol):
+    """``fuzzer.mutators.crossover``'s signature: ``(a, b, ctx) -> message``. A crossover may
+    name itself in the lineage with a ``lineage_name`` attribute (default ``splice``)."""
+
+    def __call__(
+        self, a: dict[str, Any], b: dict[str, Any], ctx: mutators.MutationContext
+    ) -> dict[str, Any]: ...
+
+
+SPACEFILL = "spacefill"
+"""The arm (and lineage name) of a fresh space-filling input (``fuzzer.generation.spacefill``)."""
+
+
+MUTATE = "mutate"
+"""The arm of a mutated (or crossed-over) corpus input."""
+
+
+@dataclass
+class Sources:
+    """Where the next input comes from (issue 11), chosen by two bandits rewarded by new
+    coverage features or new divergence signatures (``fuzzer.selection.bandit``): ``source``
+    between a fresh space-filling input (``spacefill``: the next configuration of the Sobol
+    stream put into the parent by ``fresh``) and a mutated corpus input (``mutate``); then,
+    for a mutation, ``mutators`` over the registered mutators by name.
+
+    Attributes
+    ----------
+    source : Bandit
+        Arms ``spacefill`` and ``mutate``; it also decides libFuzzer's crossovers.
+    mutators : Bandit
+        One arm per registered mutator.
+    fresh : callable (message, rng) -> message or None
+        A copy of the parent carrying the next space-filling configuration (None: not
+        applicable to this message; the harness then mutates).
+    """
+
+    source: Bandit
+    mutators: Bandit
+    fresh: Callable[[dict[str, Any], random.Random], dict[str, Any] | None]
+
+    def reward(self, strategy: str, paid: bool) -> None:
+        """Credit the arms that made an input whose last step was ``strategy``."""
+        if strategy == SPACEFILL:
+            self.source.reward(SPACEFILL, paid)
+            return
+        self.source.reward(MUTATE, paid)
+        self.mutators.reward(strategy.partition(":")[0], paid)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"source": self.source.to_json(), "mutators": self.mutators.to_json()}
 
 
 @dataclass
@@ -124,6 +189,15 @@ class Harness:
     on_exec: Callable[[], None] = lambda: None
     log: CampaignLog | None = None
     joint_names: tuple[str, ...] = ()
+    mutate_message: MessageMutator = mutators.mutate
+    """The mutator of one message (``fuzzer.scenario.mutate.for_registry`` for scenarios). One
+    with a true ``uses_other`` attribute gets a second parent as ``context.other``."""
+    crossover_message: MessageCrossover = mutators.crossover
+    """The crossover of two messages; its ``lineage_name`` (default ``splice``) goes in the lineage."""
+    sources: Sources | None = None
+    """The bandit over input sources and mutators (None: libFuzzer's parent, one mutator by weight)."""
+    float_tracer: FloatCompareTracer | None = None
+    """Float comparisons of the Python targets as features (``fuzzer.selection.floatcmp``)."""
     stats: Stats = field(default_factory=Stats)
     pool: Pool = field(default_factory=Pool)
     _last: tuple[bytes, TestCase] | None = None
@@ -139,6 +213,9 @@ class Harness:
             self.stats.malformed += 1
             self.on_exec()
             return
+        if self.float_tracer is not None:
+            self.float_tracer.install()  # again if Atheris swapped its _trace_cmp in
+        seen, signatures = len(self.features.seen), len(self.stats.signatures)
         evaluation = self.evaluator.evaluate(case, validated=trusted)
         if evaluation.verdict != Verdict.MALFORMED:
             self._remember(data, case)
@@ -148,6 +225,9 @@ class Harness:
             self.stats.malformed += 1
         else:
             self._record(case, data, evaluation)
+        if self.sources is not None and case.origin == "mutation":
+            paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
+            self.sources.reward(case.strategy, paid)
         if self.log is not None and not self.stats.execs & 255:
             self.maybe_snapshot()
         self.on_exec()
@@ -157,7 +237,15 @@ class Harness:
         now = time.monotonic()
         if self.log is not None and (force or now >= self._next_snapshot):
             self._next_snapshot = now + SNAPSHOT_SECONDS
-            self.log.snapshot(self.stats.to_json())
+            data = self.stats.to_json()
+            if self.sources is not None:
+                data["bandit"] = self.sources.to_json()
+            if self.float_tracer is not None:
+                data["float_compares"] = {
+                    "traced": self.float_tracer.traced,
+                    "sites": len(self.float_tracer.sites),
+                }
+            self.log.snapshot(data)
 
     def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:
         """(test case or None, whether it is known valid). Parents repeat: recent ones are cached."""
@@ -192,6 +280,8 @@ class Harness:
         self.features.hit(f"d:{cmp.kind}:{cmp.field}:{cmp.bucket}:{int(cmp.sign_flip)}")
         if cmp.joints:
             self.features.hit(f"j:{cmp.kind}:{cmp.field}:{','.join(map(str, cmp.joints))}")
+        if a.steps or b.steps:
+            self._step_features(ev)
         values: tuple[float, ...] = ()
         if isinstance(ev.call, MoveCall | FkCall):
             values = ev.call.positions if isinstance(ev.call, MoveCall) else ev.call.joint_values
@@ -215,6 +305,15 @@ class Harness:
         if self.stop_on_divergence:
             # every divergence is a crash here (libFuzzer's -minimize_crash relies on it)
             raise DivergenceFound(f"{cmp.headline(self.joint_names)}: signature {key}")
+
+    def _step_features(self, ev: Evaluation) -> None:
+        """Scenarios: bigrams of (step kind, step status label) of consecutive steps, per target
+        (a new order of calls, or a call ending otherwise after another, is a new behaviour)."""
+        kinds = [str(getattr(step, "kind", "?")) for step in getattr(ev.call, "steps", ())]
+        for side, outcome in zip(("a", "b"), ev.outcomes, strict=False):
+            labels = [step.label for step in outcome.steps]
+            for name in step_bigrams(kinds[: len(labels)], labels):
+                self.features.hit(f"q:{side}:{name}")
 
     def _log_divergence(self, case: TestCase, data: bytes, ev: Evaluation, values: tuple[float, ...]) -> None:
         a, b = ev.outcomes
@@ -264,7 +363,19 @@ class Harness:
             parent = self._parent(data, rng)
             ctx = self.context
             ctx.rng = rng
-            message, name = mutators.mutate(parent.message, ctx)
+            uses_other = bool(getattr(self.mutate_message, "uses_other", False))
+            if uses_other:
+                ctx.other = self._other_parent(rng).message
+            try:
+                fresh = self._fresh(parent, rng)
+                if fresh is not None:
+                    message, name = fresh, SPACEFILL
+                else:
+                    wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
+                    message, name = self.mutate_message(parent.message, ctx, wanted)
+            finally:
+                if uses_other:
+                    ctx.other = None
             return self._emit(parent.child(message, name), parent, max_size, data)
         except Exception:  # noqa: BLE001 - must never raise into libFuzzer
             return data[:max_size]
@@ -273,10 +384,14 @@ class Harness:
         try:
             rng = random.Random(seed)
             a, b = self._parent(data1, rng, pool=False), self._parent(data2, rng, pool=False)
+            fresh = self._fresh(a, rng)
+            if fresh is not None:
+                return self._emit(a.child(fresh, SPACEFILL), a, max_size, data1)
             ctx = self.context
             ctx.rng = rng
-            message = mutators.crossover(a.message, b.message, ctx)
-            return self._emit(a.child(message, "splice"), a, max_size, data1)
+            message = self.crossover_message(a.message, b.message, ctx)
+            name = str(getattr(self.crossover_message, "lineage_name", "splice"))
+            return self._emit(a.child(message, name), a, max_size, data1)
         except Exception:  # noqa: BLE001 - must never raise into libFuzzer
             return data1[:max_size]
 
@@ -291,6 +406,19 @@ class Harness:
             base = rng.choice(self.seeds)
             return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
         return case
+
+    def _fresh(self, parent: TestCase, rng: random.Random) -> dict[str, Any] | None:
+        """A space-filling input made from ``parent`` when the source bandit picks one."""
+        if self.sources is None or self.sources.source.choose(rng) != SPACEFILL:
+            return None
+        return self.sources.fresh(parent.message, rng)
+
+    def _other_parent(self, rng: random.Random) -> TestCase:
+        """A second parent for a mutator that uses one (``uses_other``, the scenario mutator's
+        step copies): a high-difference input half the time when there is one, else a seed."""
+        data = self.pool.pick(rng) if rng.random() < 0.5 else None
+        case = self._decode(data)[0] if data is not None else None
+        return case if case is not None else rng.choice(self.seeds)
 
     def _emit(self, case: TestCase, parent: TestCase, max_size: int, fallback: bytes) -> bytes:
         """The child's bytes; if too large, the (valid) parent's; if still too large, the input cut."""

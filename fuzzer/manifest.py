@@ -8,8 +8,8 @@ with a dot). It records the run configuration and the robot file's SHA-256.
 What it does:
 
 * options not given on the command line are taken from it (op, robot, tip link,
-  message type, tolerance, and targets when they are the builtins, see
-  :mod:`fuzzer.sidecar`), for campaigns, ``-merge`` and ``coverage``;
+  message type, tolerance, ``max_steps`` of a scenario corpus, and targets when they
+  are the builtins, see :mod:`fuzzer.sidecar`), for campaigns, ``-merge`` and ``coverage``;
 * a corpus made for another op, message type or robot is refused (the robot
   counts as the same when its name or its file's SHA-256 matches; the same name
   with a changed file is a warning);
@@ -22,6 +22,7 @@ from __future__ import annotations
 import datetime
 import hashlib
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,36 @@ def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, 
     if "targets" not in given and isinstance(targets, list) and (trust or not foreign_targets(targets)):
         out["targets"] = ",".join(targets)
     return out
+
+
+def recorded_max_steps(paths: Sequence[Path], op: str | None) -> int | None:
+    """The ``max_steps`` a scenario campaign over ``paths`` runs with when ``--max-steps`` is
+    not given: the first crash file's sidecar's, else the first corpus manifest's (when it
+    was made for op ``scenario`` and ``op`` is that or not given); None otherwise.
+
+    Raises
+    ------
+    SidecarError
+        A damaged sidecar or manifest.
+    """
+    from fuzzer.sidecar import read_sidecar
+
+    configs: list[dict[str, Any]] = []
+    for path in paths:
+        if path.is_file():
+            sidecar = read_sidecar(path)
+            if sidecar is not None:
+                configs.append(sidecar["config"])
+                break
+    else:
+        found = next((m for m in map(read, (p for p in paths if p.is_dir())) if m is not None), None)
+        if found is not None:
+            configs.append(found.config)
+    for config in configs:
+        steps = config.get("max_steps")
+        if config.get("op") == "scenario" and op in (None, "scenario") and isinstance(steps, int):
+            return steps
+    return None
 
 
 def write(corpus: Path, config: RunConfig) -> Path:

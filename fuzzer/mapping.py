@@ -1,18 +1,20 @@
 """How a ROS message becomes a call on a target (documented in docs/engine.md).
 
-=======  ==========================  ==============================================================
-op       message type                call
-=======  ==========================  ==============================================================
-move     sensor_msgs/JointState      ``velocity[0]`` (if any) -> ``set_max_velocity_scaling_factor``;
-                                     ``effort[0]`` (if any) -> ``set_max_acceleration_scaling_factor``;
-                                     ``name`` empty: ``set_joint_value_target(position)``, else
-                                     ``set_joint_value_target(name, position)``; then ``go()``
-move     std_msgs/Float64MultiArray  ``set_joint_value_target(data)``; ``go()``
-fk       sensor_msgs/JointState      ``forward_kinematics(position, header.frame_id or None)``
-fk       std_msgs/Float64MultiArray  ``forward_kinematics(data)``
-ik       geometry_msgs/PoseStamped   ``inverse_kinematics(pose, None, header.frame_id or None)``
-ik       geometry_msgs/Pose          ``inverse_kinematics(pose)``
-=======  ==========================  ==============================================================
+========  ==========================  ==============================================================
+op        message type                call
+========  ==========================  ==============================================================
+move      sensor_msgs/JointState      ``velocity[0]`` (if any) -> ``set_max_velocity_scaling_factor``;
+                                      ``effort[0]`` (if any) -> ``set_max_acceleration_scaling_factor``;
+                                      ``name`` empty: ``set_joint_value_target(position)``, else
+                                      ``set_joint_value_target(name, position)``; then ``go()``
+move      std_msgs/Float64MultiArray  ``set_joint_value_target(data)``; ``go()``
+fk        sensor_msgs/JointState      ``forward_kinematics(position, header.frame_id or None)``
+fk        std_msgs/Float64MultiArray  ``forward_kinematics(data)``
+ik        geometry_msgs/PoseStamped   ``inverse_kinematics(pose, None, header.frame_id or None)``
+ik        geometry_msgs/Pose          ``inverse_kinematics(pose)``
+scenario  rrosfuzz/Scenario           its steps, in order, on one live ``MoveGroup``
+                                      (``fuzzer.scenario``: a list of messages on named topics)
+========  ==========================  ==============================================================
 
 Names that do not match the robot's joints are valid inputs: both targets must
 reject them the same way. The mapping itself never validates anything.
@@ -20,6 +22,7 @@ reject them the same way. The mapping itself never validates anything.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -28,11 +31,14 @@ from typing import Any, cast
 from hypothesis import strategies as st
 from hypothesis.strategies import SearchStrategy
 
-OPS = ("move", "fk", "ik")
+from fuzzer.scenario.steps import MAX_STEPS_LIMIT, MSG_TYPE, ScenarioCall, to_call, to_message
+
+OPS = ("move", "fk", "ik", "scenario")
 DEFAULT_MSG_TYPE = {
     "move": "sensor_msgs/JointState",
     "fk": "sensor_msgs/JointState",
     "ik": "geometry_msgs/PoseStamped",
+    "scenario": MSG_TYPE,
 }
 
 
@@ -57,7 +63,7 @@ class IkCall:
     link: str | None = None
 
 
-Call = MoveCall | FkCall | IkCall
+Call = MoveCall | FkCall | IkCall | ScenarioCall
 
 
 class CallError(ValueError):
@@ -67,8 +73,11 @@ class CallError(ValueError):
 def call_to_json(call: Call, seed: tuple[float, ...] | None = None) -> dict[str, Any]:
     """A call (and the IK seed it ran with) as plain JSON data."""
     data: dict[str, Any] = {"kind": type(call).__name__}
-    for name, value in vars(call).items():
-        data[name] = list(value) if isinstance(value, tuple) else value
+    if isinstance(call, ScenarioCall):
+        data["steps"] = to_message(call)["steps"]
+    else:
+        for name, value in vars(call).items():
+            data[name] = list(value) if isinstance(value, tuple) else value
     if seed is not None:
         data["seed"] = list(seed)
     return data
@@ -119,9 +128,33 @@ def call_from_json(data: Any) -> tuple[Call, tuple[float, ...] | None]:
         call = FkCall(_floats(data, "joint_values"), _optional(data, "link", str))
     elif kind == "IkCall":
         call = IkCall(_floats(data, "position"), _floats(data, "orientation"), _optional(data, "link", str))
+    elif kind == "ScenarioCall":
+        call = _scenario_call(data)
     else:
-        raise CallError(f"unknown call kind {kind!r}: expected MoveCall, FkCall or IkCall")
+        raise CallError(f"unknown call kind {kind!r}: expected MoveCall, FkCall, IkCall or ScenarioCall")
     return call, (_floats(data, "seed") if data.get("seed") is not None else None)
+
+
+@functools.cache
+def _shipped_registry() -> Any:
+    """The registry of the shipped message types (every scenario topic's type is one)."""
+    from fuzzer.msgdef import MessageRegistry
+
+    return MessageRegistry()
+
+
+def _scenario_call(data: dict[str, Any]) -> ScenarioCall:
+    """A stored scenario call, validated as a scenario test case (the shipped message types)."""
+    from fuzzer.scenario.steps import validate
+
+    extra = sorted(str(k) for k in data if k not in ("kind", "steps", "seed"))
+    if extra:
+        raise CallError(f"unexpected field(s) in a ScenarioCall: {', '.join(extra)}")
+    try:
+        validate({"steps": data.get("steps")}, _shipped_registry(), MAX_STEPS_LIMIT)
+    except ValueError as exc:
+        raise CallError(f"call field 'steps': {exc}") from None
+    return to_call({"steps": data["steps"]})
 
 
 def _joint_state_move(m: dict[str, Any]) -> MoveCall:
@@ -146,6 +179,7 @@ MAPPINGS: dict[tuple[str, str], Callable[[dict[str, Any]], Call]] = {
     ("fk", "std_msgs/Float64MultiArray"): lambda m: FkCall(tuple(m["data"])),
     ("ik", "geometry_msgs/PoseStamped"): lambda m: IkCall(*_pose(m["pose"]), m["header"]["frame_id"] or None),
     ("ik", "geometry_msgs/Pose"): lambda m: IkCall(*_pose(m)),
+    ("scenario", MSG_TYPE): to_call,
 }
 
 # The fields mutators should prefer, per message type (dotted paths).
@@ -219,4 +253,87 @@ def seed_hints(msg_type: str, facts: RobotFacts) -> dict[str, SearchStrategy[Any
             "position": poses.map(lambda p: p["position"]),
             "orientation": poses.map(lambda p: p["orientation"]),
         }
+    if msg_type == "geometry_msgs/PointStamped":
+        return {"point": poses.map(lambda p: p["position"]), "header.frame_id": st.just("")}
+    if msg_type == "geometry_msgs/PoseArray":
+        return {"poses": st.lists(poses, min_size=1, max_size=3), "header.frame_id": st.just("")}
     return {}
+
+
+SCENARIO_WEIGHTS = {
+    "joint_target": 4,
+    "named_target": 2,
+    "pose_target": 2,
+    "position_target": 1,
+    "remember": 2,
+    "velocity_scaling": 1,
+    "acceleration_scaling": 1,
+    "goal_tolerance": 1,
+    "eef_step": 1,
+    "jump_threshold": 1,
+    "cartesian_path": 2,
+    "plan": 3,
+    "execute": 3,
+    "go": 4,
+    "stop": 1,
+    "clear_pose_targets": 1,
+}
+"""Relative frequency of each step kind in generated scenarios."""
+
+REMEMBERED = ("a", "b", "pick", "place")
+"""Names ``/remember`` steps of generated scenarios store (``/named_target`` uses them after)."""
+
+
+def scenario_strategy(
+    registry: Any, facts: RobotFacts, max_steps: int, allow_special_floats: bool = False
+) -> SearchStrategy[dict[str, Any]]:
+    """Scenario messages (``{"steps": [...]}``) of 1..max_steps steps that are mostly
+    meaningful scripts: joint targets within the limits, reachable pose targets and
+    Cartesian waypoints, named targets ``home`` or a name remembered before, scaling factors
+    in (0, 1], goal tolerances and Cartesian settings in sensible ranges.
+
+    Each step's message is drawn from the registry's strategy of its type
+    (``fuzzer.strategies.strategy_for``) with the robot hints of :func:`seed_hints`.
+    """
+    from fuzzer.scenario.steps import KINDS, TOPICS
+    from fuzzer.strategies import strategy_for
+
+    def message(msg_type: str, **extra: SearchStrategy[Any]) -> SearchStrategy[dict[str, Any]]:
+        hints = {**seed_hints(msg_type, facts), **extra}
+        if msg_type == "sensor_msgs/JointState":  # the scaling fields are not read by /joint_target
+            hints.update(velocity=st.just([]), effort=st.just([]), **{"header.frame_id": st.just("")})
+        return strategy_for(registry, msg_type, hints=hints, allow_special_floats=allow_special_floats)
+
+    def number(values: SearchStrategy[float]) -> SearchStrategy[dict[str, Any]]:
+        return message("std_msgs/Float64", data=values)
+
+    by_kind: dict[str, SearchStrategy[dict[str, Any]]] = {
+        "velocity_scaling": number(st.one_of(st.floats(0.05, 1.0), st.just(1.0))),
+        "acceleration_scaling": number(st.one_of(st.floats(0.05, 1.0), st.just(1.0))),
+        "goal_tolerance": number(st.sampled_from([0.0, 1e-6, 1e-4, 1e-3, 1e-2])),
+        "eef_step": number(st.one_of(st.floats(0.01, 0.1), st.just(0.01))),
+        "jump_threshold": number(st.one_of(st.just(0.0), st.floats(1.0, 10.0))),
+    }
+    for kind, topic in KINDS.items():
+        if kind not in by_kind and kind not in ("named_target", "remember"):
+            by_kind[kind] = message(TOPICS[topic].msg_type)
+    kinds = [kind for kind, weight in SCENARIO_WEIGHTS.items() for _ in range(weight)]
+
+    @st.composite
+    def scenario(draw: st.DrawFn) -> dict[str, Any]:
+        remembered: list[str] = []
+        steps = []
+        for _ in range(draw(st.integers(1, max_steps))):
+            kind = draw(st.sampled_from(kinds))
+            if kind == "remember":
+                name = draw(st.sampled_from(REMEMBERED))
+                remembered.append(name)
+                msg: dict[str, Any] = {"data": name}
+            elif kind == "named_target":
+                msg = {"data": draw(st.sampled_from(["home", *remembered]))}
+            else:
+                msg = draw(by_kind[kind])
+            steps.append({"topic": KINDS[kind], "msg": msg})
+        return {"steps": steps}
+
+    return scenario()

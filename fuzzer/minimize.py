@@ -14,6 +14,14 @@ runs out). Simpler means, in this order of passes:
 
 Deterministic: no randomness, leaves visited in message order. The non-zero
 joint values that remain are the joints that matter.
+
+A scenario (``--op scenario``: the message is ``{"steps": [...]}``) first loses
+steps: delta debugging (Zeller's ddmin) over the steps list, keeping the same
+signature, leaves a 1-minimal list (removing any single step changes the
+divergence). The passes above then shrink the values inside the remaining
+steps' messages (topics are left alone), each round starting with a
+remove-one-step pass, so a value made simpler never leaves a step that no
+longer matters.
 """
 
 from __future__ import annotations
@@ -23,13 +31,16 @@ import functools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypeVar
 
 from fuzzer.evaluate import Verdict
+from fuzzer.scenario.steps import MSG_TYPE as SCENARIO
 from fuzzer.session import Session
 from fuzzer.testcase import TestCase
 
 Loc = tuple[Any, ...]
+JOINTS = "/joint_target"
+"""The scenario topic whose messages carry joint values."""
 
 
 @dataclass(frozen=True)
@@ -155,13 +166,22 @@ class Minimizer:
             evaluations += 1
             return self._key(replace(case, message=candidate)) == target
 
-        passes: list[Callable[[dict[str, Any]], Iterator[Edit]]] = [
+        passes: list[Pass] = [
             _shorter_arrays,
             _zeros,
             _simpler_numbers,
             _halved,
             _shorter_strings,
         ]
+        if case.msg_type == SCENARIO and is_scenario(message):
+            before = message
+
+            def steps_hold(kept: list[Any]) -> bool:
+                return holds({**before, "steps": kept})
+
+            steps, reductions = ddmin(message["steps"], steps_hold, lambda: evaluations < self.budget)
+            message, accepted = {**message, "steps": steps}, reductions
+            passes = [_fewer_steps, *(_within_steps(shrink) for shrink in passes)]
         complete = False
         while evaluations < self.budget:
             changed = exhausted = False
@@ -187,10 +207,124 @@ class Minimizer:
         return Shrunk(shrunk, evaluations, accepted, complete)
 
 
+# -- scenarios: steps first (ddmin), then values inside the steps' messages ------------------------
+
+_T = TypeVar("_T")
+
+
+def is_scenario(message: Any) -> bool:
+    """Whether ``message`` is a scenario (``{"steps": [...]}`` with at least one step)."""
+    return isinstance(message, dict) and isinstance(message.get("steps"), list) and bool(message["steps"])
+
+
+def _chunks(items: list[int], n: int) -> list[list[int]]:
+    """``items`` cut into ``n`` contiguous chunks of near-equal size (the first ones larger)."""
+    size, extra = divmod(len(items), n)
+    out, start = [], 0
+    for k in range(n):
+        end = start + size + (k < extra)
+        out.append(items[start:end])
+        start = end
+    return out
+
+
+def ddmin(
+    items: list[_T], holds: Callable[[list[_T]], bool], budget: Callable[[], bool]
+) -> tuple[list[_T], int]:
+    """Delta debugging (Zeller and Hildebrandt's ddmin) of a non-empty list.
+
+    Parameters
+    ----------
+    items : list, shape (N,)
+        The list to shrink (kept in order; never empty).
+    holds : callable
+        ``holds(subset)``: whether the subset still shows the failure. Never called twice with
+        the same subset, nor with an empty one.
+    budget : callable
+        ``budget()``: whether another call of ``holds`` may be made.
+
+    Returns
+    -------
+    tuple
+        ``(kept, reductions)``: the shrunk list, 1-minimal when the budget did not run out
+        (removing any one item of it makes ``holds`` false), and how many reductions were kept.
+    """
+    kept = list(range(len(items)))
+    seen: dict[tuple[int, ...], bool] = {}
+    reductions, n = 0, 2
+
+    def test(subset: list[int]) -> bool | None:
+        key = tuple(subset)
+        if key not in seen:
+            if not budget():
+                return None
+            seen[key] = holds([items[i] for i in subset])
+        return seen[key]
+
+    while len(kept) >= 2:
+        chunks = _chunks(kept, min(n, len(kept)))
+        complements = [[i for i in kept if i not in chunk] for chunk in chunks] if len(chunks) > 2 else []
+        reduced = False
+        for candidate, is_chunk in [*((c, True) for c in chunks), *((c, False) for c in complements)]:
+            verdict = test(candidate)
+            if verdict is None:
+                return [items[i] for i in kept], reductions
+            if verdict:
+                kept, reduced, reductions = candidate, True, reductions + 1
+                n = 2 if is_chunk else max(len(chunks) - 1, 2)
+                break
+        if not reduced:
+            if len(chunks) >= len(kept):
+                break
+            n = min(2 * len(chunks), len(kept))
+    return [items[i] for i in kept], reductions
+
+
+def _fewer_steps(message: dict[str, Any]) -> Iterator[Edit]:
+    """Remove one step (last first); never the only one."""
+    for i in reversed(range(len(message["steps"]))):
+
+        def edit(current: dict[str, Any], i: int = i) -> dict[str, Any] | None:
+            steps = current["steps"]
+            if len(steps) <= 1 or i >= len(steps):
+                return None
+            return {**current, "steps": steps[:i] + steps[i + 1 :]}
+
+        yield edit
+
+
+def _within_steps(shrink_pass: Pass) -> Pass:
+    """``shrink_pass`` applied to each step's message (``steps[i].msg``), topics untouched."""
+
+    def scoped(message: dict[str, Any]) -> Iterator[Edit]:
+        for i, step in enumerate(list(message["steps"])):
+            if isinstance(step, dict) and isinstance(step.get("msg"), dict):
+                for inner in shrink_pass(step["msg"]):
+                    yield _step_edit(i, inner)
+
+    return scoped
+
+
+def _step_edit(i: int, inner: Edit) -> Edit:
+    """``inner`` applied to the message of step ``i``."""
+
+    def edit(message: dict[str, Any]) -> dict[str, Any] | None:
+        steps = message["steps"]
+        if i >= len(steps) or not isinstance(steps[i], dict) or not isinstance(steps[i].get("msg"), dict):
+            return None
+        msg = inner(steps[i]["msg"])
+        if msg is None:
+            return None
+        return {**message, "steps": [*steps[:i], {**steps[i], "msg": msg}, *steps[i + 1 :]]}
+
+    return edit
+
+
 # -- passes: each yields edits; an edit maps the current message to a candidate (or None when its
 #    location no longer exists), so an accepted change is never undone by a later edit --------------
 
 Edit = Callable[[dict[str, Any]], "dict[str, Any] | None"]
+Pass = Callable[[dict[str, Any]], Iterator[Edit]]
 
 
 def _exists(message: Any, loc: Loc) -> bool:
@@ -262,8 +396,18 @@ def _shorter_strings(message: dict[str, Any]) -> Iterator[Edit]:
 
 
 def joints_that_matter(case: TestCase, joint_names: tuple[str, ...]) -> list[str]:
-    """After minimization: the joints whose values stayed non-zero."""
-    message = case.message
-    values = message.get("position", message.get("data", []))
-    names = message.get("name") or list(joint_names)
-    return [str(n) for n, v in zip(names, values, strict=False) if isinstance(v, float | int) and v != 0]
+    """After minimization: the joints whose values stayed non-zero (for a scenario, in any of
+    its joint targets; each joint named once, in order of appearance)."""
+    messages = [case.message]
+    if case.msg_type == SCENARIO and is_scenario(case.message):
+        messages = [
+            s["msg"] for s in case.message["steps"] if isinstance(s, dict) and s.get("topic") == JOINTS
+        ]
+    found: dict[str, None] = {}
+    for message in messages:
+        values = message.get("position", message.get("data", []))
+        names = message.get("name") or list(joint_names)
+        for n, v in zip(names, values, strict=False):
+            if isinstance(v, float | int) and v != 0:
+                found[str(n)] = None
+    return list(found)

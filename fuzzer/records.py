@@ -36,7 +36,11 @@ class Outcome:
     message : str
         Exception text (never compared).
     values : dict of str to tuple of float
-        Compared quantities: ``joint_values`` (rad, m), ``position`` (m), ``orientation`` (x, y, z, w).
+        Compared quantities: ``joint_values`` (rad, m), ``position`` (m), ``orientation`` (x, y, z, w);
+        for a scenario step also its return values and trajectory (docs/engine.md, "Scenarios").
+    steps : tuple of Outcome
+        For ``--op scenario``: one outcome per executed step, in order (a step that crashed
+        ends the scenario, so there may be fewer than the scenario's steps); else ().
     """
 
     status: Status
@@ -44,6 +48,7 @@ class Outcome:
     code: int | None = None
     message: str = ""
     values: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    steps: tuple[Outcome, ...] = ()
 
     @property
     def label(self) -> str:
@@ -53,9 +58,15 @@ class Outcome:
         return str(self.status)
 
     def to_json(self) -> dict[str, Any]:
-        data = asdict(self)
-        data["status"] = str(self.status)
-        data["values"] = {k: list(v) for k, v in self.values.items()}
+        data: dict[str, Any] = {
+            "status": str(self.status),
+            "error": self.error,
+            "code": self.code,
+            "message": self.message,
+            "values": {k: list(v) for k, v in self.values.items()},
+        }
+        if self.steps:
+            data["steps"] = [step.to_json() for step in self.steps]
         return data
 
     @classmethod
@@ -66,6 +77,7 @@ class Outcome:
             data.get("code"),
             data.get("message", ""),
             {k: tuple(float(x) for x in v) for k, v in data.get("values", {}).items()},
+            tuple(cls.from_json(step) for step in data.get("steps", ())),
         )
 
 
@@ -132,6 +144,11 @@ class Comparison:
         e.g. 2pi for an angle, or a quaternion component gap for q vs -q).
     target : str
         The target a ``property`` violation belongs to, else ''.
+    step : int or None
+        For ``--op scenario``: the index (0-based) of the first divergent step; None otherwise.
+    step_kind : str
+        Its kind (``go``, ``plan``, ``cartesian_path``...; docs/engine.md, "Scenarios"), else ''.
+        ``field`` then reads ``<step_kind>.<quantity>``, e.g. ``plan.trajectory.velocities``.
     """
 
     kind: Kind
@@ -144,6 +161,8 @@ class Comparison:
     unit: str = "status"
     raw: float = 0.0
     target: str = ""
+    step: int | None = None
+    step_kind: str = ""
 
     @property
     def divergent(self) -> bool:
@@ -245,7 +264,7 @@ def _outcome_pair(field_name: str, a: str, b: str) -> tuple[str, str]:
     and failed are both "completed" (the problem is that one side rejected or crashed); ok
     vs failed is one problem whichever side failed."""
     finished = {str(Status.OK), str(Status.FAILED)}
-    if field_name == "status":
+    if field_name == "status" or field_name.endswith(".status"):
         if a in finished and b in finished:
             return (str(Status.FAILED), str(Status.OK))
         return (COMPLETED if a in finished else a, COMPLETED if b in finished else b)

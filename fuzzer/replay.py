@@ -26,9 +26,10 @@ from fuzzer import manifest
 from fuzzer.artifacts import sidecar_path
 from fuzzer.evaluate import Evaluation, Verdict
 from fuzzer.paths import crash_inputs
+from fuzzer.report.steps import SCENARIO_TYPE, scenario_steps
 from fuzzer.session import ConfigError, RunConfig, Session
 from fuzzer.sidecar import config_from, describe, read_sidecar
-from fuzzer.testcase import TestCaseError, decode
+from fuzzer.testcase import TestCase, TestCaseError, decode
 
 
 class Result(enum.StrEnum):
@@ -51,6 +52,10 @@ class Replay:
     has_sidecar: bool = True
     source: str = "sidecar"
     """Where the configuration came from: sidecar, a corpus manifest's path, or command line."""
+    steps: tuple[str, ...] = ()
+    """For a scenario that diverges: the first divergent step, then one line per step
+    (:meth:`fuzzer.report.steps.ScenarioSteps.lines`); the first ends ``detail``, the
+    others are printed under the verdict."""
 
     @property
     def diverges(self) -> bool:
@@ -157,12 +162,27 @@ def replay_file(
     else:
         result = Result.SAME if got == expected else Result.DIFFERENT
     detail = ""
+    steps: tuple[str, ...] = ()
     if evaluation.signature is not None:
         cmp = evaluation.comparison
         detail = f"signature {got}: {cmp.headline(tuple(session.reference.joint_names))}"
+        steps = scenario_lines(case, evaluation, tuple(r.name for r in session.runners))
     if unrecorded:
         detail = "; ".join(filter(None, [detail, f"replayed under {describe(config)}"]))
-    return Replay(path, result, evaluation, expected, detail, config, not unrecorded)
+    if steps:
+        detail = f"{detail}; {steps[0]}"  # the step list follows the verdict line (cli.replay_main)
+    return Replay(path, result, evaluation, expected, detail, config, not unrecorded, steps=steps)
+
+
+def scenario_lines(case: TestCase, evaluation: Evaluation, targets: tuple[str, ...]) -> tuple[str, ...]:
+    """The step list of a divergent scenario as replayed (``()`` for any other test case):
+    the first divergent step with both targets' outcome labels there, then one line per step."""
+    message = case.message.get("steps") if case.msg_type == SCENARIO_TYPE else None
+    if not isinstance(message, list):
+        return ()
+    cmp = evaluation.comparison
+    found = scenario_steps(message, evaluation.outcomes, cmp.step, cmp.step_kind, cmp.field, targets)
+    return tuple(found.lines())
 
 
 def expand(paths: Iterable[Path]) -> list[Path]:

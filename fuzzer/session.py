@@ -17,6 +17,7 @@ from typing import Any
 from fuzzer.mapping import DEFAULT_MSG_TYPE, RobotFacts, mapping_for
 from fuzzer.msgdef import MessageRegistry
 from fuzzer.records import Outcome
+from fuzzer.scenario import steps as scenario_steps
 from fuzzer.targets import Runner
 from fuzzer.tolerance import Tolerance
 from robot_api import robots
@@ -45,6 +46,8 @@ class RunConfig:
     """How targets run: ``inprocess``, or ``ros`` (each a ROS node: ``fuzzer.ros.transport``).
     Recorded in sidecars for information; a crash file replays in-process unless
     ``--transport ros`` is given."""
+    max_steps: int = scenario_steps.MAX_STEPS
+    """``--op scenario``: the most steps a test case may have (1..256)."""
 
     @property
     def message_type(self) -> str:
@@ -73,7 +76,22 @@ class RunConfig:
             msg_type=data.get("msg_type", ""),
             msg_path=tuple(data.get("msg_path", ())),
             filtering=bool(data.get("filtering", True)),
+            max_steps=max_steps_of(data.get("max_steps", scenario_steps.MAX_STEPS)),
         )
+
+
+def max_steps_of(value: Any) -> int:
+    """A recorded or given ``max_steps``, checked.
+
+    Raises
+    ------
+    ConfigError
+        Not an integer in 1..``MAX_STEPS_LIMIT`` (256).
+    """
+    limit = scenario_steps.MAX_STEPS_LIMIT
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= limit:
+        raise ConfigError(f"max_steps must be an integer from 1 to {limit}, not {value!r}")
+    return value
 
 
 @dataclass
@@ -91,6 +109,10 @@ class Session:
         from fuzzer.targets import TargetError
         from robot_api.errors import RobotAPIError
 
+        scenario = config.op == "scenario"
+        if scenario and config.transport == "ros":
+            raise ConfigError("--transport ros with --op scenario is not supported yet")
+        max_steps_of(config.max_steps)
         try:
             urdf = robots.resolve(config.robot)
         except RobotAPIError as exc:
@@ -98,7 +120,10 @@ class Session:
         try:
             mapping_for(config.op, config.message_type)
             registry = MessageRegistry(config.msg_path)
-            registry.get(config.message_type)
+            # a scenario is not a registry type: its topics' types are
+            topics = scenario_steps.TOPICS.values()
+            for msg_type in [t.msg_type for t in topics] if scenario else [config.message_type]:
+                registry.get(msg_type)
         except (ValueError, MsgError) as exc:
             raise ConfigError(f"--msg-type: {exc}") from None
         runners: list[Any] = []
@@ -139,20 +164,28 @@ class Session:
     def prismatic(self) -> tuple[bool, ...]:
         return tuple(lim.type == JointType.PRISMATIC for lim in self.reference.joint_limits)
 
+    def validate(self, message: Any) -> None:
+        """Check a test case's message for this configuration.
+
+        Raises
+        ------
+        ValueError
+            Naming the problem (for a scenario, the step index and topic).
+        """
+        if self.config.op == "scenario":
+            scenario_steps.validate(message, self.registry, self.config.max_steps)
+        else:
+            self.registry.validate(self.config.message_type, message)
+
     def evaluator(self) -> Any:
         from fuzzer.evaluate import Evaluator
-
-        msg_type = self.config.message_type
-
-        def validate(message: dict[str, Any]) -> None:
-            self.registry.validate(msg_type, message)
 
         return Evaluator(
             op=self.config.op,
             runners=self.runners,
-            mapping=mapping_for(self.config.op, msg_type),
+            mapping=mapping_for(self.config.op, self.config.message_type),
             tolerance=self.config.tolerance,
-            validate=validate,
+            validate=self.validate,
             filtering=self.config.filtering,
             prismatic=self.prismatic,
         )

@@ -22,20 +22,27 @@ from __future__ import annotations
 import json
 import math
 import stat
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts import sidecar_path
 from fuzzer.mapping import OPS
+from fuzzer.records import Status
 from fuzzer.session import ConfigError, RunConfig
 from fuzzer.tolerance import Tolerance
 from robot_api import robots
 
 BUILTIN_TARGETS = ("native", "python")
 MAX_SIDECAR_BYTES = 32 * 1024 * 1024
+SCENARIO_OP = "scenario"
+SCENARIO_CALL = "ScenarioCall"
+MAX_STEPS_LIMIT = 256
+"""The largest ``--max-steps``: a scenario sidecar never holds more steps (or step outcomes)."""
 CONFIG_FIELDS: dict[str, type | tuple[type, ...]] = {
     "op": str,
+    "max_steps": int,
     "robot": str,
     "tip_link": (str, type(None)),
     "targets": list,
@@ -48,6 +55,10 @@ CONFIG_FIELDS: dict[str, type | tuple[type, ...]] = {
 
 class SidecarError(ConfigError):
     """A sidecar (or manifest) that cannot be used as it is; the message names file and field."""
+
+
+Fail = Callable[[str, str], SidecarError]
+"""Makes the error for (field, problem)."""
 
 
 def _type_name(value: Any) -> str:
@@ -134,6 +145,7 @@ def validate(data: dict[str, Any], path: Path) -> None:
     for name in ("lineage", "outcomes", "joint_names"):
         if name in data and not isinstance(data[name], list):
             raise fail(name, f"must be a list, not {_type_name(data[name])}")
+    validate_scenario(data, path)
 
 
 def validate_config(config: dict[str, Any], path: Path) -> None:
@@ -151,8 +163,12 @@ def validate_config(config: dict[str, Any], path: Path) -> None:
     for name, kind in CONFIG_FIELDS.items():
         if name in config and not isinstance(config[name], kind):
             raise fail(f"config.{name}", f"has the wrong type ({_type_name(config[name])})")
-    if "op" in config and config["op"] not in OPS:
-        raise fail("config.op", f"is {config['op']!r}, expected one of {', '.join(OPS)}")
+    ops = OPS if SCENARIO_OP in OPS else (*OPS, SCENARIO_OP)
+    if "op" in config and config["op"] not in ops:
+        raise fail("config.op", f"is {config['op']!r}, expected one of {', '.join(ops)}")
+    steps = config.get("max_steps", 1)
+    if isinstance(steps, bool) or not 1 <= steps <= MAX_STEPS_LIMIT:
+        raise fail("config.max_steps", f"must be an integer from 1 to {MAX_STEPS_LIMIT}, not {steps!r}")
     targets = config.get("targets", list(BUILTIN_TARGETS))
     if len(targets) != 2 or not all(isinstance(t, str) and t for t in targets):
         raise fail("config.targets", "must be a list of two target names")
@@ -167,6 +183,101 @@ def validate_config(config: dict[str, Any], path: Path) -> None:
             raise fail(f"config.tolerance.{name}", f"must be a positive finite number, not {value!r}")
     if not all(isinstance(p, str) for p in config.get("msg_path", [])):
         raise fail("config.msg_path", "must be a list of folder names")
+
+
+def validate_scenario(data: dict[str, Any], path: Path) -> None:
+    """Check the scenario parts of a sidecar (``--op scenario``; other sidecars pass as they are).
+
+    Checked: the call's steps (``{"kind", "message"}``, 1 to the bound), the test case's
+    steps (``{"topic", "msg"}``), every outcome (status, error, code, values of numbers) with
+    its step outcomes (at most one per step, not nested further), and the comparison's
+    ``step`` (an index into the steps) and ``step_kind``. The bound is ``config.max_steps``
+    when recorded, else :data:`MAX_STEPS_LIMIT`.
+
+    Raises
+    ------
+    SidecarError
+        Naming ``path`` and the first field that is wrong, e.g. ``outcomes[1].steps[3].status``.
+    """
+
+    def fail(field: str, problem: str) -> SidecarError:
+        return SidecarError(f"{path}: field {field!r} {problem}")
+
+    config = data["config"]
+    bound = config.get("max_steps", MAX_STEPS_LIMIT)
+    scenario = config.get("op") == SCENARIO_OP
+    counts: list[int] = []
+    call = data.get("call")
+    if isinstance(call, dict) and (call.get("kind") == SCENARIO_CALL or (scenario and "kind" in call)):
+        if call.get("kind") != SCENARIO_CALL:
+            raise fail("call.kind", f"is {call.get('kind')!r}, expected {SCENARIO_CALL!r} for op scenario")
+        counts.append(_steps(call.get("steps"), "call.steps", ("kind", str), ("message", dict), bound, fail))
+    testcase = data.get("testcase")
+    if isinstance(testcase, dict) and testcase.get("msg_type") == "rrosfuzz/Scenario":
+        message = testcase.get("message")
+        raw = message.get("steps") if isinstance(message, dict) else None
+        counts.append(_steps(raw, "testcase.message.steps", ("topic", str), ("msg", dict), bound, fail))
+    if len(set(counts)) > 1:
+        raise fail("call.steps", f"holds {counts[0]} step(s), the test case {counts[1]}")
+    limit = counts[0] if counts else bound
+    for i, outcome in enumerate(data.get("outcomes", [])):
+        _outcome(outcome, f"outcomes[{i}]", limit, fail)
+    comparison = data.get("comparison", {})
+    step = comparison.get("step")
+    if step is not None and (isinstance(step, bool) or not isinstance(step, int) or not 0 <= step < limit):
+        raise fail("comparison.step", f"must be a step index from 0 to {limit - 1} or null, not {step!r}")
+    if not isinstance(comparison.get("step_kind", ""), str):
+        raise fail("comparison.step_kind", f"must be a string, not {_type_name(comparison['step_kind'])}")
+
+
+def _steps(
+    raw: Any, where: str, name: tuple[str, type], body: tuple[str, type], bound: int, fail: Fail
+) -> int:
+    """How many steps ``raw`` holds, after checking it is a list of 1..bound step objects."""
+    if not isinstance(raw, list):
+        raise fail(where, f"must be a list of steps, not {_type_name(raw)}")
+    if not 1 <= len(raw) <= bound:
+        raise fail(where, f"holds {len(raw)} step(s), expected 1 to {bound}")
+    for i, step in enumerate(raw):
+        if not isinstance(step, dict):
+            raise fail(f"{where}[{i}]", f"must be an object, not {_type_name(step)}")
+        for key, kind in (name, body):
+            if not isinstance(step.get(key), kind):
+                expected = "an object" if kind is dict else "a string"
+                raise fail(f"{where}[{i}].{key}", f"must be {expected}, not {_type_name(step.get(key))}")
+    return len(raw)
+
+
+def _outcome(raw: Any, where: str, limit: int, fail: Fail, nested: bool = False) -> None:
+    """Check one recorded outcome (and its step outcomes, at most ``limit``)."""
+    if not isinstance(raw, dict):
+        raise fail(where, f"must be an object, not {_type_name(raw)}")
+    if "status" in raw and raw["status"] not in {str(s) for s in Status}:
+        raise fail(f"{where}.status", f"is {raw['status']!r}, expected one of {', '.join(map(str, Status))}")
+    for key in ("target", "error", "message"):
+        if key in raw and not isinstance(raw[key], str | type(None)):
+            raise fail(f"{where}.{key}", f"must be a string, not {_type_name(raw[key])}")
+    code = raw.get("code")
+    if code is not None and (isinstance(code, bool) or not isinstance(code, int)):
+        raise fail(f"{where}.code", f"must be an integer or null, not {_type_name(code)}")
+    values = raw.get("values", {})
+    if not isinstance(values, dict):
+        raise fail(f"{where}.values", f"must be an object, not {_type_name(values)}")
+    for name, vector in values.items():
+        if not isinstance(vector, list) or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) for x in vector
+        ):
+            raise fail(f"{where}.values.{name}", "must be a list of numbers")
+    if "steps" not in raw:
+        return
+    steps = raw["steps"]
+    if nested:
+        raise fail(f"{where}.steps", "is not allowed in a step outcome")
+    if not isinstance(steps, list) or len(steps) > limit:
+        problem = f"holds {len(steps)} step outcomes" if isinstance(steps, list) else _type_name(steps)
+        raise fail(f"{where}.steps", f"must be a list of at most {limit} step outcomes, not {problem}")
+    for i, step in enumerate(steps):
+        _outcome(step, f"{where}.steps[{i}]", limit, fail, nested=True)
 
 
 def foreign_targets(targets: tuple[str, ...] | list[str]) -> list[str]:
@@ -249,6 +360,7 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
         msg_type=config.get("msg_type", ""),
         msg_path=msg_path,
         filtering=config.get("filtering", True),
+        **({"max_steps": config["max_steps"]} if "max_steps" in config else {}),
     )
     fields = {k: v for k, v in given.items() if k in RunConfig.__dataclass_fields__}
     return replace(recorded, **fields) if fields else recorded

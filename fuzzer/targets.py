@@ -14,6 +14,7 @@ from typing import Any
 
 from fuzzer.mapping import Call, FkCall, IkCall, MoveCall
 from fuzzer.records import Outcome, Status
+from fuzzer.scenario.steps import ScenarioCall
 from robot_api.errors import RobotAPIError
 
 BUILTIN = {"native": "native", "python": "python_impl", "ros_tf": "adapters.ros_tf:api"}
@@ -142,4 +143,8 @@ class Runner:
                     "orientation": tuple(map(float, reached.orientation)),
                 },
             )
+        if isinstance(call, ScenarioCall):
+            from fuzzer.scenario.execute import run_scenario
+
+            return run_scenario(self, call)
         raise TypeError(f"unknown call {call!r}")

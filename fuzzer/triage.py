@@ -23,6 +23,7 @@ from typing import Any
 from fuzzer.artifacts import load_sidecar
 from fuzzer.divlog import DIVERGENCES, read_lines
 from fuzzer.records import Outcome, Signature, describe
+from fuzzer.report.steps import ScenarioSteps, scenario_of
 
 SEVERITY = {
     "crash": 0,
@@ -104,7 +105,17 @@ class Bucket:
             # the representative's exact outcomes (the signature's pair may be coarse)
             with contextlib.suppress(KeyError, TypeError, ValueError, AttributeError):
                 labels = [Outcome.from_json(o).label for o in outcomes]
+        scenario = self.scenario
+        step = scenario.divergent_step if scenario is not None else None
+        if step is not None:
+            # the outcomes that diverge are the step's, not the whole scenario's
+            return f"{text}: {step.labels[0]} vs {step.labels[1]} at step {step.index} ({step.topic})"
         return f"{text}: {labels[0]} vs {labels[1]}"
+
+    @property
+    def scenario(self) -> ScenarioSteps | None:
+        """The representative's step list (``--op scenario``), else None."""
+        return scenario_of(self.sidecar)
 
 
 def _artifacts(directory: Path) -> list[Path]:
@@ -199,6 +210,7 @@ def as_json(buckets: list[Bucket]) -> list[dict[str, Any]]:
             "representative": str(b.representative),
             "minimized": str(b.minimized) if b.minimized else None,
             "signature": b.signature.to_json() if b.signature else None,
+            **({"scenario": b.scenario.to_json()} if b.scenario is not None else {}),
         }
         for b in buckets
     ]
@@ -213,6 +225,9 @@ def table(buckets: list[Bucket]) -> list[str]:
     for i, b in enumerate(buckets, 1):
         lines.append(f"{i:3d}. [{b.key}] x{b.count}  {b.describe()}")
         lines.append(f"      {b.best}")
+        scenario = b.scenario
+        if scenario is not None:
+            lines += [f"      {line}" for line in scenario.lines()]
     return lines
 
 

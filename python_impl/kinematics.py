@@ -65,12 +65,14 @@ def jacobian(chain: Chain, q: Array, link: int, nvars: int) -> Array:
     variables, which drive the first ``nvars`` movable segments (no mimics).
     """
     u1, u2 = _coefficients(chain, segment_values(chain, q))
-    frames = []
+    # every segment's transform at once (the same elementwise arithmetic as fk)
+    m = chain.a0[:link] + u1[:link, None, None] * chain.a1[:link] + u2[:link, None, None] * chain.a2[:link]
+    frames: dict[int, Array] = {}
     t = np.eye(4)
     for s in range(link):
-        joint_frame = t @ chain.origin[s]
-        frames.append(joint_frame)
-        t = t @ (chain.a0[s] + u1[s] * chain.a1[s] + u2[s] * chain.a2[s])
+        if chain.variable[s] >= 0:
+            frames[s] = t @ chain.origin[s]
+        t = t @ m[s]
     tip = t[:3, 3]
     jac = np.zeros((6, nvars))
     for s in range(link):
@@ -79,7 +81,11 @@ def jacobian(chain: Chain, q: Array, link: int, nvars: int) -> Array:
             continue
         z = frames[s][:3, :3] @ chain.axis[s]
         if chain.kind[s] == REVOLUTE:
-            jac[:3, v] = np.cross(z, tip - frames[s][:3, 3])
+            # z x r written out: np.cross's own arithmetic (a1*b2 - a2*b1, ...), without its
+            # per-call overhead (it took more than half of the twin's IK time)
+            z0, z1, z2 = z.tolist()
+            r0, r1, r2 = (tip - frames[s][:3, 3]).tolist()
+            jac[:3, v] = (z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0)
             jac[3:, v] = z
         else:
             jac[:3, v] = z

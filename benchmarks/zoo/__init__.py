@@ -1,6 +1,8 @@
 """The bug zoo: fault-injected variants of the twin, each a real bug class of kinematics stacks.
 
-Every entry names its variant (``benchmarks/zoo/bugs.py``), says in one line
+Every entry names its variant (``benchmarks/zoo/bugs.py``; the stateful ones, which
+need a second call on a live group or a look at a trajectory, ``benchmarks/zoo/stateful.py``
+with ``op="scenario"``), says in one line
 what is wrong, cites a public source of the bug class, and gives the campaign
 in which the engine is expected to show it: the op, and a robot with the
 feature the bug needs (continuous joints, a mimic joint, URDF defaults...). A
@@ -28,18 +30,21 @@ class Bug:
     robot: str = "probot_anno"
     tip_link: str | None = None
     variant: str = ""
-    """The variant in ``benchmarks/zoo/bugs.py`` (default: ``name``)."""
+    """The variant in ``benchmarks/zoo/<module>.py`` (default: ``name``)."""
+    module: str = "bugs"
+    """The module of the variant: ``bugs`` (one call shows them) or ``stateful`` (they need a
+    live group: a second call, or a look at a trajectory)."""
 
     @property
     def target(self) -> str:
-        return f"benchmarks.zoo.bugs:{self.variant or self.name}"
+        return f"benchmarks.zoo.{self.module}:{self.variant or self.name}"
 
     @property
     def is_control(self) -> bool:
         return (self.variant or self.name) == "control"
 
 
-ZOO: tuple[Bug, ...] = (
+ONE_CALL: tuple[Bug, ...] = (
     Bug(
         "wrap_positive",
         "continuous joints reported in [0, 2pi) instead of (-pi, pi]",
@@ -124,6 +129,132 @@ ZOO: tuple[Bug, ...] = (
         "moveit move_group_interface.h DEFAULT_GOAL_JOINT_TOLERANCE = 1e-4; satisfiesBounds(margin) in revolute_joint_model.cpp; https://github.com/moveit/moveit2/issues/2090",
     ),
 )
+
+STATEFUL: tuple[Bug, ...] = (
+    Bug(
+        "continuous_accumulates",
+        "a continuous joint's state accumulates across moves instead of staying in (-pi, pi]",
+        "https://github.com/osrf/drcsim/issues/58 (continuous joint 'not limited ... after some time is a value in the 100s'); https://github.com/moveit/moveit_core/pull/174 ('nothing to enforce the continuous joint values to be between -pi and +pi')",
+        op="scenario",
+        robot="kinova",
+        module="stateful",
+    ),
+    Bug(
+        "start_state_home",
+        "plans start from the home state instead of the current state; the second go() fails",
+        "https://github.com/ros-industrial-consortium/scan_n_plan_workshop/pull/81 ('Fixed error that was always setting start state to zeros'); https://github.com/ros-industrial/stomp_ros/issues/14 ('start point deviates from current robot state' on the second command)",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "cached_pose",
+        "get_current_pose() caches the first FK result and never invalidates it after a move",
+        "https://github.com/moveit/moveit2/issues/3459 (getCurrentPose() returns the pose before the move); https://github.com/StanfordVL/BEHAVIOR-1K/issues/880 ('kinematic only pose cache ... can output wrong values if the scene is moved')",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "cartesian_ignores_scaling",
+        "compute_cartesian_path times its path at full speed, ignoring the scaling factors",
+        "https://github.com/moveit/moveit/issues/1065 ('set_max_{velocity,acceleration}_scaling_factor not working in compute_cartesian_path'); https://github.com/moveit/moveit2/issues/1967",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "acceleration_scaling_ignored",
+        "the acceleration scaling factor is checked but not applied: same end point, too fast",
+        "https://github.com/tesseract-robotics/tesseract_planning/issues/118 (TOTG's scaling factors unused); https://github.com/moveit/moveit2/issues/3779 ('max_acceleration_scaling_factor not honored by TOTG')",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "duplicate_start_point",
+        "plan() repeats the start point at time 0: time_from_start not strictly increasing",
+        "https://github.com/shadow-robot/sr_interface/pull/363 ('waypoints that are not strictly increasing in time ... the initial two waypoints in the plan being the same, both having a time_from_start of 0')",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "execute_stops_short",
+        "execute(plan) leaves the arm at the plan's second-to-last point",
+        "https://github.com/ros-industrial/staubli_val3_driver/issues/16 ('Last point of trajectory skipped')",
+        op="scenario",
+        module="stateful",
+    ),
+    Bug(
+        "remember_aliases_state",
+        "remember_joint_values() stores the live state list, so the remembered state follows the arm",
+        "https://github.com/pollen-robotics/reachy_mini/issues/68 ('get_current_joints() misses a .copy()': callers alias the live joint state)",
+        op="scenario",
+        module="stateful",
+    ),
+)
+"""Bugs that need a live group: a second call, or a look at a planned or executed trajectory.
+``--op move`` (one call on a fresh group) is expected to miss them; ``--op scenario`` to find them."""
+
+ZOO: tuple[Bug, ...] = (*ONE_CALL, *STATEFUL)
+
+DEEP: tuple[Bug, ...] = (
+    Bug(
+        "narrow_band",
+        "FK wrong (1 mm) only for joint_2 in a band 0.1% wide of its range, at 61.73% of it",
+        "https://github.com/pollen-robotics/reachy2_symbolic_ik/issues/34 (within a tolerance band around a singularity the solver deliberately gives 'a slightly false result'); https://github.com/bourumir-wyngs/rs-opw-kinematics/issues/56 (behaviour decided by a 0.125 um shift band)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "joint_relation",
+        "FK wrong only when joint_1 - joint_3 is within 1e-3 of sqrt(2) - 1 (two joints in a relation)",
+        "https://github.com/Sarrasor/RoboticManipulators/issues/1 (Fanuc FK wrong because of the J2/J3 coupling: 'J3 = J3+J2')",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "computed_branch",
+        "FK wrong only when the computed tool x position lies in [0.1234, 0.1244) m (a branch on a computed float)",
+        "https://github.com/Jgocunha/universal-robots-kinematics/issues/17 and pull 52 (a branch on the computed theta5: exact equality missed values near zero that came from rounding in acos)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "atan2_quadrant",
+        "the tool position mirrored only when its azimuth atan2(y, x) lies in (2.0, 2.01) rad",
+        "https://github.com/MethodicalAcceleratorDesign/MAD-NG/issues/415 (atan2 incorrect in quadrants 2 and 3); https://github.com/rdiankov/openrave/issues/278 (ikfast: atan2(py, px) case not considered)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "calibration_entry",
+        "one wrong entry of a per-joint calibration table: joint_3 off by 1 mrad when round(100 q) == 137",
+        "https://github.com/robotology/mesh-support/issues/308 ('a bug in the calibration xls file: the sign of the zero of joint 2 had a wrong sign')",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "small_angle_wrist",
+        "a near-singular wrist: joint_5 within 2e-3 rad of 0 (but not 0) treated as 0",
+        "https://github.com/Jgocunha/universal-robots-kinematics/issues/17 (IK 'silent failure at theta5 ~ 0': theta6 set to 0 in the singular case); https://github.com/bourumir-wyngs/rs-opw-kinematics/issues/58 (J4/J6 wrong within the singularity zone of J5)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "wrap_past_pi",
+        "a revolute joint target in [4.0, 4.05) rad (limits +-2pi) wrapped into (-pi, pi]",
+        "https://github.com/Kinovarobotics/kinova-ros/pull/20 ('removed angle normalization of joints 1,4,5,6 to allow full rotations'); https://github.com/moveit/moveit_commander/issues/31 (targets normalized into [-pi, pi])",
+        robot="ur5",
+        module="deep",
+    ),
+    Bug(
+        "ik_seed_band",
+        "IK reports its seed as a success when the seed's joint_1 lies in [0.3, 0.31) rad (only from certain seeds)",
+        "https://github.com/tesseract-robotics/tesseract_planning/pull/763 (a seed-dependent IK gives a wrong branch from some seeds); https://github.com/TAMS-Group/bio_ik/issues/48 ('returned state may differ from input pose and doesn't respect success criteria')",
+        op="scenario",
+        module="deep",
+    ),
+)
+"""Deep bugs (issue 11, ``benchmarks/zoo/deep.py``): faults confined to narrow regions of
+the input space, for ``benchmarks.bench_deep``; not part of ``ZOO``'s runs."""
+"""Every zoo bug: those one call shows, then the stateful ones."""
 
 CONTROL = Bug("control", "the unmodified twin: no fault", "-")
 

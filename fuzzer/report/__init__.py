@@ -2,92 +2,27 @@
 
 The page reproduces the paper's evaluation (Tables III and IV, Figs. 6, 7 and 8),
 shows executions and divergences over time, and gives one section per bucket with
-a 3D view of where each target left the arm (the role RVIZ played in the paper).
+a 3D view of where each target left the arm (the role RVIZ played in the paper);
+a scenario bucket also gets its step list and trajectory plots.
 
 Modules: :mod:`~fuzzer.report.data` reads and aggregates (pure),
+:mod:`~fuzzer.report.steps` and :mod:`~fuzzer.report.scenario` read scenarios,
 :mod:`~fuzzer.report.figures` and :mod:`~fuzzer.report.arm` draw,
-:mod:`~fuzzer.report.page` renders the HTML.
+:mod:`~fuzzer.report.page` renders the HTML, :mod:`~fuzzer.report.build` writes it all.
+This package imports nothing heavy itself: :mod:`fuzzer.triage` uses
+:mod:`~fuzzer.report.steps` without loading matplotlib.
 """
 
 from __future__ import annotations
 
-import re
-import time
 from pathlib import Path
-from typing import Any
 
-import matplotlib
-
-from fuzzer.report import figures
-from fuzzer.report.arm import ArmView, Sessions, render
-from fuzzer.report.data import ReportData, gather
-from fuzzer.report.page import render as render_page
-
-__all__ = ["build_figures", "write_report"]
-
-
-def build_figures(data: ReportData) -> dict[str, bytes]:
-    """The page's figures that have data to show, as PNG bytes by name."""
-    out: dict[str, bytes] = {}
-    if data.strategies:
-        out["fig6"] = figures.strategies(data.strategies)
-    if not data.near_zero.empty:
-        out["fig7"] = figures.near_zero(data.near_zero)
-    if not data.differences.empty:
-        out["fig8"] = figures.differences(data.differences)
-    if data.runs:
-        out["timeline"] = figures.timeline(data.runs)
-    return out
-
-
-FILE_NAMES = {
-    "fig6": "fig6-strategies.png",
-    "fig7": "fig7-near-zero.png",
-    "fig8": "fig8-differences.png",
-    "timeline": "over-time.png",
-}
-
-
-PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}
-"""Strings from inputs (strategy names, robot names, targets) are drawn as they are:
-no mathtext, so ``$...$`` in a lineage cannot break (or style) a figure."""
+__all__ = ["write_report"]
 
 
 def write_report(directory: Path, out: Path | None = None, trust: bool = False) -> Path:
-    """Write ``out/report.html`` and every figure as a PNG file in ``out``.
+    """Write ``out/report.html`` and every figure as a PNG file in ``out``
+    (:func:`fuzzer.report.build.write_report`, which documents the parameters)."""
+    from fuzzer.report.build import write_report as write
 
-    Parameters
-    ----------
-    directory : Path
-        An artifacts folder (crash files, sidecars, divergences.jsonl, stats.jsonl);
-        an empty or missing folder gives a page saying there is nothing to show.
-    out : Path, optional
-        The output folder, ``directory / "report"`` by default.
-    trust : bool
-        Re-run buckets whose sidecar names targets other than the builtins
-        (``--trust-sidecar``); without it they get a note instead of a 3D view.
-
-    Returns
-    -------
-    Path
-        The HTML page. It is self-contained: images are data: URIs, CSS is inline,
-        there is no script and no network access. Nothing outside ``directory`` is
-        read: symlinks leading out of it are ignored (with a warning and a note).
-    """
-    directory = Path(directory)
-    out = Path(out) if out is not None else directory / "report"
-    out.mkdir(parents=True, exist_ok=True)
-    data = gather(directory)
-    with matplotlib.rc_context(PLAIN_TEXT):
-        pictures = build_figures(data)
-        sessions = Sessions(trust=trust)
-        arms: dict[str, ArmView] = {b.key: render(b, sessions) for b in data.buckets if b.sidecar is not None}
-    for name, png in pictures.items():
-        (out / FILE_NAMES[name]).write_bytes(png)
-    for key, view in arms.items():
-        if view.png is not None:
-            (out / f"arm-{re.sub(r'[^A-Za-z0-9_-]', '_', key)}.png").write_bytes(view.png)
-    generated = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
-    page = out / "report.html"
-    page.write_text(render_page(data, pictures, arms, generated), encoding="utf-8")
-    return page
+    return write(directory, out, trust)

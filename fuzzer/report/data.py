@@ -338,9 +338,10 @@ def classify(line: Divergence) -> str:
     if line.kind == "status":
         return ROW_STATUS
     if line.kind in ("representation", "value") and (line.kind == "representation" or line.sign_flip):
-        if line.field == "orientation":
+        field_ = line.field.split(".", 1)[-1]  # a scenario's field is "<step kind>.<quantity>"
+        if field_ == "orientation":
             return ROW_ROTATIONS
-        if line.field in ("joint_values", "position"):
+        if field_ in ("joint_values", "position"):
             return ROW_COORDINATES
         return ROW_OTHER
     if line.kind == "value":

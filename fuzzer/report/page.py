@@ -346,7 +346,7 @@ def _subcommand(replay: str, command: str) -> str:
     return replay.replace(" fuzz_diff.py ", f" fuzz_diff.py {command} ", 1)
 
 
-def _bucket(index: int, view: BucketView, arm: ArmView | None) -> str:
+def _bucket(index: int, view: BucketView, arm: ArmView | None, steps: str = "") -> str:
     badge = f"<span class='badge {_kind_class(view.kind)}'>{_e(view.kind)}</span>"
     title = (
         f"<h3 id='bucket-{_e(view.key)}'>{index}. {badge}<code>{_e(view.key)}</code> "
@@ -402,12 +402,12 @@ def _bucket(index: int, view: BucketView, arm: ArmView | None) -> str:
         f"<article class='bucket'>{title}<div class='cols'><div>"
         "<dl class='facts'>" + "".join(f"<dt>{_e(k)}</dt><dd>{v}</dd>" for k, v in facts) + "</dl>"
         f"<table>{sig_rows}</table></div><div>{picture}</div></div>"
-        f"<h3>Outcomes</h3>{_outcomes(view)}{_joints(view)}"
+        f"<h3>Outcomes</h3>{_outcomes(view)}{_joints(view)}{steps}"
         f"<h3>Test case <small>({_e(view.msg_type)})</small></h3><pre>{_e(view.message)}</pre></article>"
     )
 
 
-def _buckets(data: ReportData, arms: Mapping[str, ArmView]) -> str:
+def _buckets(data: ReportData, arms: Mapping[str, ArmView], scenarios: Mapping[str, str]) -> str:
     head = f'<h2 id="buckets">Buckets: {len(data.views)} distinct problem(s), most severe first</h2>'
     if not data.views:
         return head + "<p class='note'>No crash files in this folder: nothing to triage.</p>"
@@ -419,7 +419,13 @@ def _buckets(data: ReportData, arms: Mapping[str, ArmView]) -> str:
         )
         + "</ol></nav>"
     )
-    return head + index + "".join(_bucket(i, v, arms.get(v.key)) for i, v in enumerate(data.views, 1))
+    return (
+        head
+        + index
+        + "".join(
+            _bucket(i, v, arms.get(v.key), scenarios.get(v.key, "")) for i, v in enumerate(data.views, 1)
+        )
+    )
 
 
 def render(
@@ -427,6 +433,7 @@ def render(
     figures: Mapping[str, bytes],
     arms: Mapping[str, ArmView],
     generated: str,
+    scenarios: Mapping[str, str] | None = None,
 ) -> str:
     """The whole page.
 
@@ -440,6 +447,9 @@ def render(
         The 3D view of each bucket, by bucket key.
     generated : str
         When the page was made (the only non-deterministic text).
+    scenarios : mapping, optional
+        For scenario buckets, by bucket key: the HTML of their steps and trajectory figures
+        (:func:`fuzzer.report.scenario.section`, which escapes what it shows).
     """
     parts = [_summary(data, generated), _notes(data.notes)]
     if data.empty:
@@ -460,7 +470,7 @@ def render(
             _fig7(data, figures.get("fig7")),
             _fig8(data, figures.get("fig8")),
             _timeline(data, figures.get("timeline")),
-            _buckets(data, arms),
+            _buckets(data, arms, scenarios or {}),
         ]
     title = f"RROSFuzz report: {data.directory.name or data.directory}"
     return (

@@ -1,0 +1,199 @@
+"""Search strength on the deep zoo bugs (issue 11), with FuzzBench/Magma-style statistics.
+
+    .venv/bin/python -m benchmarks.bench_deep --mode full --write-md   # 10 trials x 60 s per (bug, engine)
+    .venv/bin/python -m benchmarks.bench_deep --mode quick             # 2 trials x 10 s, two bugs (CI-sized)
+
+Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of the input
+space) runs under every engine of ``benchmarks.bench_zoo`` (``full``, ``libfuzzer``,
+``paper``, ``hypothesis``, ``uniform``), N trials each (``-seed`` = the trial number), on the
+same budget, each trial a subprocess started the same way (``bench_zoo.run_one``). Per (bug,
+engine): detection rate and median time to first detection; per bug, the full engine against
+each baseline: the two-sided Mann-Whitney U test on the times to detection (a trial that
+never detects counts as the budget: censored) and the Vargha-Delaney A12 (the probability that
+a full-engine trial detects sooner than a baseline trial, ties half; 0.5 = no difference). A
+survival plot (the share of trials that have found the bug over time) goes to
+``benchmarks/results/deep-<mode>.png``; with ``--write-md`` the table replaces the marked
+section of BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from scipy.stats import mannwhitneyu
+
+from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, replace_section, run_one
+from benchmarks.zoo import DEEP
+
+ALPHA = 0.05
+MARKS = ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->")
+TITLE = "## Search strength on deep bugs (issue 11)"
+
+
+@dataclass(frozen=True)
+class Mode:
+    bugs: tuple[str, ...]
+    trials: int
+    budget: float
+    engines: tuple[str, ...] = ("full", "weights", "libfuzzer", "paper", "hypothesis", "uniform")
+
+
+MODES = {
+    "quick": Mode(
+        bugs=("narrow_band", "computed_branch"), trials=2, budget=10.0, engines=("full", "uniform")
+    ),
+    "full": Mode(bugs=tuple(b.name for b in DEEP), trials=10, budget=60.0),
+}
+
+
+def runs_on(op: str, engine: str) -> bool:
+    """The baselines of ``benchmarks.baselines`` have no scenario op (``weights`` has)."""
+    return op != "scenario" or engine in (*SCENARIO_ENGINES, "weights")
+
+
+def a12(xs: list[float], ys: list[float]) -> float:
+    """Vargha-Delaney A12 for times (lower is better): P(x < y) + 0.5 P(x == y)."""
+    wins = sum((x < y) + 0.5 * (x == y) for x in xs for y in ys)
+    return wins / (len(xs) * len(ys))
+
+
+def censored(runs: list[Run], budget: float) -> list[float]:
+    """Times to first detection, a trial without one counted as the budget."""
+    return [budget if r.detected_at is None else min(r.detected_at, budget) for r in runs]
+
+
+def compare(mine: list[float], other: list[float]) -> tuple[float, float, str]:
+    """(p, A12, verdict): 'faster' / 'slower' when p < ALPHA, else 'tie'."""
+    if len(set(mine) | set(other)) <= 1:
+        return 1.0, 0.5, "tie"
+    p = float(mannwhitneyu(mine, other, alternative="two-sided").pvalue)
+    effect = a12(mine, other)
+    if p >= ALPHA:
+        return p, effect, "tie"
+    return p, effect, "faster" if effect > 0.5 else "slower"
+
+
+def survival(runs: list[Run], budget: float, points: int = 200) -> tuple[list[float], list[float]]:
+    """(times, share of trials that have detected by each time)."""
+    times = [budget * i / (points - 1) for i in range(points)]
+    found = [r.detected_at for r in runs if r.detected_at is not None]
+    share = [sum(t <= x for t in found) / max(1, len(runs)) for x in times]
+    return times, share
+
+
+def markdown(runs: list[Run], mode: Mode, cmd: str) -> str:
+    lines = [
+        f"{mode.trials} trials x {mode.budget:.0f} s per (bug, engine), two runs at a time on "
+        f"{os.cpu_count()} CPUs ({platform.machine()}, Python {platform.python_version()}). Command: "
+        f"`{cmd}`. Cells: median time to first detection in s (detected/trials; '-' none). "
+        f"p: Mann-Whitney U (two-sided) of the full engine's times against the baseline's, a trial "
+        f"without detection counted as the budget; A12: Vargha-Delaney (full engine sooner; 0.5 = "
+        f"no difference); verdict at p < {ALPHA}.",
+        "",
+        "| bug | "
+        + " | ".join(mode.engines)
+        + " | "
+        + " | ".join(f"vs {e}" for e in mode.engines[1:])
+        + " |",
+        "|---|" + "---|" * (2 * len(mode.engines) - 1),
+    ]
+    for bug in mode.bugs:
+        by_engine = {e: [r for r in runs if r.bug == bug and r.engine == e] for e in mode.engines}
+        cells = []
+        for engine in mode.engines:
+            mine = by_engine[engine]
+            if not mine:
+                cells.append("n/a (no scenario op)")
+                continue
+            hits = sorted(r.detected_at for r in mine if r.detected_at is not None)
+            median = f"{hits[len(hits) // 2]:.1f}" if len(hits) * 2 > len(mine) else "-"
+            if hits and median == "-":
+                median = f">{mode.budget:.0f}"
+            cells.append(f"{median} ({len(hits)}/{len(mine)})")
+        full = censored(by_engine[mode.engines[0]], mode.budget)
+        for engine in mode.engines[1:]:
+            if not by_engine[engine]:
+                cells.append("n/a")
+                continue
+            p, effect, verdict = compare(full, censored(by_engine[engine], mode.budget))
+            cells.append(f"{verdict} (p={p:.3g}, A12={effect:.2f})")
+        lines.append(f"| {bug} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot(runs: list[Run], mode: Mode, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = min(4, len(mode.bugs))
+    rows = (len(mode.bugs) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, sharey=True)
+    for ax, bug in zip(axes.flat, mode.bugs, strict=False):
+        for engine in mode.engines:
+            times, share = survival([r for r in runs if r.bug == bug and r.engine == engine], mode.budget)
+            ax.step(times, share, where="post", label=engine)
+        ax.set_title(bug, fontsize=9)
+        ax.set_xlabel("s", fontsize=8)
+        ax.set_ylim(-0.02, 1.02)
+    for ax in list(axes.flat)[len(mode.bugs) :]:
+        ax.axis("off")
+    axes[0][0].set_ylabel("share of trials that found it")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+
+
+def main(argv: list[str] | None = None) -> list[Run]:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--mode", choices=MODES, default="quick")
+    parser.add_argument("--bugs", nargs="+", default=None, choices=[b.name for b in DEEP])
+    parser.add_argument("--engines", nargs="+", default=None, choices=ALL_ENGINES)
+    parser.add_argument("--trials", type=int, default=None)
+    parser.add_argument("--budget", type=float, default=None)
+    parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
+    parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
+    args = parser.parse_args(argv)
+    base = MODES[args.mode]
+    mode = Mode(
+        tuple(args.bugs or base.bugs),
+        args.trials or base.trials,
+        args.budget or base.budget,
+        tuple(args.engines or base.engines),
+    )
+    if mode.engines[0] != "full":
+        parser.error("the first engine must be 'full' (the one compared against the others)")
+    by_name = {b.name: b for b in DEEP}
+    jobs = [
+        (by_name[b], e, t)
+        for b in mode.bugs
+        for e in mode.engines
+        if runs_on(by_name[b].op, e)
+        for t in range(mode.trials)
+    ]
+    with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget), jobs))
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
+    plot(runs, mode, RESULTS / f"deep-{args.mode}.png")
+    cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
+    text = markdown(runs, mode, cmd.strip())
+    print(text)
+    if args.write_md:
+        picture = f"\n\n![survival](benchmarks/results/deep-{args.mode}.png)"
+        replace_section(text + picture, MARKS, TITLE)
+    return runs
+
+
+if __name__ == "__main__":
+    main()

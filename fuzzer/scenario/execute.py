@@ -1,0 +1,301 @@
+"""Running a scenario on one target (docs/engine.md, "Scenarios (``--op scenario``)").
+
+One new ``MoveGroup(model)`` per run; the steps run in order. A step that raises a
+``robot_api.errors.RobotAPIError`` is ``REJECTED`` and the scenario goes on (the contract
+leaves the group unchanged on error); any other exception is ``CRASHED`` and ends it.
+Each target executes its *own* last plan, as a user's script would.
+
+Per-step ``Outcome.values`` (tuples of floats):
+
+* ``joint_values`` after every step (rad, m);
+* ``position`` (m) and ``orientation`` (x, y, z, w) after ``/go`` and ``/execute``;
+* ``joint_target`` after ``/joint_target`` and ``/named_target``;
+* ``success`` (1.0 or 0.0) for ``/go``, ``/plan``, ``/execute``; ``error_code`` for ``/plan``;
+* ``fraction`` for ``/cartesian_path``;
+* ``trajectory.time_from_start`` (M,) and ``trajectory.positions``, ``.velocities``,
+  ``.accelerations`` flattened row-major (M*dof,) for ``/plan`` and ``/cartesian_path``;
+* ``named.<name>``: ``get_named_target_values(name)`` in joint order, after ``/remember``.
+
+What the executor knows for the oracle's per-target properties, on ``/plan``, ``/go``,
+``/execute`` and ``/cartesian_path`` steps (``in_effect.*``, the settings the script made
+on this target, not outputs of the target): ``in_effect.velocity_scaling``,
+``in_effect.acceleration_scaling``, ``in_effect.goal_tolerance`` (the last accepted
+values; the contract's defaults 1.0, 1.0 and ``GOAL_JOINT_TOLERANCE`` before any),
+``in_effect.joint_goal`` (``/plan`` and ``/go`` without an
+active pose target: ``get_joint_value_target()`` before the call), and for ``/execute`` of
+a plan ``in_effect.plan_last`` (the executed plan's last point).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from fuzzer.records import Outcome, Status
+from fuzzer.scenario.steps import ScenarioCall, Step
+from robot_api.constants import GOAL_JOINT_TOLERANCE
+from robot_api.errors import RobotAPIError
+from robot_api.records import JointType, RobotTrajectory
+
+DEFAULT_EEF_STEP = 0.01
+"""eef_step (m) of ``/cartesian_path`` until an ``/eef_step`` step sets another."""
+DEFAULT_JUMP_THRESHOLD = 0.0
+"""jump_threshold of ``/cartesian_path`` until a ``/jump_threshold`` step sets another."""
+
+Values = dict[str, tuple[float, ...]]
+
+_PLANS = frozenset({"plan", "go", "execute", "cartesian_path"})
+_POSED = frozenset({"go", "execute"})
+
+
+def _floats(values: Any) -> tuple[float, ...]:
+    """Any array-like of reals as a flat tuple of Python floats (row-major)."""
+    return tuple(np.asarray(values, dtype=float).ravel().tolist())
+
+
+def _trajectory(values: Values, trajectory: Any) -> None:
+    values["trajectory.time_from_start"] = _floats(trajectory.time_from_start)
+    values["trajectory.positions"] = _floats(trajectory.positions)
+    values["trajectory.velocities"] = _floats(trajectory.velocities)
+    values["trajectory.accelerations"] = _floats(trajectory.accelerations)
+
+
+def _pose(values: Values, pose: Any) -> None:
+    values["position"] = tuple(map(float, pose.position))
+    values["orientation"] = tuple(map(float, pose.orientation))
+
+
+def _pose_tuple(pose: dict[str, Any]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A ``geometry_msgs/Pose`` dict as the contract's ``((x, y, z), (qx, qy, qz, qw))``."""
+    p, q = pose["position"], pose["orientation"]
+    return (p["x"], p["y"], p["z"]), (q["x"], q["y"], q["z"], q["w"])
+
+
+def _shifted(state: list[float], shift: float, limits: Any) -> list[float]:
+    """``state`` moved by ``shift`` on every joint (minus on odd indices), clamped into the
+    limits, continuous joints normalized into (-pi, pi] (the contract's rule)."""
+    out = []
+    for j, (value, lim) in enumerate(zip(state, limits, strict=True)):
+        moved = value + (shift if j % 2 == 0 else -shift)
+        if lim.type == JointType.CONTINUOUS:
+            moved = math.fmod(moved, 2 * math.pi)
+            if moved <= -math.pi:
+                moved += 2 * math.pi
+            elif moved > math.pi:
+                moved -= 2 * math.pi
+        else:
+            moved = min(max(moved, lim.lower), lim.upper)
+        out.append(moved)
+    return out
+
+
+class _Run:
+    """The state of one scenario run on one target: its group and the script's settings."""
+
+    def __init__(self, runner: Any) -> None:
+        self.runner = runner
+        self.group = runner.impl.MoveGroup(runner.model)
+        self.eef_step = DEFAULT_EEF_STEP
+        self.jump_threshold = DEFAULT_JUMP_THRESHOLD
+        self.velocity_scaling = 1.0
+        self.acceleration_scaling = 1.0
+        self.goal_tolerance = GOAL_JOINT_TOLERANCE
+        self.pose_goal = False
+        self.last_plan: Any = None
+        self._joint_names: tuple[str, ...] | None = None
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        if self._joint_names is None:
+            self._joint_names = tuple(self.runner.model.joint_names)
+        return self._joint_names
+
+    def nudge(self, shift: float) -> None:
+        """Move the current state by ``shift`` on every joint with a one-point trajectory."""
+        limits = tuple(self.runner.model.joint_limits)
+        point = _shifted(list(self.group.get_current_joint_values()), shift, limits)
+        zeros = np.zeros((1, len(point)))
+        times, positions = np.array([0.0]), np.array([point])
+        trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
+        self.group.execute(trajectory)
+
+    def step(self, step: Step) -> tuple[Status, Values]:
+        """Run one step; raises what the target raises."""
+        group, kind, msg = self.group, step.kind, step.message
+        values: Values = {}
+        status = Status.OK
+        if kind in _PLANS:
+            values["in_effect.velocity_scaling"] = (self.velocity_scaling,)
+            values["in_effect.acceleration_scaling"] = (self.acceleration_scaling,)
+            values["in_effect.goal_tolerance"] = (self.goal_tolerance,)
+        if kind == "joint_target":
+            if msg["name"]:
+                group.set_joint_value_target(list(msg["name"]), list(msg["position"]))
+            else:
+                group.set_joint_value_target(list(msg["position"]))
+            self.pose_goal = False
+            values["joint_target"] = _floats(group.get_joint_value_target())
+        elif kind == "named_target":
+            group.set_named_target(msg["data"])
+            self.pose_goal = False
+            values["joint_target"] = _floats(group.get_joint_value_target())
+        elif kind == "pose_target":
+            group.set_pose_target(_pose_tuple(msg["pose"]), msg["header"]["frame_id"] or None)
+            self.pose_goal = True
+        elif kind == "position_target":
+            p = msg["point"]
+            group.set_position_target([p["x"], p["y"], p["z"]], msg["header"]["frame_id"] or None)
+            self.pose_goal = True
+        elif kind == "clear_pose_targets":
+            group.clear_pose_targets()
+            self.pose_goal = False
+        elif kind == "remember":
+            name = msg["data"]
+            group.remember_joint_values(name)
+            table = group.get_named_target_values(name)
+            values[f"named.{name}"] = tuple(float(table.get(j, math.nan)) for j in self.joint_names)
+        elif kind == "velocity_scaling":
+            group.set_max_velocity_scaling_factor(msg["data"])
+            self.velocity_scaling = msg["data"]
+        elif kind == "acceleration_scaling":
+            group.set_max_acceleration_scaling_factor(msg["data"])
+            self.acceleration_scaling = msg["data"]
+        elif kind == "goal_tolerance":
+            group.set_goal_joint_tolerance(msg["data"])
+            self.goal_tolerance = msg["data"]
+        elif kind == "eef_step":
+            self.eef_step = msg["data"]
+        elif kind == "jump_threshold":
+            self.jump_threshold = msg["data"]
+        elif kind == "stop":
+            group.stop()
+        elif kind == "plan" or kind == "go":
+            if not self.pose_goal:
+                values["in_effect.joint_goal"] = _floats(group.get_joint_value_target())
+            status = self._plan(values) if kind == "plan" else self._go(values)
+        elif kind == "execute":
+            status = self._execute(values)
+        elif kind == "cartesian_path":
+            poses = [_pose_tuple(p) for p in msg["poses"]]
+            trajectory, fraction = group.compute_cartesian_path(poses, self.eef_step, self.jump_threshold)
+            self.last_plan = trajectory
+            values["fraction"] = (float(fraction),)
+            _trajectory(values, trajectory)
+        else:
+            raise ValueError(f"unknown step kind {kind!r}")
+        values["joint_values"] = _floats(group.get_current_joint_values())
+        if kind in _POSED:
+            _pose(values, group.get_current_pose())
+        return status, values
+
+    def _plan(self, values: Values) -> Status:
+        result = self.group.plan()
+        success = result.success is True
+        if success:
+            self.last_plan = result.trajectory
+        values["success"] = (1.0 if success else 0.0,)
+        values["error_code"] = (float(int(result.error_code)),)
+        _trajectory(values, result.trajectory)
+        return Status.OK if success else Status.FAILED
+
+    def _go(self, values: Values) -> Status:
+        moved = self.group.go() is True
+        values["success"] = (1.0 if moved else 0.0,)
+        return Status.OK if moved else Status.FAILED
+
+    def _execute(self, values: Values) -> Status:
+        if self.last_plan is None:
+            values["success"] = (1.0,)  # no plan yet: no call, an ok step (docs/engine.md)
+            return Status.OK
+        positions = np.asarray(self.last_plan.positions, dtype=float)
+        if positions.ndim == 2 and positions.shape[0] > 0:
+            values["in_effect.plan_last"] = tuple(positions[-1].tolist())
+        done = self.group.execute(self.last_plan) is True
+        values["success"] = (1.0 if done else 0.0,)
+        return Status.OK if done else Status.FAILED
+
+    def final(self) -> Values:
+        """The state at the end: joint values and the end effector's pose."""
+        values: Values = {"joint_values": _floats(self.group.get_current_joint_values())}
+        _pose(values, self.group.get_current_pose())
+        return values
+
+
+def _failure(status: Status, exc: BaseException) -> Outcome:
+    code = int(exc.code) if isinstance(exc, RobotAPIError) else None
+    return Outcome(status, type(exc).__name__, code, str(exc)[:500])
+
+
+NUDGE_FAILED = "nudge_failed"
+"""In a scenario outcome's values when ``nudge`` could not move the state (the target refused
+the one-point trajectory): the run then says nothing about ill-conditioning."""
+
+
+def run_scenario(runner: Any, call: ScenarioCall, nudge: tuple[int, float] | None = None) -> Outcome:
+    """Run a scenario on one target.
+
+    Parameters
+    ----------
+    runner : fuzzer.targets.Runner
+        The target (its ``impl`` and loaded ``model``).
+    call : ScenarioCall
+        The steps.
+    nudge : (int, float), optional
+        ``(index, shift)``: just before step ``index``, move the current state by ``shift``
+        (rad, m) on every joint, minus on odd joint indices, clamped into the limits
+        (continuous joints normalized into (-pi, pi]), by executing a one-point trajectory
+        (time 0). An error of that execution is the step's outcome. For ill-conditioning
+        checks of the oracle.
+
+    Returns
+    -------
+    Outcome
+        ``steps``: one Outcome per executed step (module docstring); ``values``: the final
+        state (``joint_values``, ``position``, ``orientation``); status ``OK``, or
+        ``CRASHED`` with the error of the step that crashed (later steps did not run).
+
+    Raises
+    ------
+    RobotAPIError and others
+        Only from ``MoveGroup(model)`` itself (``Runner.run`` turns them into an outcome).
+    """
+    run = _Run(runner)
+    outcomes: list[Outcome] = []
+    crash: BaseException | None = None
+    nudge_failed = False
+    for index, step in enumerate(call.steps):
+        if nudge is not None and nudge[0] == index:
+            try:
+                run.nudge(nudge[1])
+            except Exception:  # noqa: BLE001 - reported as NUDGE_FAILED, never as the step's answer
+                nudge_failed = True
+        try:
+            status, values = run.step(step)
+        except RobotAPIError as exc:
+            outcomes.append(_failure(Status.REJECTED, exc))
+            continue
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - a crash of the target ends the scenario
+            outcomes.append(_failure(Status.CRASHED, exc))
+            crash = exc
+            break
+        outcomes.append(Outcome(status, values=values))
+    steps = tuple(outcomes)
+    try:
+        final = run.final()
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a target that cannot report its state
+        if crash is None:
+            failed = _failure(Status.REJECTED if isinstance(exc, RobotAPIError) else Status.CRASHED, exc)
+            return Outcome(failed.status, failed.error, failed.code, failed.message, {}, steps)
+        final = {}
+    if nudge_failed:
+        final = {**final, NUDGE_FAILED: (1.0,)}
+    if crash is not None:
+        failed = _failure(Status.CRASHED, crash)
+        return Outcome(failed.status, failed.error, failed.code, failed.message, final, steps)
+    return Outcome(Status.OK, values=final, steps=steps)

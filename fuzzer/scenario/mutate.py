@@ -1,0 +1,442 @@
+"""Sequence mutators for scenarios: a registry in the style of :mod:`fuzzer.mutators`.
+
+A scenario is ``{"steps": [{"topic": TOPIC, "msg": MSG}, ...]}`` (``fuzzer.scenario.steps``).
+Every sequence mutator is a small named function ``(steps, ctx) -> (steps, name)`` registered
+with a weight; it works on a deep copy of the steps and raises
+:class:`fuzzer.mutators.NotApplicable` when it cannot apply (the dispatcher then falls back to
+another one by weight, as :func:`fuzzer.mutators.mutate` does). The only source of randomness
+is the injected ``ctx.rng``.
+
+Mutators
+--------
+* ``seq_insert``: insert a step, a copy of a step of this scenario or of ``ctx.other`` (the
+  other parent), or a fresh one (``/go``, ``/plan``, ``/execute``..., a joint target
+  recombined column by column from the scenario's joint targets, a scaling factor...).
+* ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
+  that differ), ``seq_move`` (one step elsewhere; the order always changes).
+* ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutators.mutate`
+  with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
+* ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
+
+Every child has 1..``max_steps`` steps and, when its parents validate, validates
+(``fuzzer.scenario.steps.validate``): steps are only copied, moved, removed or made from
+registry defaults, and values change through the type-safe value mutators.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from random import Random
+from typing import Any, Final
+
+from fuzzer import mutators
+from fuzzer.mapping import FOCUS
+from fuzzer.msgdef import MessageRegistry
+from fuzzer.mutators import NOOP, MutationContext, NotApplicable
+from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
+
+StepDict = dict[str, Any]
+Steps = list[StepDict]
+SeqMutator = Callable[[Steps, "SequenceContext"], tuple[Steps, str]]
+
+SPLICE: Final = "seq_splice"
+"""Lineage name of the crossover."""
+SEQ_STEP: Final = "seq_step"
+COPY_PROBABILITY: Final = 0.5
+"""``seq_insert``: chance of copying an existing step (when there is one) rather than a fresh one."""
+FRESH_WEIGHTS: Final[Mapping[str, float]] = {"/go": 3.0, "/plan": 2.0, "/execute": 2.0, "/joint_target": 2.0}
+"""Weights of the topics of a fresh step (other topics: 1)."""
+FRESH_FLOATS: Final = (0.0, 0.01, 0.1, 0.5, 1.0)
+"""Values a fresh ``std_msgs/Float64`` step may take, besides the scenario's and the engine's."""
+FRESH_NAMES: Final = ("home",)
+"""Named targets a fresh ``std_msgs/String`` step may take, besides the scenario's strings."""
+INTERESTING_PROBABILITY: Final = 0.5
+"""Fresh joint target: chance that one joint takes an engine interesting value."""
+SPLICE_ATTEMPTS: Final = 8
+
+
+@dataclass
+class _Tables:
+    """Per-topic tables derived from the message registry (types, defaults, value contexts)."""
+
+    registry: MessageRegistry
+    types: dict[str, str]
+    """Topic -> ROS message type."""
+    fields: dict[str, dict[str, str]]
+    """ROS message type -> dotted field path -> builtin type (``MutationContext.field_types``)."""
+    contexts: dict[str, tuple[MutationContext, MutationContext]] = dataclasses.field(default_factory=dict)
+
+    def default(self, topic: str) -> dict[str, Any]:
+        """The zero message of ``topic``'s type, unit quaternions instead of zero ones."""
+        message: dict[str, Any] = _unit_quaternions(self.registry.default(self.types[topic]))
+        return message
+
+    def value_context(self, msg_type: str, outer: MutationContext) -> MutationContext:
+        """A context like ``outer`` for messages of ``msg_type`` (cached per outer context)."""
+        cached = self.contexts.get(msg_type)
+        if cached is None or cached[0] is not outer:
+            inner = dataclasses.replace(
+                outer, field_types=self.fields[msg_type], focus=FOCUS.get(msg_type, ()), other=None, memo={}
+            )
+            cached = (outer, inner)
+            self.contexts[msg_type] = cached
+        cached[1].rng = outer.rng
+        return cached[1]
+
+
+@dataclass
+class SequenceContext:
+    """What a sequence mutator may use besides the steps.
+
+    Attributes
+    ----------
+    rng : random.Random
+        The only source of randomness (the value context's).
+    value : MutationContext
+        The campaign's context (interesting floats, dictionary, options) for ``seq_step``.
+    max_steps : int
+        Largest number of steps of a child.
+    tables : _Tables
+        Registry-derived tables.
+    other : list of dict or None
+        The other parent's steps (from ``value.other``), for copies and ``seq_splice``.
+    inner : str or None
+        The value mutator ``seq_step`` tries first (from a name ``seq_step:<inner>``).
+    """
+
+    rng: Random
+    value: MutationContext
+    max_steps: int
+    tables: _Tables
+    other: Steps | None = None
+    inner: str | None = None
+
+
+def field_types(registry: MessageRegistry, msg_type: str, prefix: str = "") -> dict[str, str]:
+    """Dotted field path -> ROS type of every field of ``msg_type`` the value mutators may touch.
+
+    As ``fuzzer.campaign.field_types``, but arrays of messages are kept (``poses``:
+    ``geometry_msgs/Pose[]``, their elements' fields as ``poses.position.x``), so the
+    waypoints of a ``/cartesian_path`` step can be mutated, inserted and removed.
+    """
+    out: dict[str, str] = {}
+    for f in registry.get(msg_type).fields:
+        path = f"{prefix}{f.name}"
+        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
+        if f.is_builtin or f.is_array:
+            out[path] = f.type + suffix
+        if not f.is_builtin:
+            out.update(field_types(registry, f.type, path + "."))
+    return out
+
+
+def _unit_quaternions(node: Any) -> Any:
+    """``node`` with every all-zero ``orientation`` quaternion made the identity (w = 1)."""
+    if isinstance(node, dict):
+        out = {key: _unit_quaternions(value) for key, value in node.items()}
+        quaternion = out.get("orientation")
+        if not isinstance(quaternion, dict) or set(quaternion) != {"x", "y", "z", "w"}:
+            return out
+        if all(v == 0.0 for v in quaternion.values()):
+            out["orientation"] = {**quaternion, "w": 1.0}
+        return out
+    if isinstance(node, list):
+        return [_unit_quaternions(item) for item in node]
+    return node
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Registry
+# ----------------------------------------------------------------------------------------------------------
+
+SEQ_MUTATORS: dict[str, SeqMutator] = {}
+"""Registered sequence mutators by name; each works on a deep copy of the steps."""
+SEQ_WEIGHTS: dict[str, float] = {}
+"""Relative selection weights of :data:`SEQ_MUTATORS` (same keys)."""
+
+
+def register(name: str, weight: float = 1.0) -> Callable[[SeqMutator], SeqMutator]:
+    """Register a sequence mutator under ``name``; the registered function works on a deep copy."""
+
+    def decorator(fn: SeqMutator) -> SeqMutator:
+        if name in SEQ_MUTATORS:
+            raise ValueError(f"sequence mutator {name!r} is already registered")
+
+        @functools.wraps(fn)
+        def wrapper(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+            return fn(mutators._clone(steps), ctx)
+
+        SEQ_MUTATORS[name] = wrapper
+        SEQ_WEIGHTS[name] = weight
+        return wrapper
+
+    return decorator
+
+
+def _msg_type_of(step: Any, ctx: SequenceContext) -> str | None:
+    """The message type of a well-formed step, else None."""
+    if not isinstance(step, dict) or not isinstance(step.get("msg"), dict):
+        return None
+    topic = step.get("topic")
+    return ctx.tables.types.get(topic) if isinstance(topic, str) else None
+
+
+def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, Any]:
+    """A new message for ``topic`` made from the scenario's values (or registry defaults)."""
+    msg_type = ctx.tables.types[topic]
+    same = [s["msg"] for s in steps if _msg_type_of(s, ctx) == msg_type]
+    msg = ctx.tables.default(topic)
+    if msg_type == "sensor_msgs/JointState":
+        vectors = [m for m in same if isinstance(m.get("position"), list) and m["position"]]
+        if not vectors:
+            raise NotApplicable("no joint target to make a new one from")
+        msg = mutators._clone(ctx.rng.choice(vectors))
+        width = range(len(msg["position"]))
+        columns = [[v["position"][i] for v in vectors if i < len(v["position"])] for i in width]
+        msg["position"] = [ctx.rng.choice(column) for column in columns]
+        engine = ctx.value.interesting_floats
+        if engine and ctx.rng.random() < INTERESTING_PROBABILITY:
+            msg["position"][ctx.rng.randrange(len(columns))] = float(ctx.rng.choice(engine))
+    elif msg_type == "std_msgs/Float64":
+        pool = [float(m["data"]) for m in same if isinstance(m.get("data"), float)]
+        msg["data"] = ctx.rng.choice([*pool, *FRESH_FLOATS])
+    elif msg_type == "std_msgs/String":
+        pool = [m["data"] for m in same if isinstance(m.get("data"), str)]
+        names = [t for t in ctx.value.dictionary if isinstance(t, str)]
+        msg["data"] = ctx.rng.choice([*pool, *FRESH_NAMES, *names])
+    elif msg_type == "geometry_msgs/PoseArray":
+        poses = [s["msg"]["pose"] for s in steps if _msg_type_of(s, ctx) == "geometry_msgs/PoseStamped"]
+        pose = ctx.rng.choice(poses) if poses else ctx.tables.registry.default("geometry_msgs/Pose")
+        msg["poses"] = [_unit_quaternions(pose)]
+    elif same and msg:  # poses, points: a copy of one of the scenario's
+        msg = mutators._clone(ctx.rng.choice(same))
+    return msg
+
+
+def _new_step(steps: Steps, ctx: SequenceContext) -> StepDict:
+    """A copy of a step of this scenario or the other parent, or a fresh step."""
+    copies = [s for s in (*steps, *(ctx.other or ())) if _msg_type_of(s, ctx) is not None]
+    if copies and ctx.rng.random() < COPY_PROBABILITY:
+        return mutators._clone(ctx.rng.choice(copies))
+    pool = {topic: FRESH_WEIGHTS.get(topic, 1.0) for topic in ctx.tables.types}
+    while pool:
+        topic = ctx.rng.choices(list(pool), weights=list(pool.values()))[0]
+        try:
+            return {"topic": topic, "msg": _fresh_message(topic, steps, ctx)}
+        except NotApplicable:
+            del pool[topic]
+    raise NotApplicable("no step can be made")  # pragma: no cover - Empty topics always can
+
+
+@register("seq_insert", weight=2.0)
+def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Insert a new step (a copy, or a fresh ``/go``, ``/plan``, joint target...) anywhere."""
+    if len(steps) >= ctx.max_steps:
+        raise NotApplicable("the scenario has max_steps steps")
+    steps.insert(ctx.rng.randint(0, len(steps)), _new_step(steps, ctx))
+    return steps, "seq_insert"
+
+
+@register("seq_delete", weight=1.0)
+def seq_delete(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Delete one step (never the last one)."""
+    if len(steps) <= 1:
+        raise NotApplicable("a scenario keeps at least one step")
+    del steps[ctx.rng.randrange(len(steps))]
+    return steps, "seq_delete"
+
+
+@register("seq_duplicate", weight=1.0)
+def seq_duplicate(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Repeat one step right after itself (``/go`` twice, the same target twice...)."""
+    if not steps or len(steps) >= ctx.max_steps:
+        raise NotApplicable("no room for a duplicate")
+    index = ctx.rng.randrange(len(steps))
+    steps.insert(index + 1, mutators._clone(steps[index]))
+    return steps, "seq_duplicate"
+
+
+@register("seq_swap", weight=1.0)
+def seq_swap(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Exchange two steps that differ."""
+    if len(steps) < 2 or all(s == steps[0] for s in steps):
+        raise NotApplicable("no two different steps")
+    i = ctx.rng.randrange(len(steps))
+    j = ctx.rng.choice([k for k, s in enumerate(steps) if s != steps[i]])  # not all equal: never empty
+    steps[i], steps[j] = steps[j], steps[i]
+    return steps, "seq_swap"
+
+
+@register("seq_move", weight=1.0)
+def seq_move(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Move one step to another place; the order always changes."""
+    if len(steps) < 2 or all(s == steps[0] for s in steps):
+        raise NotApplicable("no step can change place")
+    n = len(steps)
+    i = ctx.rng.randrange(n)
+    # moving i to j changes the list iff a step between them (j included) differs from steps[i]
+    after = next((k for k in range(i + 1, n) if steps[k] != steps[i]), n)
+    before = next((k for k in range(i - 1, -1, -1) if steps[k] != steps[i]), -1)
+    targets = [*range(before + 1), *range(after, n)]
+    step = steps.pop(i)
+    steps.insert(ctx.rng.choice(targets), step)
+    return steps, "seq_move"
+
+
+@register(SEQ_STEP, weight=4.0)
+def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Mutate one step's message with the value mutators (that step type's field types)."""
+    candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(_msg_type_of(s, ctx) or "")]
+    while candidates:
+        index = candidates.pop(ctx.rng.randrange(len(candidates)))
+        step = steps[index]
+        msg_type = ctx.tables.types[step["topic"]]
+        inner = ctx.tables.value_context(msg_type, ctx.value)
+        peers = [  # for the value splice: other messages of this type (this scenario, the other parent)
+            s["msg"]
+            for s in (*steps, *(ctx.other or ()))
+            if _msg_type_of(s, ctx) == msg_type and s["msg"] != step["msg"]
+        ]
+        inner.other = ctx.rng.choice(peers) if peers else None
+        try:
+            message, name = mutators.mutate(step["msg"], inner, ctx.inner)
+        finally:
+            inner.other = None
+        if name != NOOP:
+            steps[index] = {**step, "msg": message}
+            return steps, f"{SEQ_STEP}:{name}"
+    raise NotApplicable("no step has a value to mutate")
+
+
+def _splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:
+    """``a[:i] + b[j:]`` with 1..max_steps steps, avoiding a copy of a parent when possible."""
+    child = mutators._clone(a)
+    for _ in range(SPLICE_ATTEMPTS):
+        i = rng.randint(0, min(len(a), max_steps))
+        # the suffix length s = len(b) - j must satisfy 1 <= i + s <= max_steps
+        low, high = max(1 - i, 0), min(max_steps - i, len(b))
+        if low > high:
+            continue
+        child = mutators._clone(a[:i] + b[len(b) - rng.randint(low, high) :])
+        if a == b or (child != a and child != b):
+            break
+    return child
+
+
+@register(SPLICE, weight=0.5)
+def seq_splice(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """A prefix of this scenario + a suffix of the other parent (``ctx.other``)."""
+    if not ctx.other:
+        raise NotApplicable("seq_splice needs another scenario")
+    return _splice_steps(steps, ctx.other, ctx.rng, ctx.max_steps), SPLICE
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Entry points
+# ----------------------------------------------------------------------------------------------------------
+
+
+def _steps_of(message: Any, what: str = "message") -> Steps:
+    """The steps list of a scenario message, or ValueError naming the problem."""
+    if not isinstance(message, dict) or not isinstance(message.get("steps"), list):
+        raise ValueError(f"the {what} is not a scenario: expected an object with a 'steps' list")
+    steps: Steps = message["steps"]
+    return steps
+
+
+def _with_steps(message: dict[str, Any], steps: Steps) -> dict[str, Any]:
+    """A copy of ``message`` whose steps are ``steps``."""
+    out = {key: mutators._clone(value) for key, value in message.items() if key != "steps"}
+    out["steps"] = steps
+    return out
+
+
+@dataclass(frozen=True)
+class SequenceMutator:
+    """``mutate(message, ctx, name=None) -> (message, name)`` for scenarios (as ``mutators.mutate``).
+
+    ``name`` is a sequence mutator (``seq_delete``) or ``seq_step:<value mutator>``; when it
+    does not apply, others are tried by :data:`SEQ_WEIGHTS`; :data:`fuzzer.mutators.NOOP` and an
+    unchanged copy when none applies. ``ctx.other``, when a scenario, is the other parent.
+    """
+
+    tables: _Tables
+    max_steps: int
+    uses_other: bool = True
+    """Tells the harness to pass a second parent as ``ctx.other`` (copies, value splices)."""
+
+    def __call__(
+        self, message: dict[str, Any], ctx: MutationContext, name: str | None = None
+    ) -> tuple[dict[str, Any], str]:
+        first, inner = name, None
+        if name is not None:
+            first, _, inner_name = name.partition(":")
+            inner = inner_name or None
+            if first not in SEQ_MUTATORS or (inner is not None and first != SEQ_STEP):
+                raise KeyError(f"unknown sequence mutator {name!r}; known: {sorted(SEQ_MUTATORS)}")
+            if inner is not None and inner not in mutators.MUTATORS:
+                raise KeyError(f"unknown value mutator {inner!r}; known: {sorted(mutators.MUTATORS)}")
+        steps = _steps_of(message)
+        other = _steps_of(ctx.other, "other parent") if isinstance(ctx.other, dict) else None
+        sctx = SequenceContext(ctx.rng, ctx, self.max_steps, self.tables, other, inner)
+        pool = dict(SEQ_WEIGHTS)
+        pick = first if first is not None else mutators._weighted_choice(pool, ctx.rng)
+        while True:
+            try:
+                new, used = SEQ_MUTATORS[pick](steps, sctx)
+                return _with_steps(message, new), used
+            except NotApplicable:
+                pool.pop(pick, None)
+                try:
+                    pick = mutators._weighted_choice(pool, ctx.rng)
+                except NotApplicable:
+                    return mutators._clone(message), NOOP
+
+
+@dataclass(frozen=True)
+class SequenceCrossover:
+    """``crossover(a, b, ctx) -> message`` for scenarios: ``seq_splice`` of ``a`` and ``b``.
+
+    ``lineage_name`` is the name the harness records for the child.
+    """
+
+    max_steps: int
+    lineage_name: str = SPLICE
+
+    def __call__(self, a: dict[str, Any], b: dict[str, Any], ctx: MutationContext) -> dict[str, Any]:
+        first, second = _steps_of(a, "first parent"), _steps_of(b, "second parent")
+        return _with_steps(a, _splice_steps(first, second, ctx.rng, self.max_steps))
+
+
+def for_registry(
+    registry: MessageRegistry, max_steps: int = MAX_STEPS
+) -> tuple[SequenceMutator, SequenceCrossover]:
+    """The scenario mutator and crossover for messages known to ``registry``.
+
+    Parameters
+    ----------
+    registry : MessageRegistry
+        Where the topics' message types (``fuzzer.scenario.steps.TOPICS``) are looked up.
+    max_steps : int
+        Children have 1..max_steps steps (1 <= max_steps <= ``MAX_STEPS_LIMIT``).
+
+    Returns
+    -------
+    tuple
+        ``(mutate, crossover)`` with the signatures of :func:`fuzzer.mutators.mutate` and
+        :func:`fuzzer.mutators.crossover`; the crossover's ``lineage_name`` is ``seq_splice``.
+
+    Raises
+    ------
+    ValueError
+        If ``max_steps`` is out of range or a topic's message type is unknown to ``registry``.
+    """
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int) or not 1 <= max_steps <= MAX_STEPS_LIMIT:
+        raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
+    types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
+    fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
+    tables = _Tables(registry, types, fields)
+    return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)

@@ -1,0 +1,276 @@
+"""The oracle of ``--op scenario``: every step's outputs, compared, and each target checked alone.
+
+Differential check: the steps are compared in order and the first divergent step is reported
+(``Comparison.step``, ``step_kind``, ``field = "<kind>.<quantity>"``). Per step: the status
+(class and code of errors; a crash, or a side that ended earlier, is a ``crash``/``status``
+divergence at that step), then each value in the order of :data:`ORDER`: a value present on
+one side only, a trajectory's point count (exact), then the values, each within its tolerance:
+
+=========================  ==================================  ==========  =================
+quantity                   rule                                tolerance   unit
+=========================  ==================================  ==========  =================
+success, error_code        exact                               0           status
+fraction                   absolute                            1e-9        fraction
+trajectory.points          exact                               0           points
+trajectory.time_from_start absolute per point                  1e-9        s
+trajectory.positions       per point, as joint values          campaign    rad (m)
+trajectory.velocities      absolute per point and joint        1e-6        rad/s (m/s)
+trajectory.accelerations   absolute per point and joint        1e-6        rad/s^2 (m/s^2)
+joint_target, named        as joint values                     campaign    rad (m)
+joint_values, position,    ``fuzzer.oracle.compare`` (modulo   campaign    rad (m), m, rad
+orientation                2pi, q ~ -q, canonical boundary)
+=========================  ==================================  ==========  =================
+
+Values named ``in_effect.*`` are what the executor knew (the script's settings), not outputs
+of a target, and are not compared. Divergences that documented limitations explain (IK's
+answer is a pose, not a unique joint vector; knife edges of step counts) are classified, not
+counted (``known_limitation``; ``fuzzer.scenario.oracle_ik``).
+
+Property checks (``fuzzer.scenario.oracle_properties``) run on each target alone; a differential
+divergence takes precedence at the same step, else the earliest step wins; a
+``known_limitation`` gives way to a property violation at any step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from fuzzer import oracle
+from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
+from fuzzer.scenario.oracle_ik import (
+    FRACTION_TOLERANCE,
+    absolute,
+    classify,
+    ik_answer_changed,
+    joints_apart,
+    solves_ik,
+    value_divergence,
+)
+from fuzzer.scenario.oracle_properties import first_property
+from fuzzer.scenario.steps import ScenarioCall
+from fuzzer.tolerance import Tolerance
+
+TIME_TOLERANCE = 1e-9
+"""time_from_start (s)."""
+VELOCITY_TOLERANCE = 1e-6
+"""Trajectory velocities (rad/s or m/s)."""
+ACCELERATION_TOLERANCE = 1e-6
+"""Trajectory accelerations (rad/s^2 or m/s^2)."""
+
+ORDER = (
+    "success",
+    "error_code",
+    "fraction",
+    "trajectory.points",
+    "trajectory.time_from_start",
+    "trajectory.positions",
+    "trajectory.velocities",
+    "trajectory.accelerations",
+    "joint_target",
+    "named",
+    "joint_values",
+    "position",
+    "orientation",
+)
+"""Order in which a step's quantities are compared (the first divergent one is reported)."""
+
+IN_EFFECT = "in_effect."
+"""Prefix of what the executor knew (script settings), not outputs of the target: not compared."""
+POSE_VALUES = ("joint_values", "position", "orientation")
+
+
+def _quantity(key: str) -> str:
+    return "named" if key.startswith("named.") else key
+
+
+def _rank(key: str) -> int:
+    quantity = _quantity(key)
+    return ORDER.index(quantity) if quantity in ORDER else len(ORDER)
+
+
+def _rows(
+    key: str, a: np.ndarray, b: np.ndarray, tol: Tolerance, facts: ScenarioFacts, dof: int
+) -> Comparison | None:
+    limits = np.array([tol.metres if p else tol.radians for p in facts.prismatic] or [tol.radians] * dof)
+    if dof == len(limits) and bool(np.all(np.abs(a - b).reshape(-1, dof) <= limits)):
+        return None  # the fast path: equal as numbers within tolerance
+    found: list[Comparison] = []
+    for row_a, row_b in zip(a.reshape(-1, dof), b.reshape(-1, dof), strict=True):
+        c = joints_apart(key, row_a.tolist(), row_b.tolist(), tol, facts)
+        if c is not None:
+            found.append(c)
+    if not found:
+        return None
+    values = [c for c in found if c.kind is Kind.VALUE] or found
+    worst = max(values, key=lambda c: c.difference)
+    joints = tuple(sorted({j for c in values for j in c.joints}))
+    return replace(worst, joints=joints, largest=max(c.largest for c in found))
+
+
+def _unit(base: str, facts: ScenarioFacts, joints: tuple[int, ...]) -> str:
+    linear = bool(joints) and all(j < len(facts.prismatic) and facts.prismatic[j] for j in joints)
+    return base.replace("rad", "m") if linear else base
+
+
+def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: ScenarioFacts) -> Comparison:
+    """The differential verdict on one step's two outcomes (``field`` is ``<kind>.<quantity>``).
+
+    Parameters
+    ----------
+    kind : str
+        Step kind (``go``, ``plan``...).
+    a, b : Outcome
+        The step's outcomes on the two targets; trajectories are flattened row-major, (M * dof,).
+    tol : Tolerance
+        Campaign tolerance (joint values, positions, orientations).
+    facts : ScenarioFacts
+        The robot's joints.
+    """
+    status = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
+    if status.divergent:
+        return replace(status, field=f"{kind}.status")
+    if a.status is Status.CRASHED:
+        return Comparison(Kind.AGREE)
+    found: list[Comparison] = []
+    keys = sorted(
+        (k for k in set(a.values) | set(b.values) if not k.startswith(IN_EFFECT)), key=lambda k: (_rank(k), k)
+    )
+    points = [len(o.values.get("trajectory.time_from_start", ())) for o in (a, b)]
+    dof = len(facts.joints)
+    for key in keys:
+        field_name = f"{kind}.{_quantity(key)}"
+        if key not in a.values or key not in b.values:
+            found.append(value_divergence(field_name, math.inf, "status"))
+            break
+        va, vb = np.asarray(a.values[key], dtype=float), np.asarray(b.values[key], dtype=float)
+        if key.startswith("trajectory."):
+            if points[0] != points[1]:
+                found.append(
+                    value_divergence(f"{kind}.trajectory.points", abs(points[0] - points[1]), "points")
+                )
+                break
+            if key != "trajectory.time_from_start" and not (va.size == vb.size == points[0] * dof):
+                found.append(value_divergence(field_name, math.inf, "points"))
+                break
+        elif va.size != vb.size:
+            found.append(value_divergence(field_name, math.inf, "status"))
+            break
+        c: Comparison | None
+        if key in ("success", "error_code"):
+            c = absolute(field_name, va, vb, 0.0, "status")
+        elif key == "fraction":
+            c = absolute(field_name, va, vb, FRACTION_TOLERANCE, "fraction")
+        elif key == "trajectory.time_from_start":
+            c = absolute(field_name, va, vb, TIME_TOLERANCE, "s")
+        elif key in ("trajectory.velocities", "trajectory.accelerations"):
+            speed = key.endswith("velocities")
+            unit, limit = ("rad/s", VELOCITY_TOLERANCE) if speed else ("rad/s^2", ACCELERATION_TOLERANCE)
+            c = absolute(field_name, va, vb, limit, unit, dof)
+            c = c and replace(c, unit=_unit(unit, facts, c.joints))
+        elif key == "trajectory.positions" and dof:
+            c = _rows(field_name, va, vb, tol, facts, dof)
+        elif key == "joint_target" or key.startswith("named."):
+            c = joints_apart(field_name, va.tolist(), vb.tolist(), tol, facts)
+        elif key in POSE_VALUES:
+            continue  # below, together (the oracle's own order and rules)
+        else:
+            c = absolute(field_name, va, vb, tol.radians, "")
+        if c is not None:
+            found.append(c)
+            if c.kind is Kind.VALUE:
+                break
+    pose = {k: a.values[k] for k in POSE_VALUES if k in a.values and k in b.values}
+    if pose and not any(c.kind is Kind.VALUE for c in found):
+        c = oracle.compare(
+            Outcome(Status.OK, values=pose),
+            Outcome(Status.OK, values={k: b.values[k] for k in pose}),
+            tol,
+            facts.prismatic,
+            continuous=facts.continuous,
+        )
+        if c.divergent:
+            found.append(replace(c, field=f"{kind}.{c.field}"))
+    chosen = next((c for c in found if c.kind is Kind.VALUE), found[0] if found else None)
+    return chosen or Comparison(Kind.AGREE)
+
+
+def _status_of_shorter(kind: str, shorter: Outcome) -> Comparison:
+    ended = shorter.steps[-1] if shorter.steps else shorter
+    crashed = ended.status is Status.CRASHED or shorter.status is Status.CRASHED
+    return Comparison(Kind.CRASH if crashed else Kind.STATUS, f"{kind}.status")
+
+
+def first_differential(
+    call: ScenarioCall, a: Outcome, b: Outcome, tol: Tolerance, facts: ScenarioFacts
+) -> Comparison:
+    """The first divergent step (classified), or ``agree`` with the largest raw difference."""
+    largest = 0.0
+    before = list(zip(contexts(call, a, facts), contexts(call, b, facts), strict=False))
+    for i in range(max(len(a.steps), len(b.steps))):
+        kind = call.steps[i].kind if i < len(call.steps) else "step"
+        if i >= len(a.steps) or i >= len(b.steps):
+            c = _status_of_shorter(kind, a if i >= len(a.steps) else b)
+            return replace(c, step=i, step_kind=kind)
+        c = compare_step(kind, a.steps[i], b.steps[i], tol, facts)
+        largest = max(largest, c.largest)
+        if c.divergent:
+            c = classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol)
+            return replace(c, step=i, step_kind=kind)
+    # every step agreed: the group's constructor, or reading the final state, may still differ
+    c = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
+    if c.divergent:
+        return replace(c, field="scenario.status")
+    return Comparison(Kind.AGREE, largest=largest)
+
+
+def compare_scenario(
+    call: ScenarioCall, a: Outcome, b: Outcome, tol: Tolerance, facts: ScenarioFacts
+) -> Comparison:
+    """The oracle's verdict on two runs of one scenario.
+
+    Parameters
+    ----------
+    call : ScenarioCall
+        The scenario (its steps give each step's kind and arguments).
+    a, b : Outcome
+        The two targets' scenario outcomes (``Outcome.steps``: one per executed step).
+    tol : Tolerance
+        Campaign tolerance (joint values and trajectory positions, rad or m; position m;
+        orientation rad).
+    facts : ScenarioFacts
+        The robot's joints and limits, the targets' names, and FK for the IK rules.
+
+    Returns
+    -------
+    Comparison
+        With ``step``/``step_kind`` of the reported step; ``target`` for a property violation.
+    """
+    differential = first_differential(call, a, b, tol, facts)
+    violation = first_property(call, (a, b), facts)
+    return prefer(differential, violation)
+
+
+def prefer(differential: Comparison, violation: Comparison | None) -> Comparison:
+    """A differential divergence first at the same step, else the earliest step; a divergence
+    that is not counted (``known_limitation``, ``ill_conditioned``) gives way to a violation."""
+    if violation is None or violation.step is None:
+        return differential
+    if not differential.divergent or differential.kind in (Kind.KNOWN_LIMITATION, Kind.ILL_CONDITIONED):
+        return violation
+    if differential.step is not None and violation.step < differential.step:
+        return violation
+    return differential
+
+
+__all__ = [
+    "compare_scenario",
+    "compare_step",
+    "first_differential",
+    "ik_answer_changed",
+    "prefer",
+    "solves_ik",
+]

@@ -1,0 +1,264 @@
+"""Steps that solve IK in a scenario: the documented limitations, and nudge checks.
+
+A step solves IK when it is ``go`` or ``plan`` with a pose or position target in effect, or
+``cartesian_path``. IK's answer is a pose within the solver's tolerance, not a unique joint
+vector (``fuzzer.oracle`` compares single IK calls by pose only). At such a step a divergence
+(other than of the status) is ``known_limitation`` when
+
+* ``cartesian_path``: a segment is on the knife edge of its step count (``d / eef_step``
+  within ``KNIFE_EDGE`` relative of an integer >= 1: ``floor`` may fall either way);
+* the IK answers (the state after ``go``, a plan's last point, every point of a path with the
+  same point count) differ beyond the campaign tolerance in joint space (modulo 2pi) but put the
+  link at the same pose within ``IK_AGREEMENT`` (KDL's rotation dead zone, docs/api.md);
+* the IK answers differ as numbers by more than ``IK_EXACT`` but within the campaign
+  tolerance, and the divergence is of what the contract computes *from* them (the point
+  count, ``time_from_start``, velocities, accelerations): with different inputs the timing
+  differs by the inputs' gap times a sensitivity that grows without bound as a segment
+  shrinks, so no tolerance on the timing itself can hold.
+
+The timing rule holds at any ``plan`` or ``cartesian_path`` step whose start states differ as
+numbers by more than ``IK_EXACT`` (within the tolerance, or an earlier step would have been
+reported): an earlier IK answer left the two arms that far apart. And at any step, a
+divergence of the end effector's position or orientation is ``known_limitation`` when the two
+joint vectors agree within the campaign tolerance but not as numbers (``IK_EXACT``) and the
+reported poses are no farther apart than the reference FK of the two vectors plus the
+tolerance: FK amplifies a joint gap within tolerance (rad) into a pose gap beyond it (m).
+
+A status divergence (ok vs failed) of ``go``/``plan`` with a pose target is
+``known_limitation`` when the requested orientation is within ``DEAD_ZONE`` of a half turn
+from the orientation the state before the step gives the link (``fuzzer.evaluate``'s rule
+for single IK calls). Other IK divergences go to the evaluator's nudge check
+(``ik_answer_changed``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from fuzzer import oracle
+from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
+from fuzzer.scenario.steps import ScenarioCall
+from fuzzer.tolerance import Tolerance
+
+FRACTION_TOLERANCE = 1e-9
+"""Cartesian path fraction."""
+IK_AGREEMENT = 2.0 * oracle.IK_RESIDUAL
+"""Two IK answers each within the solver's tolerance of one pose are this close (m, rad)."""
+IK_EXACT = 1e-12
+"""IK answers closer than this (rad, m) are the same answer (rounding): their timing compares."""
+KNIFE_EDGE = 1e-9
+"""Relative distance of ``d / eef_step`` to an integer within which its floor is rounding."""
+DEAD_ZONE = 1e-6
+"""KDL's rotation dead zone at a half turn (rad; ``fuzzer.evaluate.DEAD_ZONE``)."""
+DERIVED = (
+    "trajectory.points",
+    "trajectory.time_from_start",
+    "trajectory.velocities",
+    "trajectory.accelerations",
+)
+"""What the contract computes from a trajectory's positions."""
+
+Pairs = list[tuple[Sequence[float], Sequence[float]]]
+
+
+def value_divergence(
+    field_name: str, difference: float, unit: str, joints: tuple[int, ...] = ()
+) -> Comparison:
+    """A ``value`` divergence with its headline ``difference`` in ``unit``."""
+    bucket = oracle.bucket(difference)
+    return Comparison(Kind.VALUE, field_name, difference, False, bucket, joints, difference, unit, difference)
+
+
+def absolute(
+    key: str, a: np.ndarray, b: np.ndarray, limit: float, unit: str, dof: int = 0
+) -> Comparison | None:
+    """Element-wise ``|a - b| <= limit`` (NaN on both sides agrees); with ``dof`` the arrays
+    are (M * dof,) and the divergence names the joints (columns) beyond the limit."""
+    gap = np.abs(a - b)
+    gap[np.isnan(gap) & ~(np.isnan(a) & np.isnan(b))] = math.inf
+    gap[np.isnan(gap)] = 0.0
+    worst = float(gap.max(initial=0.0))
+    if worst <= limit:
+        return None
+    joints: tuple[int, ...] = ()
+    if dof:
+        columns = gap.reshape(-1, dof).max(axis=0)
+        joints = tuple(int(j) for j in np.flatnonzero(columns > limit))
+    return value_divergence(key, worst, unit, joints)
+
+
+def joints_apart(
+    key: str, a: Sequence[float], b: Sequence[float], tol: Tolerance, facts: ScenarioFacts
+) -> Comparison | None:
+    """``fuzzer.oracle.compare`` on two joint vectors (modulo 2pi, canonical boundary rule):
+    its divergence with ``field = key``, or None when they agree."""
+    c = oracle.compare(
+        Outcome(Status.OK, values={"joint_values": tuple(a)}),
+        Outcome(Status.OK, values={"joint_values": tuple(b)}),
+        tol,
+        facts.prismatic,
+        continuous=facts.continuous,
+    )
+    return replace(c, field=key) if c.divergent else None
+
+
+def solves_ik(call: ScenarioCall, step: int, before: Context) -> bool:
+    """Whether the step at ``step`` solves IK (its goal or path), given what is in effect."""
+    kind = call.steps[step].kind
+    return kind == "cartesian_path" or (kind in ("go", "plan") and before.pose_goal is not None)
+
+
+def ik_answers(kind: str, a: Outcome, b: Outcome, dof: int) -> Pairs | None:
+    """The pairs of IK answers of a step: the state after ``go``, a plan's last points, every
+    point of a path (None when a path's point counts differ or a shape is wrong)."""
+    if kind == "go":
+        pair = (a.values.get("joint_values", ()), b.values.get("joint_values", ()))
+        return [pair] if len(pair[0]) == len(pair[1]) == dof else None
+    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    if not dof or any(r.size == 0 or r.size % dof for r in rows):
+        return None
+    ra, rb = (r.reshape(-1, dof) for r in rows)
+    if kind == "plan":
+        return [(tuple(ra[-1].tolist()), tuple(rb[-1].tolist()))]
+    if len(ra) != len(rb):
+        return None
+    return [(tuple(x), tuple(y)) for x, y in zip(ra.tolist(), rb.tolist(), strict=True)]
+
+
+def classify(
+    call: ScenarioCall,
+    i: int,
+    a: Outcome,
+    b: Outcome,
+    c: Comparison,
+    before: tuple[Context, Context],
+    facts: ScenarioFacts,
+    tol: Tolerance,
+) -> Comparison:
+    """A divergence at step ``i`` that a documented limitation explains is ``known_limitation``
+    (module docstring); any other stays as it is. ``before`` is what is in effect on each target."""
+    if c.kind is Kind.CRASH:
+        return c
+    if c.field.rsplit(".", 1)[-1] in ("position", "orientation") and _pose_follows_joints(
+        a, b, c, facts, tol
+    ):
+        return replace(c, kind=Kind.KNOWN_LIMITATION)
+    ik = solves_ik(call, i, before[0])
+    kind = call.steps[i].kind
+    if c.kind is Kind.STATUS:
+        return _half_turn(a, b, c, before[0], facts) if ik else c
+    gap = _gap([(before[0].state or (), before[1].state or ())])
+    if ik:
+        if kind == "cartesian_path" and _knife_edge(call, i, before[0], facts):
+            return replace(c, kind=Kind.KNOWN_LIMITATION)
+        pairs = ik_answers(kind, a, b, len(facts.joints))
+        if pairs is None:
+            return c
+        apart = [(x, y) for x, y in pairs if joints_apart("", x, y, tol, facts) is not None]
+        if apart:
+            link = before[0].pose_goal.link if (kind != "cartesian_path" and before[0].pose_goal) else None
+            same = all(_same_pose(x, y, link, facts) for x, y in apart)
+            return replace(c, kind=Kind.KNOWN_LIMITATION) if same else c
+        gap = max(gap, _gap(pairs))
+    derived = any(c.field.endswith("." + name) for name in DERIVED)
+    return replace(c, kind=Kind.KNOWN_LIMITATION) if derived and gap > IK_EXACT else c
+
+
+def _pose_follows_joints(a: Outcome, b: Outcome, c: Comparison, facts: ScenarioFacts, tol: Tolerance) -> bool:
+    """A pose divergence of the end effector whose joint values agree within tolerance but not as
+    numbers (``IK_EXACT``), no larger than the reference FK of the two joint vectors is apart plus
+    the tolerance: FK amplifies a joint gap within tolerance (rad) into a pose gap (m) beyond it."""
+    x, y = a.values.get("joint_values", ()), b.values.get("joint_values", ())
+    if facts.forward is None or len(x) != len(y) or _gap([(x, y)]) <= IK_EXACT:
+        return False
+    if joints_apart("", x, y, tol, facts) is not None:
+        return False
+    try:
+        (pa, qa), (pb, qb) = facts.forward(x, None), facts.forward(y, None)
+    except Exception:  # noqa: BLE001 - a pose the reference cannot compute explains nothing
+        return False
+    if c.field.endswith("position"):
+        return c.difference <= math.dist(pa, pb) + tol.metres
+    return c.difference <= oracle.rotation_distance(qa, qb) + tol.radians
+
+
+def _gap(pairs: Pairs) -> float:
+    """The largest difference as numbers over pairs of vectors of equal length (0 otherwise)."""
+    gaps = [abs(p - q) for x, y in pairs if len(x) == len(y) for p, q in zip(x, y, strict=True)]
+    return max(gaps, default=0.0)
+
+
+def _half_turn(a: Outcome, b: Outcome, c: Comparison, before: Context, facts: ScenarioFacts) -> Comparison:
+    goal = before.pose_goal
+    if goal is None or goal.orientation is None or before.state is None or facts.forward is None:
+        return c
+    if not {a.status, b.status} <= {Status.OK, Status.FAILED}:
+        return c
+    norm = math.sqrt(sum(x * x for x in goal.orientation))
+    if not (norm > 0.0 and math.isfinite(norm)):
+        return c
+    try:
+        start = facts.forward(before.state, goal.link)[1]
+    except Exception:  # noqa: BLE001 - a pose the reference cannot compute is no known limitation
+        return c
+    target = tuple(x / norm for x in goal.orientation)
+    if oracle.rotation_distance(start, target) >= math.pi - DEAD_ZONE:
+        return replace(c, kind=Kind.KNOWN_LIMITATION)
+    return c
+
+
+def _knife_edge(call: ScenarioCall, i: int, before: Context, facts: ScenarioFacts) -> bool:
+    """Whether a segment's ``d / eef_step`` is within rounding of an integer >= 1."""
+    if before.state is None or facts.forward is None or not before.eef_step > 0.0:
+        return False
+    try:
+        previous = facts.forward(before.state, None)[0]
+        for pose in call.steps[i].message["poses"]:
+            point = tuple(float(pose["position"][k]) for k in "xyz")
+            ratio = math.dist(previous, point) / before.eef_step
+            nearest = round(ratio) if math.isfinite(ratio) else 0
+            if nearest >= 1 and abs(ratio - nearest) <= KNIFE_EDGE * ratio:
+                return True
+            previous = point
+    except Exception:  # noqa: BLE001 - a malformed pose, or the reference's FK failing: no knife edge
+        return False
+    return False
+
+
+def _same_pose(x: Sequence[float], y: Sequence[float], link: str | None, facts: ScenarioFacts) -> bool:
+    if facts.forward is None:
+        return False
+    try:
+        (pa, qa), (pb, qb) = facts.forward(x, link), facts.forward(y, link)
+    except Exception:  # noqa: BLE001 - a pose the reference cannot compute explains nothing
+        return False
+    return math.dist(pa, pb) <= IK_AGREEMENT and oracle.rotation_distance(qa, qb) <= IK_AGREEMENT
+
+
+def ik_answer_changed(
+    kind: str, first: Outcome, second: Outcome, tol: Tolerance, facts: ScenarioFacts
+) -> bool:
+    """Whether one target's answer at a step that solves IK changed between two runs: its
+    status, a path's point count or fraction (beyond ``FRACTION_TOLERANCE``), or the IK answer
+    beyond the campaign tolerance (modulo 2pi): the state after ``go``, the last point of a
+    plan, any point of a path. Timing is not compared (it follows the answer)."""
+    if first.label != second.label:
+        return True
+    if first.status is not Status.OK:
+        return False
+    if kind != "go":
+        times = [len(o.values.get("trajectory.time_from_start", ())) for o in (first, second)]
+        fa, fb = (np.asarray(o.values.get("fraction", (0.0,)), dtype=float) for o in (first, second))
+        if times[0] != times[1] or fa.size != fb.size:
+            return True
+        if absolute("", fa, fb, FRACTION_TOLERANCE, "") is not None:
+            return True
+    pairs = ik_answers(kind, first, second, len(facts.joints))
+    if pairs is None:
+        return True
+    return any(joints_apart("", x, y, tol, facts) is not None for x, y in pairs)

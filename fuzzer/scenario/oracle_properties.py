@@ -1,0 +1,188 @@
+"""Property checks of a scenario on each target alone (``Kind.PROPERTY``, the target named).
+
+With what is in effect before the step (``fuzzer.scenario.oracle_facts``), on every step
+that completed (status ok):
+
+=======================  ==========================================================  ============
+field                    property                                                    unit
+=======================  ==========================================================  ============
+<kind>.trajectory.shape  /plan, /cartesian_path: positions, velocities and           points
+                         accelerations hold (M, dof) values for the M times
+<kind>.joint_limits      every sample within [lower - tol, upper + tol] (tol: the    rad (m)
+                         goal tolerance); continuous joints in (-pi, pi]
+<kind>.velocity_limits   abs(velocity) <= velocity limit x velocity scaling          rad/s (m/s)
+<kind>.acceleration_     abs(acceleration) <= ACCELERATION_LIMIT x acceleration      rad/s^2
+limits                   scaling                                                     (m/s^2)
+<kind>.time_from_start   starts at 0 exactly, strictly increasing                    s
+plan.goal                /plan with a joint goal: the last point is the goal         rad (m)
+go.goal                  /go with a joint goal: the state after it is the goal       rad (m)
+execute.last_point       /execute of a plan: the state after it is its last point    rad (m)
+=======================  ==========================================================  ============
+
+Velocity and acceleration bounds get a relative slack of ``RELATIVE_SLACK`` plus
+``ABSOLUTE_SLACK``; the goal and last-point checks allow the goal tolerance (``execute``
+clamps a last point up to that far past a limit) plus the same slack; continuous joints
+compare modulo 2pi. The reported ``difference`` is how far past the bound the worst sample is.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from fuzzer import oracle
+from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
+from fuzzer.scenario.steps import ScenarioCall
+from robot_api.constants import ACCELERATION_LIMIT
+
+RELATIVE_SLACK = 1e-9
+ABSOLUTE_SLACK = 1e-12
+
+
+def _violation(
+    target: str, field_name: str, excess: float, unit: str, joints: Sequence[int] = ()
+) -> Comparison:
+    excess = excess if math.isfinite(excess) else math.inf
+    return Comparison(
+        Kind.PROPERTY,
+        field_name,
+        excess,
+        False,
+        oracle.bucket(excess),
+        tuple(sorted({int(j) for j in joints})),
+        unit=unit,
+        raw=excess,
+        target=target,
+    )
+
+
+def _unit(base: str, facts: ScenarioFacts, joints: Sequence[int]) -> str:
+    linear = bool(len(joints)) and all(facts.joints[j].prismatic for j in joints)
+    return base.replace("rad", "m") if linear else base
+
+
+def _excess(values: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """How far each ``|value|`` is past ``bound`` with the slack (NaN counts as infinitely)."""
+    over = np.abs(values) - (bound * (1.0 + RELATIVE_SLACK) + ABSOLUTE_SLACK)
+    return np.where(np.isnan(over), math.inf, over)
+
+
+def _worst(
+    target: str, field_name: str, excess: np.ndarray, base_unit: str, facts: ScenarioFacts
+) -> Comparison | None:
+    bad = excess > 0.0
+    if not bad.any():
+        return None
+    joints = np.flatnonzero(bad.any(axis=0)).tolist()
+    return _violation(target, field_name, float(excess.max()), _unit(base_unit, facts, joints), joints)
+
+
+def _outside_limits(positions: np.ndarray, facts: ScenarioFacts, tol: float) -> np.ndarray:
+    """Per sample and joint, how far past its limits (plus ``tol``); continuous: (-pi, pi]."""
+    excess = np.zeros_like(positions)
+    for j, spec in enumerate(facts.joints):
+        x = positions[:, j]
+        if spec.continuous:
+            inside = (x > -math.pi) & (x <= math.pi)
+            excess[:, j] = np.where(inside, 0.0, np.maximum(np.abs(x) - math.pi, math.ulp(math.pi)))
+        else:
+            excess[:, j] = np.maximum(np.maximum(spec.lower - tol - x, x - spec.upper - tol), 0.0)
+    return np.where(np.isnan(positions), math.inf, excess)
+
+
+def check_trajectory(
+    kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts, target: str
+) -> Comparison | None:
+    """The properties of the trajectory a ``/plan`` or ``/cartesian_path`` step returned."""
+    dof = len(facts.joints)
+    times = np.asarray(outcome.values.get("trajectory.time_from_start", ()), dtype=float)
+    m = len(times)
+    arrays = []
+    for name in ("positions", "velocities", "accelerations"):
+        flat = np.asarray(outcome.values.get(f"trajectory.{name}", ()), dtype=float)
+        if flat.size != m * dof:
+            return _violation(target, f"{kind}.trajectory.shape", abs(flat.size - m * dof), "points")
+        arrays.append(flat.reshape(m, dof))
+    if m == 0 or dof == 0:
+        return None
+    positions, velocities, accelerations = arrays
+    limits = _worst(
+        target, f"{kind}.joint_limits", _outside_limits(positions, facts, before.goal_tolerance), "rad", facts
+    )
+    if limits is not None:
+        return limits
+    vmax = np.array([spec.velocity for spec in facts.joints]) * before.velocity_scaling
+    found = _worst(target, f"{kind}.velocity_limits", _excess(velocities, vmax), "rad/s", facts)
+    if found is not None:
+        return found
+    amax = np.full(dof, ACCELERATION_LIMIT * before.acceleration_scaling)
+    found = _worst(target, f"{kind}.acceleration_limits", _excess(accelerations, amax), "rad/s^2", facts)
+    if found is not None:
+        return found
+    if times[0] != 0.0 or not math.isfinite(times[0]):
+        return _violation(target, f"{kind}.time_from_start", abs(float(times[0])), "s")
+    steps = np.diff(times)
+    if m > 1 and not bool(np.all(steps > 0.0)):
+        back = float(np.max(-steps)) if not np.isnan(steps).any() else math.inf
+        return _violation(target, f"{kind}.time_from_start", back, "s")
+    if kind == "plan" and before.pose_goal is None and before.joint_goal is not None:
+        return _equal(target, "plan.goal", tuple(positions[-1].tolist()), before.joint_goal, before, facts)
+    return None
+
+
+def _equal(
+    target: str,
+    field_name: str,
+    actual: Sequence[float],
+    expected: Sequence[float],
+    before: Context,
+    facts: ScenarioFacts,
+) -> Comparison | None:
+    """``actual`` within the goal tolerance (plus slack) of ``expected``; continuous modulo 2pi."""
+    if len(actual) != len(expected) or len(actual) != len(facts.joints):
+        return _violation(target, field_name, math.inf, "rad", range(len(facts.joints)))
+    excess = np.zeros((1, len(actual)))
+    bound = before.goal_tolerance * (1.0 + RELATIVE_SLACK) + ABSOLUTE_SLACK
+    for j, (x, y, spec) in enumerate(zip(actual, expected, facts.joints, strict=True)):
+        gap = abs(x - y)
+        if spec.continuous and math.isfinite(gap):
+            gap = abs(math.remainder(x - y, 2.0 * math.pi))
+        excess[0, j] = gap - bound if math.isfinite(gap) else math.inf
+    return _worst(target, field_name, excess, "rad", facts)
+
+
+def check_step(
+    kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts, target: str
+) -> Comparison | None:
+    """The first property violation of one step's outcome on one target, or None."""
+    if outcome.status is not Status.OK:
+        return None
+    if kind in ("plan", "cartesian_path"):
+        return check_trajectory(kind, outcome, before, facts, target)
+    state = outcome.values.get("joint_values")
+    if state is None:
+        return None
+    if kind == "go" and before.pose_goal is None and before.joint_goal is not None:
+        return _equal(target, "go.goal", state, before.joint_goal, before, facts)
+    if kind == "execute" and before.last_plan is not None:
+        return _equal(target, "execute.last_point", state, before.last_plan, before, facts)
+    return None
+
+
+def first_property(
+    call: ScenarioCall, outcomes: tuple[Outcome, Outcome], facts: ScenarioFacts
+) -> Comparison | None:
+    """The earliest property violation of either target (the first target first at a step),
+    with ``step``/``step_kind`` set, or None."""
+    found: list[Comparison] = []
+    for target, outcome in zip(facts.targets, outcomes, strict=True):
+        for i, (step, before) in enumerate(zip(call.steps, contexts(call, outcome, facts), strict=False)):
+            c = check_step(step.kind, outcome.steps[i], before, facts, target)
+            if c is not None:
+                found.append(replace(c, step=i, step_kind=step.kind))
+                break
+    return min(found, key=lambda c: c.step if c.step is not None else 0, default=None)

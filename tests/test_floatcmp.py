@@ -1,0 +1,76 @@
+"""Float comparisons of instrumented Python code become distance-to-flip features."""
+
+from __future__ import annotations
+
+import sys
+import types
+
+import atheris
+
+from fuzzer.guidance import Features
+from fuzzer.selection.floatcmp import FLOAT_CMP, FloatCompareTracer
+
+
+def _instrumented() -> types.ModuleType:
+    name = "tests.plugins.float_branch"
+    if name not in sys.modules:
+        with atheris.instrument_imports(include=[name]):
+            __import__(name)
+    return sys.modules[name]
+
+
+def test_float_comparisons_of_instrumented_code_are_traced_with_their_distance() -> None:
+    module = _instrumented()
+    features = Features(enabled=False)
+    tracer = FloatCompareTracer(features)
+    tracer.install()
+    try:
+        assert module.branch(0.5, 1.0) == 0
+        far = set(features.seen)
+        assert far and all(key.startswith(f"({FLOAT_CMP}, ") for key in far)
+        assert module.branch(0.07, 1.0) == 0  # 0.14 vs 0.1234: closer, a new exponent
+        closer = set(features.seen) - far
+        assert closer
+        assert module.branch(0.01, 5) == 1  # the branch flipped: the other side
+        assert len(tracer.sites) == 2 and tracer.traced == 5
+    finally:
+        atheris._trace_cmp = tracer.inner
+
+
+def test_install_is_idempotent_and_follows_a_swap() -> None:
+    calls: list[tuple[object, ...]] = []
+
+    def first(*args: object) -> bool:
+        calls.append(("first", *args))
+        return True
+
+    def second(*args: object) -> bool:
+        calls.append(("second", *args))
+        return False
+
+    fake = types.SimpleNamespace(_trace_cmp=first)
+    tracer = FloatCompareTracer(Features(enabled=False), fake)
+    tracer.install()
+    tracer.install()
+    assert tracer.inner is first
+    assert fake._trace_cmp(1.5, 2.5, 0, 9, False) is True
+    fake._trace_cmp = second  # Atheris swaps in its real function when fuzzing starts
+    tracer.install()
+    assert tracer.inner is second and fake._trace_cmp(1.5, 2.5, 0, 9, False) is False
+    assert [c[0] for c in calls] == ["first", "second"]
+    assert tracer.sites == {9} and tracer.traced == 2
+
+
+def test_non_float_comparisons_are_left_alone_and_special_floats_bucketed() -> None:
+    features = Features(enabled=False)
+    tracer = FloatCompareTracer(features, types.SimpleNamespace(_trace_cmp=lambda *a: None))
+    tracer.install()
+    tracer.trace(1, 2, 0, 1, False)
+    tracer.trace("a", "b", 2, 2, False)
+    assert tracer.traced == 0
+    tracer.trace(float("nan"), 1.0, 0, 3, False)
+    tracer.trace(2.0, 2.0, 2, 4, False)
+    tracer.trace(float("inf"), 1, 4, 5, False)
+    assert tracer.traced == 3 and len(features.seen) == 3
+    uninstalled = FloatCompareTracer(features, types.SimpleNamespace())
+    assert uninstalled.trace(1.0, 2.0, 0, 6, False) is True  # compares itself when never installed

@@ -1,0 +1,372 @@
+"""Scenario sequence mutators, their lineage, step-bigram features and step minimization."""
+
+from __future__ import annotations
+
+import copy
+import json
+import random
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+import python_impl
+from fuzzer import mutators
+from fuzzer.artifacts import ArtifactStore
+from fuzzer.guidance import START, Features, step_bigrams
+from fuzzer.harness import Harness
+from fuzzer.minimize import Minimizer, ddmin, joints_that_matter
+from fuzzer.msgdef import MessageRegistry
+from fuzzer.mutators import MutationContext
+from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_registry
+from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
+from fuzzer.session import RunConfig, Session
+from fuzzer.testcase import TestCase, decode
+
+REGISTRY = MessageRegistry()
+MAX = 12
+MUTATE, CROSSOVER = for_registry(REGISTRY, MAX)
+SEEDS = range(40)
+INTERESTING = (3.1416, -2.0071)
+
+
+def step(topic: str, **fields: Any) -> dict[str, Any]:
+    """A valid step: the registry default of the topic's type with ``fields`` set."""
+    msg = REGISTRY.default(TOPICS[topic].msg_type)
+    msg.update(fields)
+    return {"topic": topic, "msg": msg}
+
+
+def joint_target(*position: float) -> dict[str, Any]:
+    return step("/joint_target", position=list(position))
+
+
+GO, PLAN, EXECUTE = step("/go"), step("/plan"), step("/execute")
+
+
+def base_scenario() -> dict[str, Any]:
+    return {
+        "steps": [
+            joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6),
+            step("/velocity_scaling", data=0.5),
+            PLAN,
+            EXECUTE,
+            joint_target(-0.3, 0.1, 0.7, 0.0, 0.2, -0.1),
+            GO,
+            step("/remember", data="here"),
+        ]
+    }
+
+
+def other_scenario() -> dict[str, Any]:
+    pose = {
+        "position": {"x": 0.2, "y": 0.0, "z": 0.4},
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+    }
+    return {"steps": [step("/pose_target", pose=pose), GO, step("/named_target", data="home"), PLAN]}
+
+
+def context(seed: int, other: dict[str, Any] | None = None) -> MutationContext:
+    return MutationContext(
+        rng=random.Random(seed),
+        field_types={},
+        interesting_floats=INTERESTING,
+        dictionary=("joint_1", "link_6"),
+        other=other,
+    )
+
+
+def key(s: dict[str, Any]) -> str:
+    return json.dumps(s, sort_keys=True)
+
+
+def removed_one(longer: list[Any], shorter: list[Any]) -> list[int]:
+    """Indices i with longer[:i] + longer[i+1:] == shorter."""
+    return [i for i in range(len(longer)) if longer[:i] + longer[i + 1 :] == shorter]
+
+
+# -- sequence mutators ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", sorted(SEQ_MUTATORS))
+def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -> None:
+    parent, other = base_scenario(), other_scenario()
+    before, other_before = copy.deepcopy(parent), copy.deepcopy(other)
+    used = set()
+    for seed in SEEDS:
+        child, reported = MUTATE(parent, context(seed, other), name)
+        again, _ = MUTATE(parent, context(seed, other), name)
+        assert child == again  # a seed gives a mutation
+        validate(child, REGISTRY, MAX)
+        assert parent == before and other == other_before  # inputs untouched
+        assert child["steps"] is not parent["steps"]
+        used.add(reported)
+        old, new = parent["steps"], child["steps"]
+        if name == "seq_insert":
+            assert len(new) == len(old) + 1 and removed_one(new, old)
+        elif name == "seq_delete":
+            assert len(new) == len(old) - 1 and removed_one(old, new)
+        elif name == "seq_duplicate":
+            assert any(new[i] == new[i + 1] for i in removed_one(new, old))
+        elif name == "seq_swap":
+            moved = [i for i in range(len(old)) if old[i] != new[i]]
+            assert len(moved) == 2 and sorted(map(key, old)) == sorted(map(key, new))
+        elif name == "seq_move":
+            assert new != old and sorted(map(key, old)) == sorted(map(key, new))
+            assert any(removed_one(new, old[:i] + old[i + 1 :]) for i in range(len(old)))
+        elif name == "seq_step":
+            changed = [i for i in range(len(old)) if old[i] != new[i]]
+            assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
+        elif name == SPLICE:
+            assert any(new == old[:i] + other["steps"][j:] for i in range(8) for j in range(5))
+    if name == "seq_step":
+        assert len(used) > 3 and all(u.split(":")[1] in mutators.MUTATORS for u in used)
+    else:
+        assert used == {name}
+
+
+def test_seq_step_names_its_value_mutator_and_keeps_the_topic() -> None:
+    parent = {"steps": [GO, joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), PLAN]}
+    child, name = MUTATE(parent, context(3), "seq_step:arithmetic")
+    assert name == "seq_step:arithmetic"
+    assert child["steps"][0] == GO and child["steps"][2] == PLAN
+    old, new = parent["steps"][1]["msg"]["position"], child["steps"][1]["msg"]["position"]
+    assert sum(a != b for a, b in zip(old, new, strict=True)) == 1
+    # only steps with values are mutated by value mutators: a /go-only scenario falls back
+    child, name = MUTATE({"steps": [GO, GO]}, context(0), "seq_step")
+    assert not name.startswith("seq_step") and 1 <= len(child["steps"]) <= MAX
+
+
+def test_bounds_make_mutators_fall_back() -> None:
+    full = {"steps": [GO, PLAN] * (MAX // 2)}
+    one = {"steps": [GO]}
+    same = {"steps": [GO, GO, GO]}
+    for seed in SEEDS:
+        for name in ("seq_insert", "seq_duplicate"):
+            child, used = MUTATE(full, context(seed), name)
+            assert used != name and len(child["steps"]) <= MAX
+            validate(child, REGISTRY, MAX)
+        child, used = MUTATE(one, context(seed), "seq_delete")
+        assert used != "seq_delete" and len(child["steps"]) >= 1
+        for name in ("seq_swap", "seq_move"):
+            assert MUTATE(same, context(seed), name)[1] != name
+    # nothing applies to a one-step /go with max_steps 1: noop, an equal copy
+    mutate_one, _ = for_registry(REGISTRY, 1)
+    child, used = mutate_one(one, context(0))
+    assert used == mutators.NOOP and child == one and child is not one
+
+
+def test_random_mutations_stay_valid_and_reach_every_mutator() -> None:
+    message = base_scenario()
+    used = set()
+    for seed in range(300):
+        message, name = MUTATE(message, context(seed, other_scenario()))
+        validate(message, REGISTRY, MAX)
+        used.add(name.split(":")[0])
+    assert used == set(SEQ_MUTATORS)
+
+
+def test_fresh_steps_are_made_from_the_scenario() -> None:
+    parent = {
+        "steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), joint_target(-1.0, -2.0, 0.0, 0.0, 0.5, 1.5)]
+    }
+    columns = [{0.1, -1.0, *INTERESTING}, {0.2, -2.0, *INTERESTING}, {0.3, 0.0, *INTERESTING}]
+    topics = set()
+    for seed in range(200):
+        child, _ = MUTATE(parent, context(seed), "seq_insert")
+        [i] = removed_one(child["steps"], parent["steps"])[:1]
+        new = child["steps"][i]
+        topics.add(new["topic"])
+        if new["topic"] == "/joint_target" and new not in parent["steps"]:
+            position = new["msg"]["position"]
+            assert len(position) == 6 and all(v in columns[j] for j, v in enumerate(position[:3]))
+            topics.add("recombined")
+    assert {"/go", "/plan", "/execute", "recombined"} <= topics
+
+
+def test_field_types_cover_arrays_of_messages() -> None:
+    types = field_types(REGISTRY, "geometry_msgs/PoseArray")
+    assert types["poses"] == "geometry_msgs/Pose[]" and types["poses.orientation.w"] == "float64"
+    assert field_types(REGISTRY, "std_msgs/Empty") == {}
+
+
+def test_bad_inputs_give_clear_errors() -> None:
+    with pytest.raises(KeyError, match="unknown sequence mutator"):
+        MUTATE(base_scenario(), context(0), "arithmetic")
+    with pytest.raises(KeyError, match="unknown value mutator"):
+        MUTATE(base_scenario(), context(0), "seq_step:nope")
+    with pytest.raises(ValueError, match="not a scenario"):
+        MUTATE({"position": [1.0]}, context(0))
+    for bad in (0, MAX * 100, True):
+        with pytest.raises(ValueError, match="max_steps"):
+            for_registry(REGISTRY, bad)
+
+
+# -- crossover --------------------------------------------------------------------------------------
+
+
+def test_splice_is_a_prefix_and_a_suffix_within_bounds() -> None:
+    a, b = base_scenario(), other_scenario()
+    before = copy.deepcopy((a, b))
+    _, cross_small = for_registry(REGISTRY, 3)
+    children = set()
+    for seed in SEEDS:
+        child = CROSSOVER(a, b, context(seed))
+        assert child == CROSSOVER(a, b, context(seed))
+        assert any(child["steps"] == a["steps"][:i] + b["steps"][j:] for i in range(8) for j in range(5))
+        assert child != a and child != b
+        validate(child, REGISTRY, MAX)
+        small = cross_small(a, b, context(seed))
+        assert 1 <= len(small["steps"]) <= 3
+        children.add(key(child))
+    assert (a, b) == before and len(children) > 5
+    assert CROSSOVER.lineage_name == SPLICE
+    for seed in SEEDS:  # with itself: a range of steps removed or repeated
+        self_child = CROSSOVER(a, a, context(seed))["steps"]
+        assert any(self_child == a["steps"][:i] + a["steps"][j:] for i in range(8) for j in range(8))
+
+
+# -- the harness: lineage and step-bigram features ---------------------------------------------------
+
+
+class Drift(python_impl.MoveGroup):
+    """The planted two-call fault: the second successful go() of a group whose joint target
+    puts joint_1 above 1 rad ends 1 mrad off on joint_1."""
+
+    def __init__(self, model: Any) -> None:
+        super().__init__(model)
+        self._gos = 0
+
+    def go(self, joints: Any = None, wait: bool = True) -> bool:
+        moved: bool = super().go(joints, wait)
+        self._gos += moved
+        if moved and self._gos >= 2 and self.get_joint_value_target()[0] > 1.0:
+            self._current[0] -= 1e-3
+        return moved
+
+
+drift = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=Drift)
+TWIN = ("python", "tests.test_scenario_mutate:drift")
+
+
+@pytest.fixture(scope="module")
+def twin() -> Session:
+    return Session.open(RunConfig(op="scenario", targets=TWIN, max_steps=MAX))
+
+
+def make_harness(tmp_path: Path, session: Session) -> Harness:
+    return Harness(
+        evaluator=session.evaluator(),
+        store=ArtifactStore(tmp_path / "artifacts"),
+        features=Features(enabled=False),
+        context=context(0),
+        sidecar=lambda case, data, ev: {},
+        seeds=[TestCase(MSG_TYPE, base_scenario())],
+        mutate_message=MUTATE,
+        crossover_message=CROSSOVER,
+    )
+
+
+def test_harness_lineage_names_the_sequence_mutators(tmp_path: Path, twin: Session) -> None:
+    h = make_harness(tmp_path, twin)
+    parent = TestCase(MSG_TYPE, base_scenario(), lineage=("seed",), lineage_length=1)
+    names = set()
+    for seed in range(30):
+        child = decode(h.mutate(parent.encode(), 1 << 16, seed))
+        assert child.lineage[:-1] == parent.lineage and child.lineage_length == 2
+        validate(child.message, REGISTRY, MAX)
+        names.add(child.lineage[-1].split(":")[0])
+    assert len(names) > 3 and names <= set(SEQ_MUTATORS)
+    # the harness hands a second parent (here: the seed) to the sequence mutator: its steps get copied
+    h.seeds = [TestCase(MSG_TYPE, other_scenario())]
+    pose_target = other_scenario()["steps"][0]
+    copied = [decode(h.mutate(parent.encode(), 1 << 16, seed)).message for seed in range(60)]
+    assert any(pose_target in child["steps"] for child in copied)
+    spliced = decode(h.crossover(parent.encode(), TestCase(MSG_TYPE, other_scenario()).encode(), 1 << 16, 1))
+    assert spliced.lineage[-1] == SPLICE
+
+
+def test_step_bigrams() -> None:
+    assert step_bigrams(["joint_target", "go", "plan"], ["ok", "failed"]) == [
+        f"{START}>joint_target:ok",
+        "joint_target:ok>go:failed",
+    ]
+
+
+def test_a_new_order_of_steps_is_a_new_feature(tmp_path: Path, twin: Session) -> None:
+    h = make_harness(tmp_path, twin)
+
+    def features_of(steps: list[dict[str, Any]]) -> set[str]:
+        before = set(h.features.seen)
+        h.test_one_input(TestCase(MSG_TYPE, {"steps": steps}).encode())
+        return h.features.seen - before
+
+    target = joint_target(0.5, 0.2, 0.3, 0.4, 0.5, 0.6)
+    first = features_of([target, PLAN, GO])
+    assert {"q:a:^>joint_target:ok", "q:a:joint_target:ok>plan:ok", "q:b:plan:ok>go:ok"} <= first
+    assert features_of([target, PLAN, GO]) == set()  # the same behaviour again: nothing new
+    reordered = features_of([target, GO, PLAN])
+    assert "q:a:joint_target:ok>go:ok" in reordered and "q:a:go:ok>plan:ok" in reordered
+    rejected = features_of([joint_target(9.0, 0.0, 0.0, 0.0, 0.0, 0.0), GO])  # out of the limits
+    assert any(name.startswith("q:a:^>joint_target:rejected:") for name in rejected)
+
+
+# -- minimization -------------------------------------------------------------------------------
+
+
+def test_ddmin_finds_a_one_minimal_subset() -> None:
+    calls: list[tuple[int, ...]] = []
+
+    def holds(subset: list[int]) -> bool:
+        calls.append(tuple(subset))
+        return {3, 7} <= set(subset)
+
+    kept, reductions = ddmin(list(range(10)), holds, lambda: True)
+    assert kept == [3, 7] and reductions > 0
+    assert len(calls) == len(set(calls)) and () not in calls
+    kept, _ = ddmin(list(range(10)), holds, lambda: len(calls) < 25)  # budget: stops early, still holds
+    assert {3, 7} <= set(kept)
+
+
+def test_minimize_removes_steps_then_shrinks_values(twin: Session) -> None:
+    target = joint_target(1.37251, 0.25, -0.3, 0.4, 0.5, 0.6)
+    target["msg"]["header"] = {"seq": 7, "stamp": {"secs": 3, "nsecs": 12}, "frame_id": "x"}
+    steps = [
+        step("/velocity_scaling", data=0.5),
+        joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6),
+        GO,
+        PLAN,
+        target,
+        step("/remember", data="here"),
+        GO,
+        EXECUTE,
+        step("/goal_tolerance", data=0.001),
+        GO,
+    ]
+    case = TestCase(MSG_TYPE, {"steps": steps}, lineage=("seq_insert",), lineage_length=1)
+    evaluator = twin.evaluator()
+    ev = evaluator.evaluate(case)
+    assert ev.signature is not None and ev.comparison.field == "go.joint_values" and ev.comparison.step == 6
+    shrunk = Minimizer(twin).minimize(case)
+    kept = shrunk.case.message["steps"]
+    # 1-minimal: the joint target and two /go steps (in an order that still diverges)
+    assert sorted(s["topic"] for s in kept) == ["/go", "/go", "/joint_target"] and kept[-1] == GO
+    [shrunk_target] = [s["msg"] for s in kept if s["topic"] == "/joint_target"]
+    position = shrunk_target["position"]
+    assert position[1:] == [0.0] * 5 and position[0] > 1.0  # the value that matters, simpler
+    assert len(repr(position[0])) < len(repr(1.37251))
+    assert shrunk_target["header"] == {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+    replay = evaluator.evaluate(shrunk.case)
+    assert replay.signature is not None and replay.signature.key == ev.signature.key
+    assert shrunk.complete and shrunk.case.lineage[-1] == "minimize"
+    assert joints_that_matter(shrunk.case, twin.reference.joint_names) == ["joint_1"]
+    assert case.message["steps"] == steps and len(steps) == 10  # the input is untouched
+
+
+def test_minimize_of_a_scenario_respects_its_budget(twin: Session) -> None:
+    evaluator = twin.evaluator()
+    case = TestCase(MSG_TYPE, {"steps": [joint_target(1.5, 0.0, 0.0, 0.0, 0.0, 0.0), GO, PLAN, GO, PLAN, GO]})
+    shrunk = Minimizer(twin, budget=3).minimize(case)
+    assert shrunk.evaluations <= 3 and not shrunk.complete
+    assert evaluator.evaluate(shrunk.case).signature is not None

@@ -1,0 +1,497 @@
+"""The scenario oracle: every step's quantities, the properties of each target, the first
+divergent step, signatures without the step index, and faults only a second call shows."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import pytest
+
+from fuzzer.evaluate import Evaluator, history_of, stored_call
+from fuzzer.mapping import MoveCall
+from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
+from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
+from fuzzer.scenario.steps import ScenarioCall, Step, to_call
+from fuzzer.targets import Runner
+from fuzzer.testcase import TestCase
+from fuzzer.tolerance import Tolerance
+from robot_api import robots
+
+TOL = Tolerance(1e-6, 1e-6)
+NAMES = ("native", "python")
+# joint 0: revolute in [-2, 2], 1 rad/s; joint 1: continuous, 2 rad/s
+FACTS = ScenarioFacts(
+    (JointSpec("revolute", -2.0, 2.0, 1.0), JointSpec("continuous", -math.inf, math.inf, 2.0)),
+    NAMES,
+    home=(0.0, 0.0),
+)
+FACTS_ANY_GOAL = ScenarioFacts(FACTS.joints, NAMES)  # home unknown: no joint goal to check
+HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+POSE = {"position": {"x": 0.3, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}
+MESSAGES: dict[str, dict[str, Any]] = {
+    "joint_target": {"header": HEADER, "name": [], "position": [0.5, 0.5], "velocity": [], "effort": []},
+    "pose_target": {"header": HEADER, "pose": POSE},
+    "cartesian_path": {"header": HEADER, "poses": [POSE]},
+    "remember": {"data": "here"},
+}
+
+
+def scenario(*kinds: str, **data: float) -> ScenarioCall:
+    """Steps by kind; ``velocity_scaling=0.5`` etc. give a Float64 step its value."""
+    return ScenarioCall(
+        tuple(Step(k, MESSAGES.get(k, {"data": data[k]} if k in data else {})) for k in kinds)
+    )
+
+
+def ok(**values: tuple[float, ...]) -> Outcome:
+    return Outcome(Status.OK, values={k.replace("__", "."): v for k, v in values.items()})
+
+
+def run(*steps: Outcome) -> Outcome:
+    return Outcome(Status.OK, values={}, steps=steps)
+
+
+def trajectory(points: list[tuple[float, float]], dt: float = 0.5, **extra: tuple[float, ...]) -> Outcome:
+    """A plan step whose samples are ``points``; velocities and accelerations zero."""
+    m = len(points)
+    return ok(
+        success=(1.0,),
+        trajectory__time_from_start=tuple(i * dt for i in range(m)),
+        trajectory__positions=tuple(x for p in points for x in p),
+        trajectory__velocities=(0.0,) * (2 * m),
+        trajectory__accelerations=(0.0,) * (2 * m),
+        joint_values=(0.0, 0.0),
+        **extra,
+    )
+
+
+def judge(call: ScenarioCall, a: Outcome, b: Outcome, facts: ScenarioFacts = FACTS) -> Comparison:
+    return compare_scenario(call, a, b, TOL, facts)
+
+
+def with_value(outcome: Outcome, key: str, value: tuple[float, ...]) -> Outcome:
+    return Outcome(outcome.status, values={**outcome.values, key: value})
+
+
+PLAN = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
+SHIFT = (1e-6 * 0.5, 1e-6 * 3)  # within / beyond every tolerance below (scaled per quantity)
+
+
+@pytest.mark.parametrize(
+    ("key", "within", "beyond", "field", "unit"),
+    [
+        ("success", None, (0.0,), "plan.success", "status"),
+        ("fraction", (1.0 - 5e-10,), (1.0 - 3e-9,), "plan.fraction", "fraction"),
+        (
+            "trajectory.time_from_start",
+            (0.0, 0.5 + 5e-10, 1.0),
+            (0.0, 0.5 + 3e-9, 1.0),
+            "plan.trajectory.time_from_start",
+            "s",
+        ),
+        (
+            "trajectory.positions",
+            (0.0, 0.0, 0.25 + 5e-7, 0.25, 0.5, 0.5),
+            (0.0, 0.0, 0.25 + 3e-6, 0.25, 0.5, 0.5),
+            "plan.trajectory.positions",
+            "rad",
+        ),
+        (
+            "trajectory.velocities",
+            (0.0, 5e-7, 0, 0, 0, 0),
+            (0.0, 3e-6, 0, 0, 0, 0),
+            "plan.trajectory.velocities",
+            "rad/s",
+        ),
+        (
+            "trajectory.accelerations",
+            (5e-7, 0, 0, 0, 0, 0),
+            (3e-6, 0, 0, 0, 0, 0),
+            "plan.trajectory.accelerations",
+            "rad/s^2",
+        ),
+        ("joint_values", (5e-7, 0.0), (3e-6, 0.0), "plan.joint_values", "rad"),
+    ],
+)
+def test_each_plan_quantity_within_tolerance_agrees_and_beyond_diverges(
+    key: str, within: tuple[float, ...] | None, beyond: tuple[float, ...], field: str, unit: str
+) -> None:
+    call = scenario("joint_target", "plan")
+    base = with_value(PLAN, "fraction", (1.0,)) if key == "fraction" else PLAN
+    first = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    if within is not None:
+        assert judge(call, run(first, base), run(first, with_value(base, key, within))).kind is Kind.AGREE
+    c = judge(call, run(first, base), run(first, with_value(base, key, beyond)))
+    assert (c.kind, c.field, c.unit, c.step, c.step_kind) == (Kind.VALUE, field, unit, 1, "plan")
+    if key.startswith("trajectory.") and key != "trajectory.time_from_start":
+        assert c.joints == ((1,) if key == "trajectory.velocities" else (0,))
+
+
+def test_point_count_is_exact_and_reported_before_values() -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    longer = trajectory([(0.0, 0.0), (0.2, 0.2), (0.4, 0.4), (0.5, 0.5)])
+    c = judge(call, run(first, PLAN), run(first, longer))
+    assert (c.kind, c.field, c.difference, c.unit) == (Kind.VALUE, "plan.trajectory.points", 1, "points")
+
+
+def test_a_value_on_one_side_only_diverges() -> None:
+    call = scenario("go")
+    c = judge(call, run(ok(joint_values=(0.0, 0.0))), run(ok(joint_values=(0.0, 0.0), success=(1.0,))))
+    assert (c.kind, c.field) == (Kind.VALUE, "go.success")
+
+
+@pytest.mark.parametrize(
+    ("kind", "key", "field"),
+    [
+        ("joint_target", "joint_target", "joint_target.joint_target"),
+        ("remember", "named.here", "remember.named"),
+    ],
+)
+def test_joint_tables_compare_as_joint_values(kind: str, key: str, field: str) -> None:
+    call = scenario(kind)
+    base = ok(joint_values=(0.0, 0.0), **{key.replace(".", "__"): (0.5, 3.0)})
+    near = with_value(base, key, (0.5 + 5e-7, 3.0))
+    assert judge(call, run(base), run(near)).kind is Kind.AGREE
+    c = judge(call, run(base), run(with_value(base, key, (0.5, 3.0 - 1e-3))))
+    assert (c.kind, c.field, c.joints) == (Kind.VALUE, field, (1,))
+    wrapped = judge(call, run(base), run(with_value(base, key, (0.5, 3.0 - 2 * math.pi))))
+    assert (wrapped.kind, wrapped.field) == (Kind.REPRESENTATION, field)
+
+
+def test_continuous_positions_either_side_of_pi_agree() -> None:
+    call = scenario("cartesian_path")
+    a = trajectory([(0.0, 0.0), (0.0, math.pi)])
+    b = with_value(a, "trajectory.positions", (0.0, 0.0, 0.0, -math.pi + 1e-12))
+    assert judge(call, run(a), run(b)).kind is Kind.AGREE
+
+
+def test_pose_values_use_the_single_call_oracle() -> None:
+    call = scenario("go")
+    q = (0.0, 0.0, 0.0, 1.0)
+    a = ok(joint_values=(0.1, 0.2), position=(1.0, 0.0, 0.0), orientation=q)
+    flipped = with_value(a, "orientation", tuple(-x for x in q))
+    c = judge(call, run(a), run(flipped))
+    assert (c.kind, c.field, c.unit) == (Kind.REPRESENTATION, "go.orientation", "rad")
+    moved = with_value(a, "position", (1.0 + 3e-6, 0.0, 0.0))
+    assert judge(call, run(a), run(moved)).field == "go.position"
+
+
+def test_statuses_crashes_and_a_shorter_run() -> None:
+    call = scenario("go", "go")
+    fine = ok(joint_values=(0.0, 0.0), success=(1.0,))
+    failed = Outcome(Status.FAILED, values={"joint_values": (0.0, 0.0), "success": (0.0,)})
+    c = judge(call, run(fine, fine), run(fine, failed))
+    assert (c.kind, c.field, c.step, c.unit) == (Kind.STATUS, "go.status", 1, "status")
+    crash = Outcome(Status.CRASHED, "TypeError", None, "boom")
+    assert judge(call, run(crash), run(fine, fine)).kind is Kind.CRASH
+    c = judge(call, run(fine), run(fine, fine))  # one side ended without a crash step
+    assert (c.kind, c.field, c.step) == (Kind.STATUS, "go.status", 1)
+
+
+def test_the_first_divergent_step_is_reported() -> None:
+    call = scenario("go", "go", "go", "go")
+    same = ok(joint_values=(0.0, 0.0))
+    off = ok(joint_values=(0.1, 0.0))
+    c = judge(call, run(same, same, same, same), run(same, off, same, off))
+    assert (c.step, c.step_kind, c.field) == (1, "go", "go.joint_values")
+    assert judge(call, run(same, same), run(same, same)).kind is Kind.AGREE
+
+
+# -- properties on each target alone ---------------------------------------------------------
+
+
+def both(call: ScenarioCall, *steps: Outcome) -> Comparison:
+    """The verdict when both targets answer the same (only properties can fail)."""
+    return judge(call, run(*steps), run(*steps))
+
+
+def test_samples_outside_the_limits_break_the_property_even_when_both_agree() -> None:
+    call = scenario("cartesian_path")
+    inside = trajectory([(0.0, 0.0), (2.0 + 5e-5, math.pi)])  # within the goal tolerance 1e-4
+    assert both(call, inside).kind is Kind.AGREE
+    c = both(call, trajectory([(0.0, 0.0), (2.0 + 2e-4, 0.0)]))
+    assert (c.kind, c.field, c.target, c.joints, c.step) == (
+        Kind.PROPERTY,
+        "cartesian_path.joint_limits",
+        "native",
+        (0,),
+        0,
+    )
+    assert c.difference == pytest.approx(1e-4)
+    assert both(call, trajectory([(0.0, 0.0), (0.0, -math.pi)])).joints == (1,)  # continuous: (-pi, pi]
+
+
+def velocities(kind: str, v: float, a: float = 0.0) -> Outcome:
+    plan = trajectory([(0.0, 0.0), (0.0, 0.5), (0.0, 0.5)])
+    plan = with_value(plan, "trajectory.velocities", (0.0, 0.0, 0.0, v, 0.0, 0.0))
+    return with_value(plan, "trajectory.accelerations", (0.0, 0.0, 0.0, a, 0.0, 0.0))
+
+
+def test_velocity_limits_times_the_scaling_in_effect() -> None:
+    scaled = scenario("velocity_scaling", "cartesian_path", velocity_scaling=0.5)
+    setting = ok(joint_values=(0.0, 0.0))
+    assert both(scaled, setting, velocities("cartesian_path", 1.0)).kind is Kind.AGREE  # 2 x 0.5
+    c = both(scaled, setting, velocities("cartesian_path", 1.0 + 1e-6))
+    assert (c.kind, c.field, c.unit, c.joints, c.step) == (
+        Kind.PROPERTY,
+        "cartesian_path.velocity_limits",
+        "rad/s",
+        (1,),
+        1,
+    )
+    rejected = Outcome(Status.REJECTED, "InvalidInputError", 2, values={"joint_values": (0.0, 0.0)})
+    assert both(scaled, rejected, velocities("cartesian_path", 2.0)).kind is Kind.AGREE  # scaling stays 1
+
+
+def test_acceleration_limits_times_the_scaling_in_effect() -> None:
+    scaled = scenario("acceleration_scaling", "cartesian_path", acceleration_scaling=0.25)
+    setting = ok(joint_values=(0.0, 0.0))
+    assert both(scaled, setting, velocities("cartesian_path", 0.0, -0.25)).kind is Kind.AGREE
+    c = both(scaled, setting, velocities("cartesian_path", 0.0, -0.3))
+    assert (c.kind, c.field, c.unit) == (Kind.PROPERTY, "cartesian_path.acceleration_limits", "rad/s^2")
+    assert c.difference == pytest.approx(0.05, rel=1e-6)
+
+
+def test_time_starts_at_zero_and_strictly_increases() -> None:
+    call = scenario("cartesian_path")
+    late = with_value(PLAN, "trajectory.time_from_start", (0.1, 0.5, 1.0))
+    still = with_value(PLAN, "trajectory.time_from_start", (0.0, 0.5, 0.5))
+    for bad in (late, still):
+        c = both(call, bad)
+        assert (c.kind, c.field, c.unit) == (Kind.PROPERTY, "cartesian_path.time_from_start", "s")
+
+
+def test_the_last_point_of_a_plan_is_its_joint_goal() -> None:
+    call = scenario("joint_target", "plan")
+    target = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    assert both(call, target, PLAN).kind is Kind.AGREE
+    short = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5 - 2e-4, 0.5)])
+    c = both(call, target, short)
+    assert (c.kind, c.field, c.joints) == (Kind.PROPERTY, "plan.goal", (0,))
+    posed = scenario("pose_target", "plan")  # a pose goal: no joint goal to check
+    assert both(posed, ok(joint_values=(0.0, 0.0)), short).kind is Kind.AGREE
+
+
+def test_go_reaches_its_joint_goal_and_execute_the_last_point() -> None:
+    call = scenario("joint_target", "go", "cartesian_path", "execute")
+    target = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    there = ok(joint_values=(0.5, 0.5), success=(1.0,))
+    back = trajectory([(0.5, 0.5), (0.0, 0.0)])
+    home = ok(joint_values=(0.0, 0.0), success=(1.0,))
+    assert both(call, target, there, back, home).kind is Kind.AGREE
+    c = both(call, target, ok(joint_values=(0.0, 0.0), success=(1.0,)))
+    assert (c.kind, c.field, c.step) == (Kind.PROPERTY, "go.goal", 1)
+    c = both(call, target, there, back, there)
+    assert (c.kind, c.field, c.step) == (Kind.PROPERTY, "execute.last_point", 3)
+    # the default joint goal is home: a first go that moves elsewhere breaks it
+    assert both(scenario("go"), there).field == "go.goal"
+
+
+def test_a_differential_divergence_wins_at_its_step_and_an_earlier_property_wins() -> None:
+    call = scenario("go", "cartesian_path")
+    home = ok(joint_values=(0.0, 0.0))
+    fast, slow = velocities("cartesian_path", 5.0), velocities("cartesian_path", 1.0)
+    for pair in ((fast, slow), (slow, fast)):
+        c = judge(call, run(home, pair[0]), run(home, pair[1]))
+        assert (c.kind, c.field, c.step) == (Kind.VALUE, "cartesian_path.trajectory.velocities", 1)
+    assert both(call, home, fast).target == "native"  # the property, when both agree
+    away = ok(joint_values=(0.3, 0.0))
+    c = judge(call, run(away, slow), run(away, fast))
+    assert (c.kind, c.field, c.step, c.target) == (Kind.PROPERTY, "go.goal", 0, "native")
+
+
+# -- documented limitations -------------------------------------------------------------------
+
+
+def planar(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A toy FK where the second joint does not move the link (so IK has many answers)."""
+    return (math.cos(q[0]), math.sin(q[0]), 0.0), (0.0, 0.0, math.sin(q[0] / 2), math.cos(q[0] / 2))
+
+
+def test_ik_answers_apart_in_joint_space_at_one_pose_are_a_known_limitation() -> None:
+    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)
+    call = scenario("pose_target", "go")
+    set_ = ok(joint_values=(0.0, 0.0))
+    a = ok(joint_values=(0.4, 0.1), success=(1.0,))
+    c = judge(call, run(set_, a), run(set_, with_value(a, "joint_values", (0.4, 0.1 + 1e-5))), facts)
+    assert (c.kind, c.field, c.step) == (Kind.KNOWN_LIMITATION, "go.joint_values", 1)
+    other_pose = judge(call, run(set_, a), run(set_, with_value(a, "joint_values", (0.4 + 1e-5, 0.1))), facts)
+    assert other_pose.kind is Kind.VALUE
+    joint_goal = judge(scenario("go"), run(a), run(with_value(a, "joint_values", (0.4, 0.1 + 1e-5))), facts)
+    assert joint_goal.kind is Kind.VALUE  # not a step that solves IK
+
+
+def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> None:
+    def origin(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+
+    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, origin)
+    three = trajectory([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)])
+    four = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)])
+    edge = scenario("cartesian_path")  # d / eef_step = 0.3 / 0.01 = 29.999999999999996
+    assert judge(edge, run(three), run(four), facts).kind is Kind.KNOWN_LIMITATION
+    off = ScenarioCall(
+        (
+            Step(
+                "cartesian_path",
+                {"header": HEADER, "poses": [{**POSE, "position": {"x": 0.305, "y": 0.0, "z": 0.0}}]},
+            ),
+        )
+    )
+    assert judge(off, run(three), run(four), facts).kind is Kind.VALUE
+
+
+def test_timing_of_ik_answers_that_differ_within_tolerance_is_a_known_limitation() -> None:
+    call = scenario("pose_target", "plan")
+    set_ = ok(joint_values=(0.0, 0.0))
+    a = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
+    later = with_value(a, "trajectory.time_from_start", (0.0, 0.5, 1.0 + 3e-9))
+    moved = with_value(later, "trajectory.positions", (0.0, 0.0, 0.25, 0.25, 0.5 + 1e-9, 0.5))
+    c = judge(call, run(set_, a), run(set_, moved))
+    assert (c.kind, c.field) == (Kind.KNOWN_LIMITATION, "plan.trajectory.time_from_start")
+    same_answer = judge(call, run(set_, a), run(set_, later))  # same points, other timing: a bug
+    assert (same_answer.kind, same_answer.field) == (Kind.VALUE, "plan.trajectory.time_from_start")
+    joint_goal = scenario("joint_target", "plan")
+    target = ok(joint_target=(0.5 + 1e-9, 0.5), joint_values=(0.0, 0.0))
+    assert judge(joint_goal, run(target, a), run(target, moved)).kind is Kind.VALUE
+
+
+def test_timing_from_start_states_apart_within_tolerance_is_a_known_limitation() -> None:
+    call = scenario("go", "plan")
+    a = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
+    later = with_value(a, "trajectory.time_from_start", (0.0, 0.5, 1.0 + 3e-9))
+    here, near = ok(joint_values=(0.0, 0.0)), ok(joint_values=(1e-9, 0.0))
+    c = judge(call, run(here, a), run(near, later), FACTS_ANY_GOAL)
+    assert (c.kind, c.field, c.step) == (Kind.KNOWN_LIMITATION, "plan.trajectory.time_from_start", 1)
+    assert judge(call, run(here, a), run(here, later), FACTS_ANY_GOAL).kind is Kind.VALUE
+
+
+def test_a_pose_gap_that_fk_makes_of_joints_within_tolerance_is_a_known_limitation() -> None:
+    def lever(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        return (10.0 * q[0], 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+
+    facts = ScenarioFacts(FACTS.joints, NAMES, None, lever)
+    call = scenario("execute")
+    q = (0.0, 0.0, 0.0, 1.0)
+    a = ok(joint_values=(0.1, 0.0), position=(1.0, 0.0, 0.0), orientation=q)
+    b = ok(joint_values=(0.1 + 5e-7, 0.0), position=(1.0 + 5e-6, 0.0, 0.0), orientation=q)
+    c = judge(call, run(a), run(b), facts)
+    assert (c.kind, c.field) == (Kind.KNOWN_LIMITATION, "execute.position")
+    wrong_fk = with_value(b, "position", (1.0 + 5e-5, 0.0, 0.0))
+    assert judge(call, run(a), run(wrong_fk), facts).kind is Kind.VALUE
+    same_joints = with_value(b, "joint_values", (0.1, 0.0))
+    assert judge(call, run(a), run(same_joints), facts).kind is Kind.VALUE
+
+
+@pytest.mark.parametrize(("half_angle", "kind"), [(math.pi / 2, Kind.KNOWN_LIMITATION), (1.5, Kind.STATUS)])
+def test_an_ik_status_divergence_at_a_half_turn_is_a_known_limitation(half_angle: float, kind: Kind) -> None:
+    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)  # home (0, 0): orientation identity
+    turned = {
+        **POSE,
+        "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(half_angle), "w": math.cos(half_angle)},
+    }
+    call = ScenarioCall((Step("pose_target", {"header": HEADER, "pose": turned}), Step("go", {})))
+    set_ = ok(joint_values=(0.0, 0.0))
+    moved = ok(joint_values=(math.pi, 0.0), success=(1.0,))
+    stayed = Outcome(Status.FAILED, values={"joint_values": (0.0, 0.0), "success": (0.0,)})
+    c = judge(call, run(set_, moved), run(set_, stayed), facts)
+    assert (c.kind, c.field, c.step) == (kind, "go.status", 1)
+
+
+def test_ik_answer_changes_count_status_points_and_the_answer_not_timing() -> None:
+    a = trajectory([(0.0, 0.0), (0.5, 0.5)])
+    slower = with_value(a, "trajectory.time_from_start", (0.0, 0.5 + 1e-7))
+    assert not ik_answer_changed("plan", a, slower, TOL, FACTS)
+    assert ik_answer_changed(
+        "plan", a, with_value(a, "trajectory.positions", (0.0, 0.0, 0.5, 0.5 + 1e-5)), TOL, FACTS
+    )
+    assert ik_answer_changed("plan", a, Outcome(Status.FAILED), TOL, FACTS)
+    assert ik_answer_changed("cartesian_path", a, trajectory([(0.0, 0.0)]), TOL, FACTS)
+
+
+def test_the_signature_names_the_step_kind_not_its_index() -> None:
+    path = robots.resolve("probot_anno")
+    runner = Runner.create("python", path, None)
+    ev = Evaluator("scenario", (runner, runner), to_call, TOL, lambda m: None)
+    same, off = ok(joint_values=(0.0,) * 6), ok(joint_values=(0.1,) + (0.0,) * 5)
+    early = scenario("go", "go", "go")
+    a, b = run(same, same, same), run(same, off, same)
+    c1 = compare_scenario(early, a, b, TOL, ev.scenario_facts)
+    c2 = compare_scenario(early, run(same, same, same), run(same, same, off), TOL, ev.scenario_facts)
+    assert (c1.step, c2.step) == (1, 2)
+    s1, s2 = ev.signature(a, b, c1), ev.signature(run(same, same, same), run(same, same, off), c2)
+    assert s1.key == s2.key and s1.field == "go.joint_values"
+    failed = Outcome(Status.FAILED)
+    status = compare_scenario(early, run(same, same), run(same, failed), TOL, ev.scenario_facts)
+    assert ev.signature(run(same, same), run(same, failed), status).field == "go.status"
+
+
+# -- end to end on live targets ---------------------------------------------------------------
+
+JOINT = {"header": HEADER, "name": [], "velocity": [], "effort": []}
+
+
+def live(kind: str, **msg: Any) -> dict[str, Any]:
+    topic = "/" + kind
+    if kind == "joint_target":
+        return {"topic": topic, "msg": {**JOINT, **msg}}
+    return {"topic": topic, "msg": msg}
+
+
+def evaluator(op: str, second: str, robot: str = "probot_anno") -> Evaluator:
+    path = robots.resolve(robot)
+    runners = (Runner.create("native", path, None), Runner.create(second, path, None))
+    mapping = to_call if op == "scenario" else (lambda m: MoveCall(None, tuple(m["position"])))
+    return Evaluator(op, runners, mapping, Tolerance(), lambda m: None)
+
+
+def test_a_fault_of_the_second_go_is_found_by_scenario_and_not_by_move() -> None:
+    faulty = "tests.plugins.scenario_faults:stale_second_go"
+    steps = [
+        live("joint_target", position=[0.2, 0.1, 0.3, 0.0, 0.2, 0.1]),
+        live("go"),
+        live("joint_target", position=[-0.3, 0.2, 0.1, 0.4, -0.2, 0.3]),
+        live("go"),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    ev = evaluator("scenario", faulty)
+    found = ev.evaluate(case, validated=True)
+    assert found.divergent and found.signature is not None
+    c = found.comparison
+    assert (c.kind, c.step, c.field) == (Kind.VALUE, 3, "go.joint_values")
+    assert evaluator("scenario", "python").evaluate(case, validated=True).comparison.kind is Kind.AGREE
+    move = evaluator("move", faulty)
+    for step in steps[::2]:
+        single = TestCase("sensor_msgs/JointState", step["msg"])
+        assert move.evaluate(single, validated=True).comparison.kind is Kind.AGREE
+
+
+def reachable_pose(ev: Evaluator) -> dict[str, Any]:
+    fk = ev.runners[0].model.forward_kinematics([0.3, -0.2, 0.4, 0.1, 0.5, 0.2])
+    return {
+        "position": dict(zip("xyz", fk.position, strict=True)),
+        "orientation": dict(zip("xyzw", fk.orientation, strict=True)),
+    }
+
+
+@pytest.mark.parametrize(
+    ("plugin", "kind"), [("seed_parity_ik", Kind.ILL_CONDITIONED), ("no_pose_goal", Kind.STATUS)]
+)
+def test_an_ik_step_that_flips_under_a_nudge_is_ill_conditioned(plugin: str, kind: Kind) -> None:
+    ev = evaluator("scenario", f"tests.plugins.scenario_faults:{plugin}")
+    steps = [live("pose_target", header=HEADER, pose=reachable_pose(ev)), live("go")]
+    c = ev.evaluate(TestCase("rrosfuzz/Scenario", {"steps": steps}), validated=True).comparison
+    assert (c.kind, c.step, c.field) == (kind, 1, "go.status")
+
+
+def test_scenario_history_round_trips_through_a_sidecar() -> None:
+    call = to_call({"steps": [live("go"), live("remember", data="x")]})
+    stored = stored_call(call)
+    assert history_of({"history": [stored]}) == [(call, None)]
+    with pytest.raises(ValueError, match="step 0"):
+        history_of(
+            {"history": [{"kind": "ScenarioCall", "message": {"steps": [{"topic": "/nope", "msg": {}}]}}]}
+        )

@@ -1,0 +1,72 @@
+"""The harness's input sources (issue 11): space-filling inputs and bandits, end to end."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+from fuzzer import mutators
+from fuzzer.generation.spacefill import SpaceFill, fresh_inputs, scenario_with_configuration
+from fuzzer.harness import MUTATE, SPACEFILL, Harness, Sources
+from fuzzer.selection.bandit import Bandit
+from fuzzer.session import RunConfig, Session
+from fuzzer.testcase import decode
+from tests.test_harness import make_harness
+
+
+def _with_sources(tmp_path: Path, seed: int = 0) -> tuple[Harness, SpaceFill]:
+    h = make_harness(tmp_path)
+    session = Session.open(RunConfig())
+    limits = session.reference.joint_limits
+    stream = SpaceFill([lim.lower for lim in limits], [lim.upper for lim in limits], seed=seed)
+    facts = session.facts()
+    fresh = fresh_inputs("move", "sensor_msgs/JointState", stream, facts.joint_names, facts.reachable)
+    h.sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(tuple(mutators.WEIGHTS), mutators.WEIGHTS), fresh)
+    return h, stream
+
+
+def test_space_filling_inputs_come_from_mutate_and_crossover(tmp_path: Path) -> None:
+    h, stream = _with_sources(tmp_path)
+    parent = h.seeds[0].encode()
+    children = [decode(h.mutate(parent, 4096, s)) for s in range(200)]
+    children += [decode(h.crossover(parent, h.seeds[1].encode(), 4096, s)) for s in range(200)]
+    fresh = [c for c in children if c.strategy == SPACEFILL]
+    assert 50 < len(fresh) < 350 and stream.drawn == len(fresh)
+    limits = Session.open(RunConfig()).reference.joint_limits
+    for child in fresh:
+        values = zip(child.message["position"], limits, strict=True)
+        assert all(lim.lower <= v <= lim.upper for v, lim in values)
+    others = {c.strategy for c in children} - {SPACEFILL}
+    # "seed": the parent itself, when a child is larger than max_size (_emit's fallback)
+    assert others and others <= {*mutators.MUTATORS, "noop", "splice", "seed"}
+
+
+def test_sources_are_deterministic_and_rewarded(tmp_path: Path) -> None:
+    a, _ = _with_sources(tmp_path / "a")
+    b, _ = _with_sources(tmp_path / "b")
+    data = a.seeds[2].encode()
+    assert [a.mutate(data, 4096, s) for s in range(60)] == [b.mutate(data, 4096, s) for s in range(60)]
+    for s in range(30):
+        a.test_one_input(a.mutate(data, 4096, 100 + s))
+    assert a.sources is not None
+    source = a.sources.source.arms
+    rewarded = source[MUTATE].rewards + source[SPACEFILL].rewards
+    assert rewarded > 0  # new behaviour features early on
+    assert sum(arm.pulls for arm in a.sources.mutators.arms.values()) > 0
+    a.sources.reward("seq_step:arithmetic", True)  # a scenario's inner mutator credits its outer one
+    assert set(a.sources.to_json()) == {"source", "mutators"}
+
+
+def test_a_scenario_gets_its_configuration_in_a_joint_target() -> None:
+    rng = random.Random(4)
+    js = {"header": {}, "name": [], "position": [0.0], "velocity": [], "effort": []}
+    with_target = {"steps": [{"topic": "/go", "msg": {}}, {"topic": "/joint_target", "msg": js}]}
+    out = scenario_with_configuration(with_target, (0.1, 0.2), ("a", "b"), rng, 16)
+    assert out is not None and out["steps"][1]["msg"]["position"] == [0.1, 0.2]
+    assert out["steps"][1]["msg"]["name"] == ["a", "b"] and js["position"] == [0.0]
+    without = {"steps": [{"topic": "/go", "msg": {}}]}
+    out = scenario_with_configuration(without, (0.1, 0.2), ("a", "b"), rng, 16)
+    assert out is not None and [s["topic"] for s in out["steps"]].count("/joint_target") == 1
+    assert len(out["steps"]) == 3
+    assert scenario_with_configuration(without, (0.1,), ("a",), rng, 2) is None  # no room
+    assert scenario_with_configuration({"steps": "x"}, (0.1,), ("a",), rng, 16) is None

@@ -1,0 +1,135 @@
+"""The deep zoo bugs (benchmarks/zoo/deep.py) are wrong inside their region and right outside it."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import native
+import python_impl
+from benchmarks import bench_deep
+from benchmarks.bench_zoo import Run
+from benchmarks.zoo import deep
+from robot_api import robots
+
+ANNO = robots.resolve("probot_anno")
+
+
+def _gap(a: tuple[float, ...], b: tuple[float, ...]) -> float:
+    return max(abs(x - y) for x, y in zip(a, b, strict=True))
+
+
+@pytest.fixture(scope="module")
+def reference() -> python_impl.RobotModel:
+    return native.RobotModel(ANNO)
+
+
+def _fk_gap(variant: object, values: list[float], reference: python_impl.RobotModel) -> float:
+    """The largest gap in position (m) or quaternion component between the variant and native."""
+    mine = variant.RobotModel(ANNO).forward_kinematics(values)  # type: ignore[attr-defined]
+    theirs = reference.forward_kinematics(values)
+    return _gap((*mine.position, *mine.orientation), (*theirs.position, *theirs.orientation))
+
+
+BAND_START = -2.007 + 0.6173 * 4.014  # joint_2's limits are about +-2.007
+
+
+@pytest.mark.parametrize(
+    ("name", "inside", "outside"),
+    [
+        (
+            "narrow_band",
+            [0.1, BAND_START + 0.002, 0.3, 0.0, 0.5, 0.0],
+            [0.1, BAND_START - 0.01, 0.3, 0.0, 0.5, 0.0],
+        ),
+        (
+            "joint_relation",
+            [0.9, 0.2, 0.9 - (math.sqrt(2) - 1) + 2e-4, 0, 0.5, 0],
+            [0.9, 0.2, 0.3, 0, 0.5, 0],
+        ),
+        ("calibration_entry", [0.0, 0.2, 1.37, 0.0, 0.5, 0.0], [0.0, 0.2, 1.36, 0.0, 0.5, 0.0]),
+        ("small_angle_wrist", [0.0, 0.2, 0.5, 0.3, 1e-3, 0.0], [0.0, 0.2, 0.5, 0.3, 0.0, 0.0]),
+    ],
+)
+def test_fk_faults_only_inside_their_band(
+    name: str, inside: list[float], outside: list[float], reference: python_impl.RobotModel
+) -> None:
+    variant = getattr(deep, name)
+    assert _fk_gap(variant, inside, reference) > 1e-5
+    assert _fk_gap(variant, outside, reference) < 1e-9
+
+
+def _search(predicate: object, reference: python_impl.RobotModel) -> list[float]:
+    """A configuration whose tool pose satisfies ``predicate`` (a seeded scan of joint_1)."""
+    for i in range(200000):
+        q = [-math.pi + i * 2 * math.pi / 200000, 0.3, 0.6, 0.0, 0.7, 0.0]
+        if predicate(reference.forward_kinematics(q).position):  # type: ignore[operator]
+            return q
+    raise AssertionError("no configuration found")
+
+
+def test_computed_branch_and_atan2_band(reference: python_impl.RobotModel) -> None:
+    q = _search(lambda p: 0.1236 <= p[0] < 0.1242, reference)
+    assert _fk_gap(deep.computed_branch, q, reference) > 1e-5
+    assert _fk_gap(deep.computed_branch, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0], reference) < 1e-9
+    q = _search(lambda p: 2.002 < math.atan2(p[1], p[0]) < 2.008, reference)
+    assert _fk_gap(deep.atan2_quadrant, q, reference) > 1e-5
+    assert _fk_gap(deep.atan2_quadrant, [0.0, 0.3, 0.6, 0.0, 0.7, 0.0], reference) < 1e-9
+
+
+def test_wrap_past_pi_needs_a_revolute_joint_beyond_pi() -> None:
+    ur5 = robots.resolve("ur5")
+    model = deep.wrap_past_pi.RobotModel(ur5)
+    group = deep.wrap_past_pi.MoveGroup(model)
+    group.set_joint_value_target([4.02, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert group.get_joint_value_target()[0] == pytest.approx(4.02 - 2 * math.pi)
+    group.set_joint_value_target([3.9, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert group.get_joint_value_target()[0] == 3.9
+
+
+def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotModel) -> None:
+    model = deep.ik_seed_band.RobotModel(ANNO)
+    goal = reference.forward_kinematics([0.5, 0.3, 0.6, 0.0, 0.7, 0.0])
+    wrong = model.inverse_kinematics(goal, [0.305, 0.3, 0.6, 0.0, 0.7, 0.0])
+    assert wrong.joint_values[0] == 0.305  # "success" at the seed
+    right = model.inverse_kinematics(goal, [0.2, 0.3, 0.6, 0.0, 0.7, 0.0])
+    assert str(right.status) == "success" and right.joint_values[0] == pytest.approx(0.5, abs=1e-5)
+    assert model.inverse_kinematics(goal).joint_values[0] != 0.0  # the default seed is home: no fault
+
+
+# -- the statistics of benchmarks/bench_deep.py ---------------------------------------------------
+
+
+
+def _run(engine: str, seed: int, at: float | None, bug: str = "narrow_band") -> Run:
+    return Run(bug, engine, seed, 10.0, at, 1 if at is not None else 0, 100, 10.0, "fk", 0)
+
+
+def test_a12_and_censoring() -> None:
+    assert bench_deep.a12([1.0, 2.0], [3.0, 4.0]) == 1.0  # the first always sooner
+    assert bench_deep.a12([3.0], [3.0]) == 0.5
+    runs = [_run("full", 0, 2.0), _run("full", 1, None), _run("full", 2, 50.0)]
+    assert bench_deep.censored(runs, 10.0) == [2.0, 10.0, 10.0]
+
+
+def test_compare_verdicts() -> None:
+    fast, slow = [1.0 + 0.1 * i for i in range(10)], [8.0 + 0.1 * i for i in range(10)]
+    p, effect, verdict = bench_deep.compare(fast, slow)
+    assert p < 0.05 and effect == 1.0 and verdict == "faster"
+    assert bench_deep.compare(slow, fast)[2] == "slower"
+    assert bench_deep.compare([10.0] * 5, [10.0] * 5) == (1.0, 0.5, "tie")
+    assert bench_deep.compare([1.0, 9.0, 2.0], [8.0, 1.5, 3.0])[2] == "tie"
+
+
+def test_survival_and_markdown() -> None:
+    runs = [_run("full", i, 1.0 + i) for i in range(4)] + [_run("uniform", i, None) for i in range(4)]
+    times, share = bench_deep.survival([r for r in runs if r.engine == "full"], 10.0, points=11)
+    assert times[0] == 0.0 and times[-1] == 10.0
+    assert share[0] == 0.0 and share[-1] == 1.0 and share == sorted(share)
+    mode = bench_deep.Mode(("narrow_band",), 4, 10.0, ("full", "uniform"))
+    text = bench_deep.markdown(runs, mode, "cmd")
+    row = next(line for line in text.splitlines() if line.startswith("| narrow_band"))
+    assert "(4/4)" in row and "- (0/4)" in row and "faster" in row
+    assert bench_deep.runs_on("scenario", "weights") and not bench_deep.runs_on("scenario", "uniform")
+    assert bench_deep.runs_on("fk", "uniform")
