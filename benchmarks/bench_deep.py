@@ -22,6 +22,7 @@ import argparse
 import json
 import os
 import platform
+import random
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
@@ -181,6 +182,9 @@ def main(argv: list[str] | None = None) -> list[Run]:
         if runs_on(by_name[b].op, e)
         for t in range(mode.trials)
     ]
+    # a seeded random order, as FuzzBench does: a change of machine load during the sweep then
+    # falls on every engine alike instead of on the engines that happen to run last
+    random.Random(0).shuffle(jobs)
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget), jobs))
     RESULTS.mkdir(parents=True, exist_ok=True)

@@ -47,6 +47,12 @@ class Features:
             # look the function up at call time: Fuzz() swaps in the real one
             self._atheris._trace_branch(self._ids[zlib.crc32(name.encode()) % self.count])
 
+    def bump(self, key: tuple[int, ...]) -> None:
+        """Bump the counter of a feature already recorded with :meth:`hit_ids` (the hot path of
+        float-comparison tracing: no name kept again)."""
+        if self.enabled:
+            self._atheris._trace_branch(self._ids[hash(key) % self.count])
+
     def hit_ids(self, keys: Iterable[tuple[int, ...]]) -> None:
         """Record features named by integer tuples (cheaper than strings; ``hash`` of an int
         tuple is the same in every process, unlike the hash of a str)."""

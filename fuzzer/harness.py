@@ -335,6 +335,8 @@ class Harness:
                 "joints": list(cmp.joints),
                 "joint_names": [self.joint_names[j] for j in cmp.joints if j < len(self.joint_names)],
                 "target": cmp.target,
+                "step": cmp.step,
+                "step_kind": cmp.step_kind,
                 "outcome_a": a.label,
                 "outcome_b": b.label,
                 "strategy": case.strategy,

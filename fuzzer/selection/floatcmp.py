@@ -56,6 +56,7 @@ class FloatCompareTracer:
         self.sites: set[int] = set()
         """Comparison sites that compared a float at least once."""
         self.traced = 0
+        self._keys: set[tuple[int, ...]] = set()
 
     def install(self) -> None:
         """Wrap the module's current ``_trace_cmp`` unless it is already this tracer's."""
@@ -84,8 +85,13 @@ class FloatCompareTracer:
         else:
             exponent = min(HIGH, max(LOW, math.frexp(gap)[1]))
         self.traced += 1
-        self.sites.add(site)
-        self.features.hit_ids(((FLOAT_CMP, site, gap > 0.0, exponent),))
+        key = (FLOAT_CMP, site, int(gap > 0.0), exponent)
+        if key in self._keys:
+            self.features.bump(key)
+        else:
+            self._keys.add(key)
+            self.sites.add(site)
+            self.features.hit_ids((key,))
 
 
 _OPS: dict[int, Callable[[Any, Any], Any]] = {
