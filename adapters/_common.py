@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+import python_impl
 from python_impl.transforms import quaternion, rotation_angle, rotation_vector
 from python_impl.urdf import is_path_source
 from robot_api.constants import IK_EPS
@@ -53,3 +54,39 @@ def ik_errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
         float(np.linalg.norm(reached[:3, 3] - target[:3, 3])),
         rotation_angle(reached[:3, :3].T @ target[:3, :3]),
     )
+
+
+class RowwiseFkModel(python_impl.RobotModel):
+    """A model whose batch FK is the library's single-configuration FK, one row at a time.
+
+    An adapter names the library's transform in :meth:`_row_matrix`; the batch method, its
+    checks (``_batch_input``, ``link_index``) and its documentation are shared.
+    """
+
+    __slots__ = ()  # keeps the subclasses' slot layouts (pybullet's declares __weakref__)
+
+    def _row_matrix(self, row: Matrix, link: int) -> Matrix:
+        """The library's transform (4, 4) of link index ``link`` for one row of checked values."""
+        raise NotImplementedError
+
+    def forward_kinematics_batch(self, joint_values: Matrix, link: str | None = None) -> Matrix:
+        """Poses of a link for many configurations (the library's FK, one row at a time).
+
+        Parameters
+        ----------
+        joint_values : ndarray, shape (N, dof), or list of N rows
+            Joint values (rad, m).
+        link : str, optional
+            A link of the chain; the tip by default.
+
+        Returns
+        -------
+        ndarray, shape (N, 4, 4)
+            Homogeneous transforms in the root frame.
+        """
+        q = self._batch_input(joint_values)
+        index = self.link_index(link)
+        out = np.empty((q.shape[0], 4, 4))
+        for i, row in enumerate(q):
+            out[i] = self._row_matrix(row, index)
+        return out

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from adapters._common import matrix_pose, urdf_bytes
+from adapters._common import RowwiseFkModel, matrix_pose, urdf_bytes
 from python_impl.urdf import Urdf, load_urdf
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
 from robot_api.protocol import JointValues
@@ -105,7 +105,7 @@ def unsupported(library: str, what: str) -> URDFError:
     return URDFError(f"{library}: {what}", ErrorCode.URDF_UNSUPPORTED)
 
 
-class EngineModel(python_impl.RobotModel):
+class EngineModel(RowwiseFkModel):
     """A chain loaded from URDF whose link frames come from a third-party library.
 
     Subclasses set ``LIBRARY`` and implement ``_load`` and ``_frames``.
@@ -180,29 +180,9 @@ class EngineModel(python_impl.RobotModel):
         """Pose of link index ``link`` for checked values, by the library's FK."""
         return matrix_pose(self._matrix(values, link))
 
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (the library's FK, one row at a time).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        out = np.empty((q.shape[0], 4, 4))
-        for i, row in enumerate(q):
-            out[i] = self._matrix(row, index)
-        return out
+    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
+        """The library's transform of link index ``link`` for one row (batch FK)."""
+        return self._matrix(row, link)
 
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None

@@ -84,7 +84,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from adapters._common import ik_errors, matrix_pose, meets_criterion, urdf_bytes
+from adapters._common import RowwiseFkModel, ik_errors, matrix_pose, meets_criterion, urdf_bytes
 from python_impl.angles import normalize_angle
 from python_impl.transforms import homogeneous, quaternion_matrix
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
@@ -113,7 +113,7 @@ def _serial_chain(data: bytes, link: str) -> Any:
         _xml_core.on_error = hook
 
 
-class RobotModel(python_impl.RobotModel):
+class RobotModel(RowwiseFkModel):
     """A chain loaded from URDF whose kinematics are kinpy's (see the module docstring).
 
     Parameters
@@ -172,29 +172,9 @@ class RobotModel(python_impl.RobotModel):
         """Pose of link index ``link`` for checked values, by kinpy's FK."""
         return matrix_pose(self._matrix(values, link))
 
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (kinpy's FK, one row at a time).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        out = np.empty((q.shape[0], 4, 4))
-        for i, row in enumerate(q):
-            out[i] = self._matrix(row, index)
-        return out
+    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
+        """The library's transform of link index ``link`` for one row (batch FK)."""
+        return self._matrix(row, link)
 
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None

@@ -113,6 +113,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 import python_impl
+from adapters._common import RowwiseFkModel
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source
@@ -154,7 +155,7 @@ def _is_small(twist: Array) -> bool:
     return all(x <= IK_EPS and x + IK_EPS >= 0.0 for x in twist.tolist())
 
 
-class RobotModel(python_impl.RobotModel):
+class RobotModel(RowwiseFkModel):
     """A kinematic chain from URDF whose kinematics are pinocchio's.
 
     Chain, variables, limits and argument checks follow the contract through
@@ -285,29 +286,9 @@ class RobotModel(python_impl.RobotModel):
         x, y, z = t[:3, 3].tolist()
         return Pose((x, y, z), canonical_quaternion(pin.Quaternion(t[:3, :3]).coeffs()))
 
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (pinocchio's FK, row by row).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        out = np.empty((q.shape[0], 4, 4))
-        for n, row in enumerate(q):
-            out[n] = self._transform(row, index)
-        return out
+    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
+        """The library's transform of link index ``link`` for one row (batch FK)."""
+        return self._transform(row, link)
 
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None

@@ -125,6 +125,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
+from adapters._common import RowwiseFkModel
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle, unit
 from python_impl.urdf import Joint, is_path_source, load_urdf
@@ -260,7 +261,7 @@ class _IkSolver:
         )
 
 
-class RobotModel(python_impl.RobotModel):
+class RobotModel(RowwiseFkModel):
     """A kinematic chain from URDF whose kinematics are KDL's, through PyKDL.
 
     Chain, variables, limits and argument checks follow the contract through
@@ -338,29 +339,9 @@ class RobotModel(python_impl.RobotModel):
         p = frame.p
         return Pose((float(p[0]), float(p[1]), float(p[2])), canonical_quaternion(frame.M.GetQuaternion()))
 
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (KDL's FK, row by row).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        out = np.empty((q.shape[0], 4, 4))
-        for n, row in enumerate(q.tolist()):
-            out[n] = frame_matrix(self._frame(row, index))
-        return out
+    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
+        """The library's transform of link index ``link`` for one row (batch FK)."""
+        return frame_matrix(self._frame(row.tolist(), link))
 
     def _ik_solver(self, link: int, nvars: int) -> _IkSolver:
         if link not in self._ik_solvers:

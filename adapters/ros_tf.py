@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from adapters._common import urdf_bytes
+from adapters._common import RowwiseFkModel, urdf_bytes
 from robot_api.errors import ErrorCode, InvalidInputError
 from robot_api.protocol import JointValues
 from robot_api.records import IKResult, Pose
@@ -208,7 +208,7 @@ def state_publisher(urdf: str) -> StatePublisher:
         return publisher
 
 
-class RobotModel(python_impl.RobotModel):
+class RobotModel(RowwiseFkModel):
     """A kinematic chain from URDF whose FK is robot_state_publisher's, looked up through tf2.
 
     Parameters
@@ -248,29 +248,9 @@ class RobotModel(python_impl.RobotModel):
         p, q = t.translation, t.rotation
         return Pose((float(p.x), float(p.y), float(p.z)), canonical_quaternion(q.x, q.y, q.z, q.w))
 
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (one JointState per row).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        out = np.empty((q.shape[0], 4, 4))
-        for n, row in enumerate(q.tolist()):
-            out[n] = self.pose_of(row, index).matrix
-        return out
+    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
+        """The library's transform of link index ``link`` for one row (batch FK)."""
+        return self.pose_of(row.tolist(), link).matrix
 
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None
