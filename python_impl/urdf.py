@@ -144,6 +144,9 @@ class _Guard:
         self.links = 0
         self.root_is_robot = False
         self.tree = TreeBuilder()
+        self.colon_name: str | None = None
+        """The first attribute name starting with ':' (XML allows it, urdfdom's TinyXML does not;
+        an element name starting with ':' it reads)."""
         # "UTF-8" overrides the document's own declaration; on_xml_decl rejects any other.
         self.parser = expat.ParserCreate("UTF-8")
         self.parser.XmlDeclHandler = self.on_xml_decl
@@ -167,6 +170,8 @@ class _Guard:
             self.links += 1
             if self.links > MAX_LINKS:
                 raise self.fail(f"has more than {MAX_LINKS} links", ErrorCode.URDF_UNSUPPORTED)
+        if self.colon_name is None:
+            self.colon_name = next((key for key in attrs if key.startswith(":")), None)
         for key, value in attrs.items():
             # file names are never formatted by urdfdom; URL-encoded ones ("my%20arm.stl") are common
             if "%" in value and key != "filename":
@@ -223,6 +228,12 @@ def _parse_xml(data: bytes) -> Element:
         raise _invalid(
             f"URDF is not well-formed XML: {expat.ErrorString(exc.code)} (line {exc.lineno})"
         ) from None
+    if guard.colon_name is not None:
+        # urdfdom's TinyXML reads a name only from a letter or '_' ("Error reading Attributes")
+        raise _invalid(
+            f"URDF attribute name '{_clip(guard.colon_name)}' starts with ':' "
+            "(urdfdom's XML parser refuses it)"
+        )
     root: Element = guard.tree.close()
     return root
 

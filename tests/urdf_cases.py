@@ -212,6 +212,12 @@ add("external_entity_SYSTEM", '''<?xml version="1.0"?>
 <!DOCTYPE robot [ <!ENTITY xxe SYSTEM "file:///etc/hostname"> ]>
 <robot name="r"><link name="&xxe;"/></robot>
 ''')
+# names starting with ':' are XML names; urdfdom's TinyXML refuses them as attribute names
+# (found by tests/fuzz_urdf_loader.py under ASan) but reads them as element names
+add("attribute_name_starting_with_colon", chain1('<limit lower="-1" :pper="1" effort="10" velocity="2"/>'))
+add("root_attribute_name_starting_with_colon", robot(links("base"), extra=' :v="1"'))
+add("element_name_starting_with_colon", robot(links("base") + "<:x/>"))
+add("attribute_name_with_inner_colon", robot(links("base") + '<x a:b="1"/>'))
 add("predefined_and_numeric_entities", robot('<link name="a&lt;&#65;&#x42;&gt;"/>'))
 add("unknown_entity_in_attr", robot('<link name="a&foo;b"/>'))
 add("xml_comment_and_pi", '<?xml version="1.0"?><!-- c --><?pi x?><robot name="r"><!-- c2 --><link name="a"/></robot>')
