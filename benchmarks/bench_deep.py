@@ -1,6 +1,7 @@
 """Search strength on the deep zoo bugs (issue 11), with FuzzBench/Magma-style statistics.
 
     .venv/bin/python -m benchmarks.bench_deep --mode full --write-md   # 10 trials x 60 s per (bug, engine)
+    .venv/bin/python -m benchmarks.bench_deep --mode short --write-md  # 10 trials x 10 s, 5 engines
     .venv/bin/python -m benchmarks.bench_deep --mode quick             # 2 trials x 10 s, two bugs (CI-sized)
 
 Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of the input
@@ -48,10 +49,19 @@ class Mode:
 
 MODES = {
     "quick": Mode(
-        bugs=("narrow_band", "computed_branch"), trials=2, budget=10.0, engines=("full", "uniform")
+        bugs=("narrower_band", "computed_branch"), trials=2, budget=10.0, engines=("full", "uniform")
+    ),
+    "short": Mode(
+        bugs=tuple(b.name for b in DEEP),
+        trials=10,
+        budget=10.0,
+        engines=("full", "libfuzzer", "paper", "hypothesis", "uniform"),
     ),
     "full": Mode(bugs=tuple(b.name for b in DEEP), trials=10, budget=60.0),
 }
+"""quick: CI-sized (about a minute on 2 cores). short: every deep bug against the baselines the
+goal names, 10 trials x 10 s (about 55 minutes on 2 cores). full: 10 trials x 60 s, the old
+engine (``weights``) too (about 6 hours on 2 cores)."""
 
 
 def runs_on(op: str, engine: str) -> bool:

@@ -446,6 +446,10 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 
 
+SWEEP_SEED = 0x5EED
+"""Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
+
+
 def _search(session: Session, options: CampaignOptions, features: Any) -> dict[str, Any]:
     """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
     "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither."""
@@ -470,7 +474,17 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
         config.op, config.message_type, stream, facts.joint_names, facts.reachable, config.max_steps
     )
     sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(tuple(weights), weights), fresh)
-    return {"sources": sources, "float_tracer": FloatCompareTracer(features)}
+    search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
+    if config.op == "fk" and config.transport == "inprocess":
+        from fuzzer.generation.sweep import Sweep
+
+        search["sweep"] = Sweep(
+            [lim.lower for lim in limits],
+            [lim.upper for lim in limits],
+            config.tolerance,
+            seed=options.seed + SWEEP_SEED,
+        )
+    return search
 
 
 def _transport_note(config: RunConfig) -> str:

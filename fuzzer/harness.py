@@ -32,6 +32,8 @@ from fuzzer import mutators
 from fuzzer.artifacts import ArtifactStore
 from fuzzer.divlog import CampaignLog, closer_to_command, near_zero_count
 from fuzzer.evaluate import Evaluation, Evaluator, Verdict
+from fuzzer.generation.spacefill import configuration_message
+from fuzzer.generation.sweep import Sweep
 from fuzzer.guidance import Features, input_features, step_bigrams
 from fuzzer.mapping import FkCall, MoveCall
 from fuzzer.selection.bandit import Bandit
@@ -198,6 +200,8 @@ class Harness:
     """The bandit over input sources and mutators (None: libFuzzer's parent, one mutator by weight)."""
     float_tracer: FloatCompareTracer | None = None
     """Float comparisons of the Python targets as features (``fuzzer.selection.floatcmp``)."""
+    sweep: Sweep | None = None
+    """Batched FK sweeps for ``--op fk`` (``fuzzer.generation.sweep``)."""
     stats: Stats = field(default_factory=Stats)
     pool: Pool = field(default_factory=Pool)
     _last: tuple[bytes, TestCase] | None = None
@@ -213,9 +217,21 @@ class Harness:
             self.stats.malformed += 1
             self.on_exec()
             return
+        seen, signatures = len(self.features.seen), len(self.stats.signatures)
+        self._execute(case, data, trusted)
+        if self.sources is not None and case.origin == "mutation":
+            paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
+            self.sources.reward(case.strategy, paid)
+        if self.sweep is not None and self.sweep.due():
+            self._sweep()
+        if self.log is not None and not self.stats.execs & 255:
+            self.maybe_snapshot()
+        self.on_exec()
+
+    def _execute(self, case: TestCase, data: bytes, trusted: bool) -> Evaluation:
+        """Evaluate a decoded test case and record what it showed."""
         if self.float_tracer is not None:
             self.float_tracer.install()  # again if Atheris swapped its _trace_cmp in
-        seen, signatures = len(self.features.seen), len(self.stats.signatures)
         evaluation = self.evaluator.evaluate(case, validated=trusted)
         if evaluation.verdict != Verdict.MALFORMED:
             self._remember(data, case)
@@ -225,12 +241,45 @@ class Harness:
             self.stats.malformed += 1
         else:
             self._record(case, data, evaluation)
-        if self.sources is not None and case.origin == "mutation":
-            paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
-            self.sources.reward(case.strategy, paid)
-        if self.log is not None and not self.stats.execs & 255:
-            self.maybe_snapshot()
-        self.on_exec()
+        return evaluation
+
+    def _sweep(self) -> None:
+        """A batched FK sweep (``fuzzer.generation.sweep``): its flagged rows are evaluated as
+        ordinary test cases; neighbours that raised the difference become preferred parents."""
+        assert self.sweep is not None
+        centres = []
+        for difference, data in reversed(self.pool.entries[-4:]):
+            call = self._call_of(data)
+            if isinstance(call, FkCall):
+                centres.append((call.joint_values, difference))
+        result = self.sweep.run([r.model for r in self.evaluator.runners], centres)
+        base = self.seeds[0]
+        for row in result.flagged:
+            case = self._row_case(base, row)
+            if case is None:
+                continue
+            self.stats.execs += 1
+            if not self._execute(case, case.encode(), trusted=True).divergent:
+                self.sweep.unconfirmed += 1
+        for row in result.improved:
+            case = self._row_case(base, row)
+            if case is not None:
+                self.pool.offer(row.difference, case.encode())
+
+    def _call_of(self, data: bytes) -> Any:
+        case = self._decode(data)[0]
+        try:
+            return None if case is None else self.evaluator.mapping(case.message)
+        except ValueError:
+            return None
+
+    def _row_case(self, base: TestCase, row: Any) -> TestCase | None:
+        message = configuration_message(base.msg_type, base.message, row.values, self.joint_names)
+        if message is None:
+            return None
+        if isinstance(message.get("header"), dict):  # the sweep's link (a JointState's frame_id)
+            message["header"]["frame_id"] = (self.sweep.link if self.sweep is not None else None) or ""
+        return base.child(message, row.label)
 
     def maybe_snapshot(self, force: bool = False) -> None:
         """Append this process's counters to stats.jsonl (at most every SNAPSHOT_SECONDS)."""
@@ -240,6 +289,8 @@ class Harness:
             data = self.stats.to_json()
             if self.sources is not None:
                 data["bandit"] = self.sources.to_json()
+            if self.sweep is not None:
+                data["sweep"] = self.sweep.to_json()
             if self.float_tracer is not None:
                 data["float_compares"] = {
                     "traced": self.float_tracer.traced,

@@ -46,15 +46,25 @@ def fk(chain: Chain, q: Array, link: int) -> Array:
 
 
 def fk_batch(chain: Chain, q: Array, link: int) -> Array:
-    """Transforms (N, 4, 4) of link ``link`` for q of shape (N, dof)."""
+    """Transforms (N, 4, 4) of link ``link`` for q of shape (N, dof).
+
+    Per segment, ``T (A0 + u1 A1 + u2 A2)`` is computed as ``T A0 + u1 (T A1) + u2 (T A2)``:
+    three products of the stacked transforms with one constant 4x4 matrix each (one BLAS call
+    on an (4N, 4) array), about twice as fast as N small matrix products. The result equals
+    ``fk``'s row by row up to rounding (a few ulp).
+    """
     n = q.shape[0]
-    out = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
     if link == 0 or n == 0:
-        return out
+        return np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
     u1, u2 = _coefficients(chain, segment_values(chain, q))
-    for s in range(link):
-        m = chain.a0[s] + u1[:, s, None, None] * chain.a1[s] + u2[:, s, None, None] * chain.a2[s]
-        out = np.matmul(out, m)
+    out: Array = chain.a0[0] + u1[:, 0, None, None] * chain.a1[0] + u2[:, 0, None, None] * chain.a2[0]
+    for s in range(1, link):
+        flat = out.reshape(n * 4, 4)
+        nxt = (flat @ chain.a0[s]).reshape(n, 4, 4)
+        if chain.revolute[s] or chain.prismatic[s]:
+            nxt += u1[:, s, None, None] * (flat @ chain.a1[s]).reshape(n, 4, 4)
+            nxt += u2[:, s, None, None] * (flat @ chain.a2[s]).reshape(n, 4, 4)
+        out = nxt
     return out
 
 

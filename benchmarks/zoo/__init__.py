@@ -238,6 +238,27 @@ DEEP: tuple[Bug, ...] = (
         module="deep",
     ),
     Bug(
+        "narrower_band",
+        "FK wrong (1 mm) only for joint_2 in a band 1e-5 of its range wide, at 38.29% of it",
+        "https://github.com/bourumir-wyngs/rs-opw-kinematics/issues/56 (behaviour decided by a 0.125 um shift band: far narrower than 0.1%); https://github.com/pollen-robotics/reachy2_symbolic_ik/issues/34",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "tight_relation",
+        "FK wrong only when joint_2 + joint_4 is within 2e-5 of 1/e (a thin slab of two joints)",
+        "https://github.com/Sarrasor/RoboticManipulators/issues/1 (a J2/J3 coupling error in Fanuc FK)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
+        "amplified_error",
+        "the tool's z off by 1e-11 / |joint_5 - 0.6583| m: a difference above rounding almost everywhere, above 1e-6 m only within 1e-5 rad",
+        "https://github.com/Jgocunha/universal-robots-kinematics/issues/17 (error blowing up near theta5 ~ 0); https://github.com/bourumir-wyngs/rs-opw-kinematics/issues/58 (J4/J6 wrong within the singularity zone of J5)",
+        op="fk",
+        module="deep",
+    ),
+    Bug(
         "wrap_past_pi",
         "a revolute joint target in [4.0, 4.05) rad (limits +-2pi) wrapped into (-pi, pi]",
         "https://github.com/Kinovarobotics/kinova-ros/pull/20 ('removed angle normalization of joints 1,4,5,6 to allow full rotations'); https://github.com/moveit/moveit_commander/issues/31 (targets normalized into [-pi, pi])",

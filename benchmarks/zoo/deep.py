@@ -5,13 +5,19 @@ must *find*: a band about 0.1% wide of one joint's range away from round values,
 between two joints, a branch on a computed float (a position of the tool, an ``atan2``
 angle), a calibration-table entry, a near-singular wrist, a revolute joint past pi, an IK
 that goes wrong only from certain seeds. ``benchmarks/zoo/__init__.py`` lists them with the
-public source of each class. Outside its region every variant is the twin itself.
+public source of each class. Outside its region every variant is the twin itself. The FK
+faults sit in the kernel that ``forward_kinematics`` and ``forward_kinematics_batch`` share
+(``_Deep``), so the batched search of ``fuzzer.generation.sweep`` meets the same fault a
+single call does.
 """
 
 from __future__ import annotations
 
 import math
 from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 import python_impl
 from python_impl.angles import normalize_angle
@@ -29,22 +35,48 @@ def _impl(model: type = Model, group: type = Group) -> Any:
     return SimpleNamespace(RobotModel=model, MoveGroup=group)
 
 
-def _shifted(pose: Pose, dz: float = SHIFT) -> Pose:
-    x, y, z = pose.position
-    return Pose((x, y, z + dz), pose.orientation)
+class _Deep(Model):
+    """A twin whose FK kernel carries a fault, on the single and the batch path alike (a real
+    library's fault sits in the kernel both share): ``fault_values`` changes the joint values
+    before the chain is evaluated, ``fault_positions`` the link positions after it. Both are
+    vectorized over rows: ``q`` of shape (N, dof) in rad, positions (N, 3) in m."""
+
+    def fault_values(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return q
+
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return p
+
+    def pose_of(self, values: list[float], link: int) -> Pose:
+        q = np.array([values], dtype=np.float64)
+        pose = super().pose_of(self.fault_values(q)[0].tolist(), link)
+        p = self.fault_positions(q, np.array([pose.position], dtype=np.float64))[0]
+        return Pose((float(p[0]), float(p[1]), float(p[2])), pose.orientation)
+
+    def forward_kinematics_batch(
+        self, joint_values: NDArray[np.float64], link: str | None = None
+    ) -> NDArray[np.float64]:
+        q = self._batch_input(joint_values)
+        out = super().forward_kinematics_batch(self.fault_values(q), link)
+        out[:, :3, 3] = self.fault_positions(q, out[:, :3, 3])
+        return out
+
+
+def _shifted(p: NDArray[np.float64], rows: NDArray[np.bool_], dz: float = SHIFT) -> NDArray[np.float64]:
+    out = p.copy()
+    out[rows, 2] += dz
+    return out
 
 
 # -- 1. a band 0.1% wide of joint 2's range, at 61.73% of the range -------------------------
 
 
-class _NarrowBand(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        pose = super().pose_of(values, link)
+class _NarrowBand(_Deep):
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
         lim = self.joint_limits[1]
         start = lim.lower + 0.6173 * (lim.upper - lim.lower)
-        if len(values) > 1 and start <= values[1] < start + 0.001 * (lim.upper - lim.lower):
-            return _shifted(pose)
-        return pose
+        band = (start <= q[:, 1]) & (q[:, 1] < start + 0.001 * (lim.upper - lim.lower))
+        return _shifted(p, band)
 
 
 narrow_band = _impl(model=_NarrowBand)
@@ -53,12 +85,9 @@ narrow_band = _impl(model=_NarrowBand)
 # -- 2. two joints in a relation: joint_1 - joint_3 within 1e-3 of sqrt(2) - 1 ---------------
 
 
-class _JointRelation(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        pose = super().pose_of(values, link)
-        if len(values) > 2 and abs(values[0] - values[2] - (math.sqrt(2.0) - 1.0)) < 1e-3:
-            return _shifted(pose)
-        return pose
+class _JointRelation(_Deep):
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return _shifted(p, np.abs(q[:, 0] - q[:, 2] - (math.sqrt(2.0) - 1.0)) < 1e-3)
 
 
 joint_relation = _impl(model=_JointRelation)
@@ -67,12 +96,9 @@ joint_relation = _impl(model=_JointRelation)
 # -- 3. a branch on a computed float: the tool's x position in [0.1234, 0.1244) m ------------
 
 
-class _ComputedBranch(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        pose = super().pose_of(values, link)
-        if 0.1234 <= pose.position[0] < 0.1244:
-            return _shifted(pose)
-        return pose
+class _ComputedBranch(_Deep):
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return _shifted(p, (p[:, 0] >= 0.1234) & (p[:, 0] < 0.1244))
 
 
 computed_branch = _impl(model=_ComputedBranch)
@@ -81,13 +107,13 @@ computed_branch = _impl(model=_ComputedBranch)
 # -- 4. atan2 quadrant: the tool's azimuth in (2.0, 2.01) rad mirrored -----------------------
 
 
-class _Atan2Quadrant(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        pose = super().pose_of(values, link)
-        x, y, z = pose.position
-        if 2.0 < math.atan2(y, x) < 2.01:
-            return Pose((-x, y, z), pose.orientation)
-        return pose
+class _Atan2Quadrant(_Deep):
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        azimuth = np.arctan2(p[:, 1], p[:, 0])
+        out = p.copy()
+        rows = (azimuth > 2.0) & (azimuth < 2.01)
+        out[rows, 0] = -out[rows, 0]
+        return out
 
 
 atan2_quadrant = _impl(model=_Atan2Quadrant)
@@ -96,11 +122,11 @@ atan2_quadrant = _impl(model=_Atan2Quadrant)
 # -- 5. a calibration table with one wrong entry: joint_3 at round(100 q) == 137 -------------
 
 
-class _CalibrationEntry(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        if len(values) > 2 and round(values[2] * 100) == 137:
-            values = [*values[:2], values[2] + SHIFT, *values[3:]]
-        return super().pose_of(values, link)
+class _CalibrationEntry(_Deep):
+    def fault_values(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = q.copy()
+        out[np.round(q[:, 2] * 100) == 137, 2] += SHIFT
+        return out
 
 
 calibration_entry = _impl(model=_CalibrationEntry)
@@ -109,14 +135,61 @@ calibration_entry = _impl(model=_CalibrationEntry)
 # -- 6. near-singular wrist: joint_5 within 2e-3 of 0 (but not 0) treated as 0 --------------
 
 
-class _SmallAngleWrist(Model):
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        if len(values) > 4 and 0.0 < abs(values[4]) < 2e-3:
-            values = [*values[:4], 0.0, *values[5:]]
-        return super().pose_of(values, link)
+class _SmallAngleWrist(_Deep):
+    def fault_values(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = q.copy()
+        out[(np.abs(q[:, 4]) > 0.0) & (np.abs(q[:, 4]) < 2e-3), 4] = 0.0
+        return out
 
 
 small_angle_wrist = _impl(model=_SmallAngleWrist)
+
+
+# -- 6b-6d. narrower still: the regions real reports describe ------------------------------
+
+
+class _NarrowerBand(_Deep):
+    """Joint_2 in a band 1e-5 of its range wide (at 38.29% of it)."""
+
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        lim = self.joint_limits[1]
+        start = lim.lower + 0.3829 * (lim.upper - lim.lower)
+        band = (start <= q[:, 1]) & (q[:, 1] < start + 1e-5 * (lim.upper - lim.lower))
+        return _shifted(p, band)
+
+
+narrower_band = _impl(model=_NarrowerBand)
+
+
+class _TightRelation(_Deep):
+    """joint_2 + joint_4 within 2e-5 of 1/e (two joints in a relation, a 50x thinner slab)."""
+
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return _shifted(p, np.abs(q[:, 1] + q[:, 3] - math.exp(-1.0)) < 2e-5)
+
+
+tight_relation = _impl(model=_TightRelation)
+
+
+AMPLIFIED_AT = 0.6583
+"""Where ``amplified_error``'s joint_5 error blows up (rad)."""
+
+
+class _AmplifiedError(_Deep):
+    """Rounding amplified near a singular value: the tool's z off by 1e-11 / |q5 - 0.6583| m.
+
+    Above rounding noise almost everywhere (1e-11 m at 1 rad away) but above the oracle's
+    1e-6 m only within 1e-5 rad of the point: a difference that grows toward the fault, as
+    ``1 / sin`` terms do near a wrist singularity. The pattern search can follow it."""
+
+    def fault_positions(self, q: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = p.copy()
+        with np.errstate(divide="ignore"):
+            out[:, 2] += np.minimum(SHIFT, 1e-11 / np.abs(q[:, 4] - AMPLIFIED_AT))
+        return out
+
+
+amplified_error = _impl(model=_AmplifiedError)
 
 
 # -- 7. a revolute joint past pi: targets in [4.0, 4.05) rad wrapped into (-pi, pi] ----------
@@ -148,12 +221,15 @@ class _SeedBandIk(Model):
 ik_seed_band = _impl(model=_SeedBandIk)
 
 __all__ = [
+    "amplified_error",
     "atan2_quadrant",
     "calibration_entry",
     "computed_branch",
     "ik_seed_band",
     "joint_relation",
     "narrow_band",
+    "narrower_band",
     "small_angle_wrist",
+    "tight_relation",
     "wrap_past_pi",
 ]

@@ -57,6 +57,23 @@ class SpaceFill:
         self._lo, self._hi = np.array(lo), np.array(hi)
         self._fixed = self._hi <= self._lo  # a joint with lower == upper: always that value
         self._engine = qmc.Sobol(d=len(lo), scramble=True, seed=np.random.default_rng(self.seed))
+        self._rows = np.empty((0, len(lo)))
+
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) as arrays, infinite bounds replaced by -pi / pi."""
+        return self._lo.copy(), self._hi.copy()
+
+    def block(self, n: int) -> np.ndarray:
+        """The next ``n`` points at once, shape (n, dof), inside the box. Drawn from Sobol in
+        power-of-two blocks (its balance needs them) kept in a buffer; a separate sequence
+        from ``next``'s (use one of the two per stream)."""
+        while len(self._rows) < n:
+            size = max(BLOCK, 1 << max(0, n - len(self._rows) - 1).bit_length())
+            span = np.where(self._fixed, 0.0, self._hi - self._lo)
+            self._rows = np.vstack([self._rows, self._lo + self._engine.random(size) * span])
+        out, self._rows = self._rows[:n], self._rows[n:]
+        self.drawn += n
+        return out
 
     def next(self) -> tuple[float, ...]:
         """The next configuration (a tuple of dof floats inside the limits)."""

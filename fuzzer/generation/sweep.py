@@ -1,0 +1,237 @@
+"""Batched differential FK (issue 11): many configurations through both targets at once.
+
+A single test case costs the engine about a millisecond of Python around microseconds of
+kinematics. For ``--op fk`` a sweep instead hands ``ROWS`` configurations to each target's
+``forward_kinematics_batch`` in one call and compares the two (N, 4, 4) answers with a
+vectorized oracle (``differences``): the position gap (m, Euclidean, as the single-call
+oracle's) and the rotation angle between the two rotation matrices (rad). The rows are:
+
+* **a pattern search** around the campaign's highest-difference inputs (the harness's pool,
+  Algorithm 3) that are not divergent yet, when their difference is above rounding noise
+  (``NOISE``): every joint moved
+  alone by +- each of ``SCALES`` of its range, and as many random directions (an
+  alternating-variable / Hooke-Jeeves exploratory step, all of it in one batch). A row whose
+  difference grows goes back to the pool, so the next sweep starts from it: the search
+  follows the difference uphill;
+* **space-filling** rows for the rest: the next block of a scrambled Sobol sequence inside the
+  limits (``SpaceFill``, its own seed), so a fault confined to a narrow region of the joint
+  space is met at batch speed.
+
+The vectorized oracle is only a filter. A row it flags (either gap above half the campaign's
+tolerance, or a non-finite answer) becomes an ordinary test case (a ``JointState`` or
+``Float64MultiArray`` made from a seed, lineage ``sweep:sobol`` or ``sweep:<joint>:<step>``)
+that the harness evaluates like any other input: the single-call oracle, confirmation on
+fresh targets, a crash file and sidecar per new signature. A flagged row the single call does
+not confirm (the targets' batch and single paths disagree) is counted, not reported.
+Representation-only differences (a quaternion's sign) do not exist in rotation matrices;
+the single-call path keeps finding those.
+
+Sweeps take ``SHARE`` of the campaign's time (when they run depends on the clock, like
+libFuzzer's ``-max_total_time``; what they evaluate depends only on the seed).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fuzzer.generation.spacefill import SpaceFill
+from fuzzer.tolerance import Tolerance
+
+ROWS = 1024
+"""Configurations per sweep (a power of two keeps the Sobol block balanced)."""
+
+SHARE = 0.5
+"""Share of the campaign's wall time spent in sweeps."""
+
+SCALES = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
+"""Pattern-search steps, as fractions of each joint's range."""
+
+CENTRES = 4
+"""Pool inputs a sweep searches around (the highest differences)."""
+
+NOISE = 1e-12
+"""A difference (m or rad) at or below this is rounding noise: nothing to follow."""
+
+CONFIRM = 2
+"""Flagged rows per sweep handed to the single-call path (the others wait for later sweeps)."""
+
+Array = NDArray[np.float64]
+
+
+def differences(a: Array, b: Array) -> tuple[Array, Array]:
+    """Position gap (m) and rotation angle (rad) per row of two (N, 4, 4) transform stacks.
+
+    The angle is ``2 asin(|Ra - Rb|_F / (2 sqrt 2))``, exact for rotation matrices and
+    well-conditioned near zero (unlike ``acos((trace - 1) / 2)``). A non-finite answer in
+    either stack gives ``inf`` in both.
+    """
+    position = np.sqrt(np.sum((a[:, :3, 3] - b[:, :3, 3]) ** 2, axis=1))
+    frobenius = np.sqrt(np.sum((a[:, :3, :3] - b[:, :3, :3]) ** 2, axis=(1, 2)))
+    with np.errstate(invalid="ignore"):
+        angle = 2.0 * np.arcsin(np.minimum(1.0, frobenius / (2.0 * math.sqrt(2.0))))
+    bad = ~(np.isfinite(a).all(axis=(1, 2)) & np.isfinite(b).all(axis=(1, 2)))
+    position[bad] = np.inf
+    angle[bad] = np.inf
+    return position, angle
+
+
+@dataclass(frozen=True)
+class Row:
+    """One configuration of a sweep worth a test case."""
+
+    values: tuple[float, ...]
+    label: str
+    """The lineage step: ``sweep:sobol`` or ``sweep:<joint index><+|-><step>``."""
+    difference: float
+    """max(position gap in m, rotation angle in rad)."""
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    flagged: tuple[Row, ...]
+    """Rows above half the tolerance (largest first, at most ``CONFIRM``)."""
+    improved: tuple[Row, ...]
+    """Per centre, its best neighbour when that beats the centre (not flagged)."""
+    rows: int
+
+
+@dataclass
+class Sweep:
+    """Batched neighbourhood and space-filling evaluation for ``--op fk``.
+
+    Parameters
+    ----------
+    lower, upper : sequence of float, length dof
+        Joint limits (rad, m); infinite bounds (continuous joints) become -pi / pi.
+    tolerance : Tolerance
+        The campaign's; rows above half of it are flagged.
+    seed : int
+        Seeds the Sobol stream and the random directions.
+    link : str or None
+        The link the campaign's FK calls ask for (None: the tip).
+    """
+
+    lower: Sequence[float]
+    upper: Sequence[float]
+    tolerance: Tolerance
+    seed: int = 0
+    link: str | None = None
+    rows: int = ROWS
+    share: float = SHARE
+    sweeps: int = 0
+    compared: int = 0
+    flagged: int = 0
+    """Rows the vectorized oracle flagged (all of them, confirmed or not)."""
+    unconfirmed: int = 0
+    """Flagged rows the single-call path did not confirm (counted by the harness)."""
+    failed: int = 0
+    """Sweeps a target raised in (the sweep is then switched off after ``MAX_FAILURES``)."""
+    seconds: float = 0.0
+    _started: float = field(default=0.0, repr=False)
+    _stream: SpaceFill = field(init=False, repr=False)
+    _rng: np.random.Generator = field(init=False, repr=False)
+
+    MAX_FAILURES = 3
+
+    def __post_init__(self) -> None:
+        self._stream = SpaceFill(self.lower, self.upper, seed=self.seed)
+        self._lo, self._hi = self._stream.box()
+        self._rng = np.random.default_rng(self.seed)
+
+    @property
+    def enabled(self) -> bool:
+        return self.failed < self.MAX_FAILURES
+
+    def due(self) -> bool:
+        """Whether the sweeps are below their share of the time since the first call."""
+        now = time.monotonic()
+        if not self._started:
+            self._started = now
+            return False
+        return self.enabled and self.seconds < self.share * (now - self._started)
+
+    def batch(self, centres: Sequence[tuple[tuple[float, ...], float]]) -> tuple[Array, list[str], list[int]]:
+        """The rows of the next sweep: (q of shape (rows, dof), lineage label per row, index of
+        the centre per row or -1 for a space-filling row)."""
+        dof = len(self._lo)
+        span = np.where(self._hi > self._lo, self._hi - self._lo, 0.0)
+        parts: list[Array] = []
+        labels: list[str] = []
+        owner: list[int] = []
+        budget = self.rows // 2
+        ceiling = 0.5 * min(self.tolerance.metres, self.tolerance.radians)
+        for c, (values, difference) in enumerate(centres[:CENTRES]):
+            if not NOISE < difference < ceiling or len(values) != dof:
+                continue  # nothing to follow, or already divergent (found: the pool keeps it)
+            centre = np.asarray(values, dtype=np.float64)
+            for scale in SCALES:
+                if budget < 4 * dof:
+                    break
+                steps = np.diag(span * scale)
+                directions = self._rng.standard_normal((2 * dof, dof)) * (span * scale)
+                block = centre + np.vstack([steps, -steps, directions])
+                parts.append(block)
+                labels += [f"sweep:{j}+{scale:g}" for j in range(dof)]
+                labels += [f"sweep:{j}-{scale:g}" for j in range(dof)]
+                labels += [f"sweep:dir{scale:g}"] * (2 * dof)
+                owner += [c] * (4 * dof)
+                budget -= 4 * dof
+        used = sum(len(p) for p in parts)
+        fill = self._stream.block(self.rows - used)
+        parts.append(fill)
+        labels += ["sweep:sobol"] * len(fill)
+        owner += [-1] * len(fill)
+        q = np.clip(np.vstack(parts), self._lo, self._hi)
+        return q, labels, owner
+
+    def run(self, models: Sequence[Any], centres: Sequence[tuple[tuple[float, ...], float]]) -> SweepResult:
+        """Evaluate one sweep on two models (each with ``forward_kinematics_batch``)."""
+        began = time.monotonic()
+        try:
+            q, labels, owner = self.batch(centres)
+            try:
+                a = np.asarray(models[0].forward_kinematics_batch(q, self.link), dtype=np.float64)
+                b = np.asarray(models[1].forward_kinematics_batch(q, self.link), dtype=np.float64)
+            except Exception:  # noqa: BLE001 - a target's batch path failing is not this sweep's input
+                self.failed += 1
+                return SweepResult((), (), 0)
+            if a.shape != (len(q), 4, 4) or b.shape != a.shape:
+                self.failed += 1
+                return SweepResult((), (), 0)
+            position, angle = differences(a, b)
+            worst = np.maximum(position, angle)
+            over = (position > 0.5 * self.tolerance.metres) | (angle > 0.5 * self.tolerance.radians)
+            picked = np.flatnonzero(over)
+            self.flagged += len(picked)
+            picked = picked[np.argsort(-worst[picked], kind="stable")][:CONFIRM]
+            flagged = tuple(Row(tuple(map(float, q[i])), labels[i], float(worst[i])) for i in picked)
+            improved = []
+            owners = np.asarray(owner)
+            for c in sorted(set(owner) - {-1}):
+                rows = np.flatnonzero((owners == c) & ~over)
+                if len(rows):
+                    best = rows[int(np.argmax(worst[rows]))]
+                    if worst[best] > centres[c][1]:
+                        improved.append(Row(tuple(map(float, q[best])), labels[best], float(worst[best])))
+            self.sweeps += 1
+            self.compared += len(q)
+            return SweepResult(flagged, tuple(improved), len(q))
+        finally:
+            self.seconds += time.monotonic() - began
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "sweeps": self.sweeps,
+            "compared": self.compared,
+            "flagged": self.flagged,
+            "unconfirmed": self.unconfirmed,
+            "failed": self.failed,
+            "seconds": round(self.seconds, 3),
+        }
