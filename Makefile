@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.rrosfuzz-installed
 BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh
 
-.PHONY: setup run test lint native-cov fuzz-native bench bench-quick
+.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-quick
 
 setup: $(STAMP)
 
@@ -23,12 +23,20 @@ test: setup
 	scripts/ros-ensure.sh --viz  # ROS 1, RViz and Xvfb from apt, for the ROS tests only (tests/test_ros_*.py)
 	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
-## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds.
+## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
+## then every deep bug x 6 engines x 10 trials x 60 s (about 6 hours on 2 cores).
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md
+	$(PY) -m benchmarks.bench_deep --mode full --write-md
 
+## The deep bugs against the goal's baselines, 10 trials x 10 s (about an hour on 2 cores).
+bench-deep: setup
+	$(PY) -m benchmarks.bench_deep --mode short --write-md
+
+## CI-sized: a few zoo bugs, and two deep bugs x 2 engines x 2 trials (tests/test_bench_deep.py runs it).
 bench-quick: setup
 	$(PY) -m benchmarks.bench_zoo --mode quick
+	$(PY) -m benchmarks.bench_deep --mode quick
 
 lint: setup
 	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks

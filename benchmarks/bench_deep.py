@@ -174,6 +174,9 @@ def main(argv: list[str] | None = None) -> list[Run]:
     parser.add_argument("--budget", type=float, default=None)
     parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
+    parser.add_argument(
+        "--results", type=Path, default=RESULTS, help="folder for deep-<mode>.json and .png (%(default)s)"
+    )
     args = parser.parse_args(argv)
     base = MODES[args.mode]
     mode = Mode(
@@ -197,9 +200,9 @@ def main(argv: list[str] | None = None) -> list[Run]:
     random.Random(0).shuffle(jobs)
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget), jobs))
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
-    plot(runs, mode, RESULTS / f"deep-{args.mode}.png")
+    args.results.mkdir(parents=True, exist_ok=True)
+    (args.results / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
+    plot(runs, mode, args.results / f"deep-{args.mode}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
     text = markdown(runs, mode, cmd.strip())
     print(text)

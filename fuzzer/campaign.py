@@ -17,6 +17,7 @@ import os
 import random
 import sys
 import time
+import types
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -77,6 +78,50 @@ def instrument(config: RunConfig) -> None:
             for name in fresh:
                 with contextlib.suppress(Exception):  # a bad target is reported when it is loaded
                     __import__(name)
+    instrument_loaded(names)
+
+
+def instrument_loaded(names: list[str]) -> int:
+    """Instrument, in place, the functions of the modules ``names`` and their submodules that
+    Atheris' import hook left as they were; returns how many it patched.
+
+    ``atheris.instrument_imports`` rewrites code as its loader reads it, but a module found by
+    another finder (the editable install's redirect: ``fuzzer``, ``python_impl``...) comes in
+    through that finder's loader: Atheris warns about a "custom loader" and the code stays
+    uninstrumented, so no edge and no comparison of it would reach libFuzzer. Each function,
+    method, static/class method and property of those modules gets
+    ``atheris.instrument_func`` (nested functions and lambdas with it; code already
+    instrumented is left alone)."""
+    import atheris
+
+    prefixes = tuple(f"{n}." for n in names)
+    patched = 0
+    for modname, module in list(sys.modules.items()):
+        if module is None or not (modname in names or modname.startswith(prefixes)):
+            continue
+        for obj in list(vars(module).values()):
+            for func in _own_functions(obj, modname):
+                if "__ATHERIS_INSTRUMENTED__" not in func.__code__.co_consts:
+                    atheris.instrument_func(func)
+                    patched += 1
+    return patched
+
+
+def _own_functions(obj: Any, modname: str) -> list[Any]:
+    """The Python functions defined by module ``modname`` in ``obj`` (a function or a class)."""
+    if isinstance(obj, types.FunctionType):
+        return [obj] if obj.__module__ == modname else []
+    if not isinstance(obj, type) or obj.__module__ != modname:
+        return []
+    out = []
+    for member in vars(obj).values():
+        if isinstance(member, staticmethod | classmethod):
+            member = member.__func__
+        if isinstance(member, property):
+            out += [f for f in (member.fget, member.fset, member.fdel) if isinstance(f, types.FunctionType)]
+        elif isinstance(member, types.FunctionType):
+            out.append(member)
+    return out
 
 
 def parse_dictionary(path: str) -> list[str | float]:
@@ -457,9 +502,9 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
         return {}
     from fuzzer import mutators
     from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
-    from fuzzer.harness import MUTATE, SPACEFILL, Sources
     from fuzzer.selection.bandit import Bandit
     from fuzzer.selection.floatcmp import FloatCompareTracer
+    from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
 
     config = session.config
     weights: dict[str, float] = dict(mutators.WEIGHTS)

@@ -18,12 +18,11 @@ consecutive (step kind, step status) to libFuzzer (``guidance.step_bigrams``).
 
 from __future__ import annotations
 
-import bisect
 import hashlib
 import math
 import random
 import time
-from collections import Counter, OrderedDict
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -36,12 +35,11 @@ from fuzzer.generation.spacefill import configuration_message
 from fuzzer.generation.sweep import Sweep
 from fuzzer.guidance import Features, input_features, step_bigrams
 from fuzzer.mapping import FkCall, MoveCall
-from fuzzer.selection.bandit import Bandit
 from fuzzer.selection.floatcmp import FloatCompareTracer
+from fuzzer.selection.state import SPACEFILL, Pool, Sources, Stats
 from fuzzer.testcase import TestCase, TestCaseError, decode
 
 SNAPSHOT_SECONDS = 5.0
-POOL_SIZE = 64
 POOL_PARENT_CHANCE = 0.2
 DECODE_CACHE = 4096
 
@@ -65,113 +63,6 @@ class MessageCrossover(Protocol):
     def __call__(
         self, a: dict[str, Any], b: dict[str, Any], ctx: mutators.MutationContext
     ) -> dict[str, Any]: ...
-
-
-SPACEFILL = "spacefill"
-"""The arm (and lineage name) of a fresh space-filling input (``fuzzer.generation.spacefill``)."""
-
-
-MUTATE = "mutate"
-"""The arm of a mutated (or crossed-over) corpus input."""
-
-
-@dataclass
-class Sources:
-    """Where the next input comes from (issue 11), chosen by two bandits rewarded by new
-    coverage features or new divergence signatures (``fuzzer.selection.bandit``): ``source``
-    between a fresh space-filling input (``spacefill``: the next configuration of the Sobol
-    stream put into the parent by ``fresh``) and a mutated corpus input (``mutate``); then,
-    for a mutation, ``mutators`` over the registered mutators by name.
-
-    Attributes
-    ----------
-    source : Bandit
-        Arms ``spacefill`` and ``mutate``; it also decides libFuzzer's crossovers.
-    mutators : Bandit
-        One arm per registered mutator.
-    fresh : callable (message, rng) -> message or None
-        A copy of the parent carrying the next space-filling configuration (None: not
-        applicable to this message; the harness then mutates).
-    """
-
-    source: Bandit
-    mutators: Bandit
-    fresh: Callable[[dict[str, Any], random.Random], dict[str, Any] | None]
-
-    def reward(self, strategy: str, paid: bool) -> None:
-        """Credit the arms that made an input whose last step was ``strategy``."""
-        if strategy == SPACEFILL:
-            self.source.reward(SPACEFILL, paid)
-            return
-        self.source.reward(MUTATE, paid)
-        self.mutators.reward(strategy.partition(":")[0], paid)
-
-    def to_json(self) -> dict[str, Any]:
-        return {"source": self.source.to_json(), "mutators": self.mutators.to_json()}
-
-
-@dataclass
-class Stats:
-    """Counts of a campaign (one process)."""
-
-    started: float = field(default_factory=time.monotonic)
-    execs: int = 0
-    filtered: int = 0
-    malformed: int = 0
-    divergent: Counter[str] = field(default_factory=Counter)
-    by_strategy: Counter[str] = field(default_factory=Counter)
-    executed_by_strategy: Counter[str] = field(default_factory=Counter)
-    signatures: dict[str, str] = field(default_factory=dict)
-    max_difference: float = 0.0
-    """The largest headline difference of a value divergence (never a representation)."""
-    max_difference_unit: str = ""
-    """Its unit (m or rad); '' when no value divergence was seen."""
-    near_zero: Counter[int] = field(default_factory=Counter)
-    """Fig. 7: evaluated test cases by how many joint values are close to zero."""
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "elapsed": self.elapsed,
-            "execs": self.execs,
-            "filtered": self.filtered,
-            "malformed": self.malformed,
-            "divergent": dict(self.divergent),
-            "by_strategy": dict(self.by_strategy),
-            "executed_by_strategy": dict(self.executed_by_strategy),
-            "signatures": len(self.signatures),
-            "max_difference": self.max_difference,
-            "max_difference_unit": self.max_difference_unit,
-            "near_zero": {str(k): v for k, v in sorted(self.near_zero.items())},
-        }
-
-    @property
-    def elapsed(self) -> float:
-        return time.monotonic() - self.started
-
-    @property
-    def divergences(self) -> int:
-        return sum(self.divergent.values())
-
-
-@dataclass
-class Pool:
-    """Candidate seeds sorted by difference priority (Algorithm 3)."""
-
-    size: int = POOL_SIZE
-    entries: list[tuple[float, bytes]] = field(default_factory=list)
-
-    def offer(self, difference: float, data: bytes) -> None:
-        if difference <= 0.0 or (len(self.entries) >= self.size and difference <= self.entries[0][0]):
-            return
-        bisect.insort(self.entries, (difference, data))
-        del self.entries[: max(0, len(self.entries) - self.size)]
-
-    def pick(self, rng: random.Random) -> bytes | None:
-        """Higher difference, higher chance (rank-weighted)."""
-        if not self.entries:
-            return None
-        weights = range(1, len(self.entries) + 1)
-        return rng.choices(self.entries, weights=weights)[0][1]
 
 
 @dataclass

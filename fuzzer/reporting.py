@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
-    from fuzzer.harness import Stats
+    from fuzzer.selection.state import Stats
 
 PREFIX = "[rrosfuzz]"
 

@@ -74,3 +74,24 @@ def test_non_float_comparisons_are_left_alone_and_special_floats_bucketed() -> N
     assert tracer.traced == 3 and len(features.seen) == 3
     uninstalled = FloatCompareTracer(features, types.SimpleNamespace())
     assert uninstalled.trace(1.0, 2.0, 0, 6, False) is True  # compares itself when never installed
+
+
+def test_the_campaign_instruments_the_targets_and_the_oracle_it_names() -> None:
+    """The editable install's finder loads ``fuzzer`` and ``python_impl`` with its own loader,
+    which Atheris' import hook leaves uninstrumented ("custom loader"): ``campaign.instrument``
+    must patch them in place, or no comparison of theirs reaches libFuzzer. In a subprocess
+    (instrumentation rewrites the code of the running process)."""
+    import subprocess
+
+    script = (
+        "import dis\n"
+        "from fuzzer import campaign\n"
+        "from fuzzer.session import RunConfig\n"
+        "campaign.instrument(RunConfig(op='fk', targets=('native', 'python')))\n"
+        "import fuzzer.oracle as o, python_impl.model as m\n"
+        "calls = lambda f: {i.argval for i in dis.get_instructions(f)}\n"
+        "print('_trace_cmp' in calls(o.compare), '_trace_cmp' in calls(m.RobotModel.check_vector))\n"
+        "print(campaign.instrument_loaded(['fuzzer.oracle', 'python_impl']))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True)
+    assert done.stdout.split() == ["True", "True", "0"], done.stdout + done.stderr

@@ -12,7 +12,8 @@ import pytest
 from fuzzer import campaign, mutators
 from fuzzer.artifacts import ArtifactStore, load_sidecar
 from fuzzer.guidance import Features
-from fuzzer.harness import DivergenceFound, Harness, Pool
+from fuzzer.harness import DivergenceFound, Harness
+from fuzzer.selection.state import Pool
 from fuzzer.session import RunConfig, Session
 from fuzzer.testcase import TestCase, decode
 

@@ -420,7 +420,7 @@ def test_the_summary_shows_the_largest_value_difference_with_its_unit(
     """Never a representation gap, never an agreement's rounding: the largest headline
     difference of a value divergence, with its unit."""
     from fuzzer import reporting
-    from fuzzer.harness import Stats
+    from fuzzer.selection.state import Stats
 
     stats = Stats(execs=10)
     reporting.summary(stats, 0, "a", ["c"], [])

@@ -7,8 +7,9 @@ from pathlib import Path
 
 from fuzzer import mutators
 from fuzzer.generation.spacefill import SpaceFill, fresh_inputs, scenario_with_configuration
-from fuzzer.harness import MUTATE, SPACEFILL, Harness, Sources
+from fuzzer.harness import Harness
 from fuzzer.selection.bandit import Bandit
+from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
 from fuzzer.session import RunConfig, Session
 from fuzzer.testcase import decode
 from tests.test_harness import make_harness
