@@ -93,5 +93,26 @@ def test_the_campaign_instruments_the_targets_and_the_oracle_it_names() -> None:
         "print('_trace_cmp' in calls(o.compare), '_trace_cmp' in calls(m.RobotModel.check_vector))\n"
         "print(campaign.instrument_loaded(['fuzzer.oracle', 'python_impl']))\n"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True
+    )
     assert done.stdout.split() == ["True", "True", "0"], done.stdout + done.stderr
+
+
+def test_the_tracer_steps_aside_after_its_budget_until_the_next_input() -> None:
+    calls: list[str] = []
+
+    def atheris_own(*args: object) -> bool:
+        calls.append("own")
+        return True
+
+    fake = types.SimpleNamespace(_trace_cmp=atheris_own)
+    tracer = FloatCompareTracer(Features(enabled=False), fake)
+    tracer.install(budget=3)
+    for i in range(5):
+        fake._trace_cmp(0.5 + i, 2.5, 0, 7, False)
+    assert tracer.traced == 3 and len(calls) == 5  # every comparison still reaches Atheris
+    assert fake._trace_cmp is atheris_own
+    tracer.install(budget=3)  # the next input: traced again
+    fake._trace_cmp(0.25, 2.5, 0, 7, False)
+    assert tracer.traced == 4 and fake._trace_cmp == tracer.trace

@@ -14,7 +14,8 @@ function. An input that brings a comparison within half the distance of any earl
 (a new exponent at that site) is new coverage, so libFuzzer keeps it and mutates it further:
 the search climbs toward the branch. Exponents are clipped to [-60, 16] (1e-18 .. 65,536); a
 difference of exactly 0 is its own bucket. The cost is one Python call per comparison in the
-instrumented modules (BENCHMARKS.md has the measured overhead).
+instrumented modules (BENCHMARKS.md has the measured overhead), for the first ``PER_INPUT``
+float comparisons of each input; after those the tracer steps aside until the next input.
 """
 
 from __future__ import annotations
@@ -30,6 +31,11 @@ from fuzzer.guidance import Features
 FLOAT_CMP = 11
 """Tag of float-comparison features (guidance's integer feature tuples start with a tag)."""
 LOW, HIGH = -60, 16
+
+PER_INPUT = 64
+"""Float comparisons traced per input (the first ones it makes); then Atheris' own function
+takes over until the next input. A ``move`` through the twin's planner makes about 350, and
+tracing them all took a third of the campaign's time (BENCHMARKS.md)."""
 _FLOATS = (float, np.float64, np.float32)
 _NUMBERS = (*_FLOATS, int, np.int64)
 
@@ -56,10 +62,13 @@ class FloatCompareTracer:
         self.sites: set[int] = set()
         """Comparison sites that compared a float at least once."""
         self.traced = 0
+        self.remaining = PER_INPUT
         self._keys: set[tuple[int, ...]] = set()
 
-    def install(self) -> None:
-        """Wrap the module's current ``_trace_cmp`` unless it is already this tracer's."""
+    def install(self, budget: int = PER_INPUT) -> None:
+        """Wrap the module's current ``_trace_cmp`` unless it is already this tracer's, for the
+        next ``budget`` float comparisons (the harness calls this before every input)."""
+        self.remaining = budget
         current = getattr(self.module, "_trace_cmp", None)
         if current is None or current == self.trace:
             return
@@ -71,6 +80,9 @@ class FloatCompareTracer:
         t1, t2 = type(obj1), type(obj2)
         if (t1 in _FLOATS and t2 in _NUMBERS) or (t2 in _FLOATS and t1 in _NUMBERS):
             self._record(float(obj1), float(obj2), site)
+            self.remaining -= 1
+            if self.remaining <= 0 and self.inner is not None:
+                self.module._trace_cmp = self.inner  # the budget is spent: Atheris' own until install()
         inner = self.inner
         if inner is None:  # never installed: compare like COMPARE_OP would
             return _compare(obj1, obj2, opid)
