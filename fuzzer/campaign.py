@@ -513,6 +513,8 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
 
         weights = dict(SEQ_WEIGHTS)
     limits = session.reference.joint_limits
+    if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
+        return {"float_tracer": FloatCompareTracer(features)}
     facts = session.facts()
     stream = SpaceFill([lim.lower for lim in limits], [lim.upper for lim in limits], seed=options.seed)
     fresh = fresh_inputs(

@@ -189,3 +189,19 @@ def test_no_sweep_reports_between_correct_targets(tmp_path: Path) -> None:
     for _ in range(100):
         h._sweep()
     assert not h.stats.signatures and h.sweep.flagged == 0 and h.sweep.compared == 100 * ROWS
+
+
+def test_a_campaign_on_a_chain_without_joints_runs_without_space_filling(tmp_path: Path) -> None:
+    """Baxter's default chain (base to torso) has no joint variable: no Sobol stream and no
+    sweep can exist, and the campaign must still run (it raised in SpaceFill before)."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run(
+        [sys.executable, str(root / "fuzz_diff.py"), str(tmp_path / "corpus"), "--op", "fk", "--robot",
+         "baxter", f"--artifacts={tmp_path / 'artifacts'}", "-runs=50", "--no-progress"],
+        capture_output=True, text=True, timeout=300, check=False, cwd=root,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
