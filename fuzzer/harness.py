@@ -32,7 +32,7 @@ from fuzzer.artifacts import ArtifactStore
 from fuzzer.divlog import CampaignLog, closer_to_command, near_zero_count
 from fuzzer.evaluate import Evaluation, Evaluator, Verdict
 from fuzzer.generation.spacefill import configuration_message
-from fuzzer.generation.sweep import Sweep
+from fuzzer.generation.sweep import CENTRES, Sweep
 from fuzzer.guidance import Features, input_features, step_bigrams
 from fuzzer.mapping import FkCall, MoveCall
 from fuzzer.selection.floatcmp import FloatCompareTracer
@@ -139,7 +139,7 @@ class Harness:
         ordinary test cases; neighbours that raised the difference become preferred parents."""
         assert self.sweep is not None
         centres = []
-        for difference, data in reversed(self.pool.entries[-4:]):
+        for difference, data in reversed(self.pool.entries[-CENTRES:]):
             call = self._call_of(data)
             if isinstance(call, FkCall):
                 centres.append((call.joint_values, difference))
