@@ -71,3 +71,48 @@ def test_a_scenario_gets_its_configuration_in_a_joint_target() -> None:
     assert len(out["steps"]) == 3
     assert scenario_with_configuration(without, (0.1,), ("a",), rng, 2) is None  # no room
     assert scenario_with_configuration({"steps": "x"}, (0.1,), ("a",), rng, 16) is None
+
+
+def test_a_scenario_visits_the_configuration_before_a_step_seeded_by_the_state() -> None:
+    """A pose goal's IK starts from the current state (MoveIt seeds it so): the space-filling
+    configuration also becomes that state, a /joint_target + /go right before the step."""
+    pose = {"header": {}, "pose": {}}
+    js = {"header": {}, "name": [], "position": [0.0], "velocity": [], "effort": []}
+    scenario = {
+        "steps": [
+            {"topic": "/joint_target", "msg": js},
+            {"topic": "/go", "msg": {}},
+            {"topic": "/pose_target", "msg": pose},
+            {"topic": "/go", "msg": {}},
+        ]
+    }
+    placed = set()
+    for seed in range(20):
+        out = scenario_with_configuration(scenario, (0.3, 0.2), ("a", "b"), random.Random(seed), 16)
+        assert out is not None
+        topics = [s["topic"] for s in out["steps"]]
+        if len(topics) == 6:  # inserted before the pose goal
+            assert topics[2:5] == ["/joint_target", "/go", "/pose_target"]
+            assert out["steps"][2]["msg"]["position"] == [0.3, 0.2]
+            placed.add("before pose")
+        else:  # or the existing joint target overwritten
+            assert out["steps"][0]["msg"]["position"] == [0.3, 0.2]
+            placed.add("overwritten")
+    assert placed == {"before pose", "overwritten"}
+    assert scenario_with_configuration(scenario, (0.3, 0.2), ("a", "b"), random.Random(0), 5) is not None
+    only_pose = {"steps": scenario["steps"][2:]}
+    assert scenario_with_configuration(only_pose, (0.3,), ("a",), random.Random(0), 3) is None  # no room
+
+
+def test_a_scenario_without_targets_gets_a_state_and_a_pose_goal_from_it() -> None:
+    session = Session.open(RunConfig(op="scenario"))
+    facts = session.facts()
+    stream = SpaceFill(facts.lower, facts.upper, seed=3)
+    fresh = fresh_inputs("scenario", "", stream, facts.joint_names, facts.reachable, 16)
+    out = fresh({"steps": [{"topic": "/stop", "msg": {}}]}, random.Random(1))
+    assert out is not None
+    topics = [s["topic"] for s in out["steps"]]
+    assert [t for t in topics if t != "/stop"] == ["/joint_target", "/go", "/pose_target", "/go"]
+    goal = next(s["msg"] for s in out["steps"] if s["topic"] == "/pose_target")
+    session.registry.validate("geometry_msgs/PoseStamped", goal)
+    assert set(goal["pose"]) == {"position", "orientation"}

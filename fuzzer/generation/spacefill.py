@@ -122,7 +122,28 @@ def configuration_message(
     return out
 
 
+GOAL_STEP = 0.1
+"""How far toward another space-filling point a fresh scenario's pose goal lies (a share)."""
+_STAMPED: dict[str, Any] = {"header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}}
+
 Reachable = Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
+
+
+SEEDED_BY_STATE = ("/pose_target", "/position_target", "/cartesian_path")
+"""Steps whose IK starts from the current state (MoveIt seeds a pose goal's and a Cartesian
+path's IK with it): a fault that depends on the IK seed shows only from some states."""
+
+
+def _state_steps(values: tuple[float, ...], joint_names: Sequence[str]) -> list[dict[str, Any]]:
+    """``/joint_target`` (all joints, by name) then ``/go``: the robot moves to ``values``."""
+    state = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": list(joint_names),
+        "position": list(values),
+        "velocity": [],
+        "effort": [],
+    }
+    return [{"topic": "/joint_target", "msg": state}, {"topic": "/go", "msg": {}}]
 
 
 def scenario_with_configuration(
@@ -131,33 +152,42 @@ def scenario_with_configuration(
     joint_names: Sequence[str],
     rng: random.Random,
     max_steps: int,
+    goal: Callable[[tuple[float, ...]], dict[str, Any]] | None = None,
 ) -> dict[str, Any] | None:
-    """A copy of a scenario (``--op scenario``) whose joint target goes to ``values``: one of
-    its ``/joint_target`` steps (picked by ``rng``) gets the configuration (all joints, by
-    name), or, when it has none and there is room, a ``/joint_target`` + ``/go`` pair is
-    inserted at a random place. None when neither applies."""
+    """A copy of a scenario (``--op scenario``) that visits configuration ``values``.
+
+    Either one of its ``/joint_target`` steps (picked by ``rng``) gets the configuration (all
+    joints, by name), or a ``/joint_target`` + ``/go`` pair moves the robot there right before
+    one of its steps seeded by the current state (``SEEDED_BY_STATE``), so the space-filling
+    points cover the IK seeds too; each with even odds when both apply. With neither and
+    room, the pair goes in at a random place, followed by ``/pose_target`` ``goal(values)`` (a
+    PoseStamped message: a pose goal from that state) and ``/go`` when ``goal`` is given and
+    there is room for four steps.
+    None when nothing applies.
+    """
     steps = message.get("steps")
     if not isinstance(steps, list):
         return None
     out = copy.deepcopy(message)
-    targets = [
-        i for i, step in enumerate(steps) if isinstance(step, dict) and step.get("topic") == "/joint_target"
-    ]
+    topics = [step.get("topic") if isinstance(step, dict) else None for step in steps]
+    targets = [i for i, topic in enumerate(topics) if topic == "/joint_target"]
+    seeded = [i for i, topic in enumerate(topics) if topic in SEEDED_BY_STATE]
+    room = max_steps - len(steps)
+    if seeded and room >= 2 and (not targets or rng.random() < 0.5):
+        at = rng.choice(seeded)
+        out["steps"][at:at] = _state_steps(values, joint_names)
+        return out
     if targets:
         msg = out["steps"][rng.choice(targets)]["msg"]
         msg["name"], msg["position"] = list(joint_names), list(values)
         return out
-    if len(steps) + 2 > max_steps:
+    if room < 2:
         return None
-    state = {
-        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
-        "name": list(joint_names),
-        "position": list(values),
-        "velocity": [],
-        "effort": [],
-    }
+    inserted = _state_steps(values, joint_names)
+    if goal is not None and room >= 4:
+        inserted += [{"topic": "/pose_target", "msg": goal(values)}, {"topic": "/go", "msg": {}}]
     at = rng.randint(0, len(steps))
-    out["steps"][at:at] = [{"topic": "/joint_target", "msg": state}, {"topic": "/go", "msg": {}}]
+    out["steps"][at:at] = inserted
     return out
 
 
@@ -171,10 +201,21 @@ def fresh_inputs(
 ) -> Callable[[dict[str, Any], random.Random], dict[str, Any] | None]:
     """The harness's ``Sources.fresh``: the parent message carrying the stream's next point."""
 
+    def goal(values: tuple[float, ...]) -> dict[str, Any]:
+        # the tip at a configuration a tenth of the way from ``values`` toward the stream's next
+        # point: reachable, and near enough for an iterative IK from ``values`` to converge
+        toward = stream.next()
+        near = tuple(v + GOAL_STEP * (t - v) for v, t in zip(values, toward, strict=True))
+        pose = configuration_message("geometry_msgs/PoseStamped", _STAMPED, near, (), reachable)
+        assert pose is not None
+        return pose
+
     def fresh(message: dict[str, Any], rng: random.Random) -> dict[str, Any] | None:
         values = stream.next()
         if op == "scenario":
-            return scenario_with_configuration(message, values, joint_names, rng, max_steps)
+            return scenario_with_configuration(
+                message, values, joint_names, rng, max_steps, goal if reachable is not None else None
+            )
         return configuration_message(msg_type, message, values, joint_names, reachable)
 
     return fresh
