@@ -109,6 +109,16 @@ class Run:
     """Kind and verdict of each file that did not."""
     fields: tuple[str, ...] = ()
     """Per field that diverged: ``kind field: largest difference unit`` (what was found)."""
+    first_input: float | None = None
+    """Seconds from the process start to the first evaluated test case (the start-up: imports,
+    seeds, instrumentation); None when the run logged none."""
+
+    @property
+    def search_time(self) -> float | None:
+        """Seconds from the first evaluated test case to the first detection (start-up excluded)."""
+        if self.detected_at is None or self.first_input is None:
+            return None
+        return max(0.0, self.detected_at - self.first_input)
 
 
 def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
@@ -189,6 +199,8 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = Fals
         last: dict[Any, dict[str, Any]] = {}
         for record in read_lines(artifacts / STATS):
             last[record.get("pid")] = record
+        starts = [float(r["first_input"]) for r in last.values() if r.get("first_input") is not None]
+        started_search = min(starts) - started if starts else None
         executions = sum(int(r.get("execs", 0)) for r in last.values())
         elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
         fidelity = replay_fidelity(bug, artifacts) if replay and engine == "full" else (0, 0, ())
@@ -206,6 +218,7 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = Fals
         len(hits),
         *fidelity,
         found_fields(hits),
+        started_search,
     )
 
 

@@ -121,6 +121,8 @@ class Harness:
 
     def _execute(self, case: TestCase, data: bytes, trusted: bool) -> Evaluation:
         """Evaluate a decoded test case and record what it showed."""
+        if self.stats.first_input is None:
+            self.stats.first_input = time.time()
         if self.float_tracer is not None:
             self.float_tracer.install()  # a fresh budget; again if Atheris swapped its _trace_cmp in
         evaluation = self.evaluator.evaluate(case, validated=trusted)

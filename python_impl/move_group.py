@@ -338,7 +338,7 @@ class MoveGroup:
         self._execute(names, times, np.asarray(positions, dtype=np.float64))
         return True
 
-    def _execute(self, names: list[str], times: list[float], positions: np.ndarray) -> None:
+    def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:
         def invalid(message: str) -> InvalidInputError:
             return InvalidInputError(message, ErrorCode.INVALID_TRAJECTORY)
 
@@ -348,11 +348,13 @@ class MoveGroup:
         for j, (theirs, ours) in enumerate(zip(names, own, strict=True)):
             if theirs != ours:
                 raise invalid(f"trajectory joint #{j} is '{theirs}', the group's is '{ours}'")
-        if not times:
+        if not len(times):
             raise invalid("trajectory has no points")
-        for i, t in enumerate(times):
-            if not math.isfinite(t) or (t < 0.0 if i == 0 else not t > times[i - 1]):
-                raise invalid("trajectory times must be finite, >= 0 and strictly increasing")
+        stamps = np.asarray(times, dtype=np.float64)
+        # one vector test, not a Python loop over the points: finite, the first >= 0, each
+        # after the one before (NaN fails every comparison, so it fails here too)
+        if not (np.isfinite(stamps).all() and stamps[0] >= 0.0 and (np.diff(stamps) > 0.0).all()):
+            raise invalid("trajectory times must be finite, >= 0 and strictly increasing")
         if not np.isfinite(positions).all():
             raise invalid("trajectory has a non-finite position")
         first = positions[0].tolist()
@@ -393,7 +395,7 @@ class MoveGroup:
             trajectory = self._plan()
         except PlanningError:
             return False  # moveit_commander's go() returns False when planning fails
-        self._execute(list(trajectory.joint_names), trajectory.time_from_start.tolist(), trajectory.positions)
+        self._execute(list(trajectory.joint_names), trajectory.time_from_start, trajectory.positions)
         return True
 
     def stop(self) -> None:

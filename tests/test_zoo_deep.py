@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -135,6 +136,20 @@ def test_survival_and_markdown() -> None:
     assert bench_deep.runs_on("fk", "uniform")
 
 
+def test_the_search_table_takes_the_start_up_out() -> None:
+    """A slower start-up with a quicker search: slower from the process start, faster from the
+    first input (the second table), and each engine's median start-up shown."""
+    full = [replace(_run("full", i, 2.0 + 0.01 * i), first_input=1.9) for i in range(6)]
+    other = [replace(_run("uniform", i, 1.5 + 0.01 * i), first_input=1.0) for i in range(6)]
+    assert full[0].search_time == pytest.approx(0.1) and _run("full", 0, None).search_time is None
+    assert bench_deep.censored_search([*full[:1], _run("full", 1, 3.0)], 10.0) == [pytest.approx(0.1), 10.0]
+    mode = bench_deep.Mode(("narrow_band",), 6, 10.0, ("full", "uniform"))
+    text = bench_deep.markdown([*full, *other], mode, "cmd")
+    first, second = (line for line in text.splitlines() if line.startswith("| narrow_band"))
+    assert "slower" in first and "faster" in second
+    assert "| 1.90 | 1.00 |" in second
+
+
 def test_the_quick_mode_runs_and_the_sweep_finds_the_narrower_band(tmp_path) -> None:  # type: ignore[no-untyped-def]
     """``bench_deep --mode quick`` (what CI runs of issue 11's statistics): 2 deep bugs x (full,
     uniform) x 2 trials x 10 s. The full engine's batched sweeps meet a band 1e-5 of joint_2's
@@ -148,3 +163,4 @@ def test_the_quick_mode_runs_and_the_sweep_finds_the_narrower_band(tmp_path) -> 
     swept = [r for r in runs if r.bug == "narrower_band" and r.engine == "full"]
     assert len(swept) == 2 and all(r.detected_at is not None and r.detected_at < 10.0 for r in swept)
     assert (tmp_path / "deep-quick.json").is_file() and (tmp_path / "deep-quick.png").is_file()
+    assert all(r.first_input is not None and 0.0 < r.first_input < 10.0 for r in runs)  # start-up logged

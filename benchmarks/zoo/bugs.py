@@ -13,6 +13,7 @@ import dataclasses
 import math
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -99,7 +100,7 @@ class _TargetDespiteError(Group):
         except OutOfBoundsError:
             return value  # MoveIt's setJointValueTarget returns false, but has set the state
 
-    def _execute(self, names: list[str], times: list[float], positions: np.ndarray) -> None:
+    def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:
         self._current = positions[-1].tolist()  # and execution does not check bounds either
 
 

@@ -42,7 +42,7 @@ class _ContinuousAccumulates(Group):
     across +-pi leaves the joint outside (-pi, pi] (e.g. 3.0 then -3.0 gives 3.28).
     """
 
-    def _execute(self, names: list[str], times: list[float], positions: np.ndarray) -> None:
+    def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:
         before = list(self._current)
         super()._execute(names, times, positions)
         self._current = [
@@ -206,7 +206,7 @@ class _RememberAliasesState(Group):
         if values is None:
             self._named[convert.to_string(name, "named target")] = self._current  # no copy
 
-    def _execute(self, names: list[str], times: list[float], positions: np.ndarray) -> None:
+    def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:
         state = self._current
         super()._execute(names, times, positions)
         state[:] = self._current  # updated in place

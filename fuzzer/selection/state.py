@@ -77,6 +77,9 @@ class Stats:
     """Its unit (m or rad); '' when no value divergence was seen."""
     near_zero: Counter[int] = field(default_factory=Counter)
     """Fig. 7: evaluated test cases by how many joint values are close to zero."""
+    first_input: float | None = None
+    """Wall-clock time (``time.time()``) the first test case was evaluated: what start-up cost
+    (imports, seeds, instrumentation) ends at; ``benchmarks.bench_deep`` measures from it too."""
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -91,6 +94,7 @@ class Stats:
             "max_difference": self.max_difference,
             "max_difference_unit": self.max_difference_unit,
             "near_zero": {str(k): v for k, v in sorted(self.near_zero.items())},
+            "first_input": self.first_input,
         }
 
     @property
