@@ -132,6 +132,10 @@ def test_survival_and_markdown() -> None:
     text = bench_deep.markdown(runs, mode, "cmd")
     row = next(line for line in text.splitlines() if line.startswith("| narrow_band"))
     assert "(4/4)" in row and "- (0/4)" in row and "faster" in row
+    late = [_run("full", 0, 2.0), _run("full", 1, 12.0)]  # the second past the 10-s budget
+    table = bench_deep.markdown(late, mode, "cmd").splitlines()
+    row = next(ln for ln in table if ln.startswith("| narrow_band"))
+    assert "(1/2)" in row  # a detection after the budget is not one within it
     assert bench_deep.runs_on("scenario", "weights") and not bench_deep.runs_on("scenario", "uniform")
     assert bench_deep.runs_on("fk", "uniform")
 
@@ -164,3 +168,23 @@ def test_the_quick_mode_runs_and_the_sweep_finds_the_narrower_band(tmp_path) -> 
     assert len(swept) == 2 and all(r.detected_at is not None and r.detected_at < 10.0 for r in swept)
     assert (tmp_path / "deep-quick.json").is_file() and (tmp_path / "deep-quick.png").is_file()
     assert all(r.first_input is not None and 0.0 < r.first_input < 10.0 for r in runs)  # start-up logged
+
+
+def test_an_earlier_results_file_is_tabulated_again(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """``--from-json`` re-tabulates a deep-<mode>.json (its bugs, engines, trials, budget) and
+    names a file that is not one instead of raising."""
+    import json
+    from dataclasses import asdict
+
+    runs = [replace(_run("full", i, 1.0 + i), first_input=0.5) for i in range(3)]
+    runs += [replace(_run("uniform", i, None), first_input=0.4) for i in range(3)]
+    source = tmp_path / "in.json"
+    source.write_text(json.dumps([{**asdict(r), "future_field": 1} for r in runs]))
+    again = bench_deep.main(["--mode", "short", "--from-json", str(source), "--results", str(tmp_path)])
+    assert again == runs and (tmp_path / "deep-short.png").is_file()
+    assert not (tmp_path / "deep-short.json").exists()  # the source is not copied over
+    for bad in ("{}", "[]", "[1]", '[{"bug": "x"}]', "not json"):
+        source.write_text(bad)
+        with pytest.raises(SystemExit) as exit_info:
+            bench_deep.main(["--from-json", str(source), "--results", str(tmp_path)])
+        assert exit_info.value.code == 2
