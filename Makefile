@@ -3,7 +3,14 @@ SHELL := /bin/bash
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.rrosfuzz-installed
-BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh
+MODULES := build/python-modules.txt
+# The editable install maps each Python module to its file when it is installed: a module added,
+# moved or removed since then needs setup again. The list is rewritten only when it changes.
+$(shell mkdir -p build && find fuzzer python_impl robot_api native adapters -name '*.py' -not -path '*/__pycache__/*' \
+	| LC_ALL=C sort > build/python-modules.new && (cmp -s build/python-modules.new $(MODULES) \
+	|| mv build/python-modules.new $(MODULES)); rm -f build/python-modules.new)
+BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh \
+	$(MODULES)
 
 .PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-quick
 

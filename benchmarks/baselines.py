@@ -26,14 +26,15 @@ import random
 import time
 from pathlib import Path
 
-from fuzzer import campaign, mutators, reporting
-from fuzzer.artifacts import ArtifactStore
-from fuzzer.divlog import CampaignLog
-from fuzzer.guidance import Features
+from fuzzer import campaign, reporting
+from fuzzer.artifacts.divlog import CampaignLog
+from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution.session import RunConfig, Session, versions
+from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.harness import Harness
-from fuzzer.session import RunConfig, Session, versions
-from fuzzer.testcase import TestCase
-from fuzzer.tolerance import default_tolerance
+from fuzzer.input.testcase import TestCase
+from fuzzer.mutation import mutators
+from fuzzer.selection.guidance import Features
 
 ENGINES = ("paper", "hypothesis", "uniform")
 

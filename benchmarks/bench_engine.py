@@ -72,8 +72,8 @@ def sweep_rate(seconds: float, seed: int) -> float:
     """Differential FK comparisons per second of ``Sweep.run`` (native vs twin, default robot)."""
     import native
     import python_impl
+    from fuzzer.execution.tolerance import Tolerance
     from fuzzer.generation.sweep import Sweep
-    from fuzzer.tolerance import Tolerance
     from robot_api.robots import default_robot_path
 
     reference = native.RobotModel(default_robot_path())

@@ -32,7 +32,7 @@ from scipy.stats import mannwhitneyu
 
 from benchmarks.bench_zoo import NOT_DETECTIONS, command, replace_section
 from benchmarks.zoo import BY_NAME, CONTROL
-from fuzzer.divlog import DIVERGENCES, STATS, read_lines
+from fuzzer.artifacts.divlog import DIVERGENCES, STATS, read_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"

@@ -39,12 +39,12 @@ from typing import Any
 from unittest import mock
 
 from benchmarks.bench_zoo import ROOT, replace_section
+from fuzzer.artifacts.divlog import STATS, read_lines
 from fuzzer.campaign import make_seeds
-from fuzzer.divlog import STATS, read_lines
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.input.testcase import TestCase, decode
 from fuzzer.scenario import execute
 from fuzzer.scenario.steps import ScenarioCall, to_call
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import TestCase, decode
 
 RESULTS = ROOT / "benchmarks" / "results"
 MARKS = ("<!-- bench_scenario:begin -->", "<!-- bench_scenario:end -->")

@@ -45,7 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
-from fuzzer.divlog import DIVERGENCES, STATS, read_lines
+from fuzzer.artifacts.divlog import DIVERGENCES, STATS, read_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"

@@ -23,8 +23,11 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
-from fuzzer.artifacts import ArtifactStore, atomic_write, clean_temporaries
-from fuzzer.divlog import CampaignLog, worker_totals
+from fuzzer.artifacts.divlog import CampaignLog, worker_totals
+from fuzzer.artifacts.store import ArtifactStore, atomic_write, clean_temporaries
+from fuzzer.execution.session import ConfigError, RunConfig, Session, outcome_json, versions
+from fuzzer.execution.targets import module_of
+from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
@@ -39,9 +42,6 @@ from fuzzer.processes import (
     supervises,
 )
 from fuzzer.processes import deadline as child_deadline
-from fuzzer.session import ConfigError, RunConfig, Session, outcome_json, versions
-from fuzzer.targets import module_of
-from fuzzer.testcase import TestCase, TestCaseError, decode
 
 DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
 
@@ -70,7 +70,7 @@ def instrument(config: RunConfig) -> None:
     """Import the Python targets and the oracle with Atheris coverage instrumentation."""
     import atheris
 
-    names = sorted({module_of(spec) for spec in config.targets} - {"native"} | {"fuzzer.oracle"})
+    names = sorted({module_of(spec) for spec in config.targets} - {"native"} | {"fuzzer.execution.oracle"})
     # a malformed spec (":x", "a..b") is left to load_target, which reports it by name
     fresh = [n for n in names if n not in sys.modules and all(s.isidentifier() for s in n.split("."))]
     if fresh:
@@ -167,9 +167,9 @@ def interesting_values(session: Session) -> list[float]:
 def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
     """n seeds from Hypothesis strategies of the message definition, with robot-aware hints
     (for ``--op scenario`` a sequence strategy over the topics' step strategies)."""
-    from fuzzer.mapping import scenario_strategy, seed_hints
-    from fuzzer.seeds import generate_seeds
-    from fuzzer.strategies import strategy_for
+    from fuzzer.generation.seeds import generate_seeds
+    from fuzzer.generation.strategies import strategy_for
+    from fuzzer.input.mapping import scenario_strategy, seed_hints
 
     msg_type = session.config.message_type
     special = not session.config.filtering
@@ -245,14 +245,14 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     import atheris
 
     instrument(config)
-    from fuzzer import mutators
-    from fuzzer.guidance import Features
     from fuzzer.harness import Harness
+    from fuzzer.mutation import mutators
+    from fuzzer.selection.guidance import Features
 
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
-    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/manifest.py)
-        from fuzzer.travel import record_corpus
+    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
+        from fuzzer.artifacts.travel import record_corpus
 
         record_corpus(options.corpus, config)
     options.artifacts.mkdir(parents=True, exist_ok=True)
@@ -298,7 +298,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     dictionary: list[str | float] = [*session.reference.joint_names, *session.reference.link_names]
     if options.dictionary_file:
         dictionary += parse_dictionary(options.dictionary_file)
-    from fuzzer.mapping import FOCUS
+    from fuzzer.input.mapping import FOCUS
 
     focus = FOCUS.get(config.message_type, ())
 
@@ -500,8 +500,8 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
     "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither."""
     if options.mutator != "rrosfuzz":
         return {}
-    from fuzzer import mutators
     from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
+    from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
     from fuzzer.selection.floatcmp import FloatCompareTracer
     from fuzzer.selection.state import MUTATE, SPACEFILL, Sources

@@ -25,10 +25,10 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
-from fuzzer.mapping import DEFAULT_MSG_TYPE, OPS
+from fuzzer.execution.session import ConfigError, RunConfig
+from fuzzer.execution.tolerance import Tolerance, default_tolerance
+from fuzzer.input.mapping import DEFAULT_MSG_TYPE, OPS
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT
-from fuzzer.session import ConfigError, RunConfig
-from fuzzer.tolerance import Tolerance, default_tolerance
 from robot_api import robots
 
 SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage", "export-bag", "view")
@@ -301,8 +301,8 @@ def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def replay_main(argv: Sequence[str]) -> int:
-    from fuzzer.replay import replay_file, source_of
-    from fuzzer.session import ConfigError
+    from fuzzer.execution.session import ConfigError
+    from fuzzer.triage.replay import replay_file, source_of
 
     args = _replay_parser().parse_args(argv)
     base, given = _config(args)
@@ -333,7 +333,7 @@ def replay_main(argv: Sequence[str]) -> int:
 
 def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
     """Crash files from paths, folders and shell globs (sidecars skipped); missing ones are errors."""
-    from fuzzer.paths import PathError, crash_inputs
+    from fuzzer.input.paths import PathError, crash_inputs
 
     try:
         return crash_inputs(paths, folders=folders)
@@ -342,7 +342,7 @@ def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
 
 
 def triage_main(argv: Sequence[str]) -> int:
-    from fuzzer import triage
+    from fuzzer.triage import pipeline as triage
 
     parser = argparse.ArgumentParser(prog="fuzz_diff.py triage", description="List divergence buckets.")
     parser.add_argument(
@@ -371,12 +371,12 @@ def triage_main(argv: Sequence[str]) -> int:
 
 
 def minimize_main(argv: Sequence[str]) -> int:
-    from fuzzer.artifacts import ArtifactStore, sidecar_path
-    from fuzzer.evaluate import history_of
-    from fuzzer.minimize import Minimizer, joints_that_matter
-    from fuzzer.session import ConfigError, Session
-    from fuzzer.sidecar import SidecarError, config_from, read_sidecar
-    from fuzzer.testcase import TestCaseError, decode
+    from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
+    from fuzzer.artifacts.store import ArtifactStore, sidecar_path
+    from fuzzer.execution.evaluate import history_of
+    from fuzzer.execution.session import ConfigError, Session
+    from fuzzer.input.testcase import TestCaseError, decode
+    from fuzzer.triage.minimize import Minimizer, joints_that_matter
 
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py minimize",
@@ -399,7 +399,7 @@ def minimize_main(argv: Sequence[str]) -> int:
     _, given = _config(args)
     files = _inputs(args.paths, folders=False)
     if args.output is not None:
-        from fuzzer.paths import prepare_folder
+        from fuzzer.input.paths import prepare_folder
 
         prepare_folder(args.output, "--output", writable=True)
     sessions: dict[Any, Any] = {}
@@ -493,7 +493,7 @@ def report_main(argv: Sequence[str]) -> int:
         output = args.directory / "report"
         if output.is_symlink():  # a crafted folder must not make us write elsewhere
             raise UsageError(f"{output} is a symbolic link; choose the output folder with -o")
-    from fuzzer.paths import prepare_folder
+    from fuzzer.input.paths import prepare_folder
 
     prepare_folder(output, "report output", writable=True)
     page = write_report(args.directory, output, trust=args.trust_sidecar)
@@ -502,7 +502,7 @@ def report_main(argv: Sequence[str]) -> int:
 
 
 def promote_main(argv: Sequence[str]) -> int:
-    from fuzzer.regressions import SUITE, PromoteError, promote
+    from fuzzer.triage.regressions import SUITE, PromoteError, promote
 
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py promote", description="Add a crash file to the regression suite."
@@ -526,7 +526,7 @@ def promote_main(argv: Sequence[str]) -> int:
 
 
 def coverage_main(argv: Sequence[str]) -> int:
-    from fuzzer.coverage_report import measure
+    from fuzzer.report.coverage import measure
 
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py coverage", description="Line and branch coverage of python_impl over a corpus."
@@ -535,17 +535,17 @@ def coverage_main(argv: Sequence[str]) -> int:
     _config_options(parser)
     parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
     args = parser.parse_args(argv)
-    from fuzzer.paths import PathError, check_input_file
+    from fuzzer.input.paths import PathError, check_input_file
 
     for path in args.corpus:
         if not path.exists():
             raise UsageError(f"{path}: no such file or folder")
         check_input_file(path)
-    from fuzzer.travel import adopt_manifest
+    from fuzzer.artifacts.travel import adopt_manifest
 
     adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
     config, _ = _config(args)
-    from fuzzer.travel import check_manifests
+    from fuzzer.artifacts.travel import check_manifests
 
     check_manifests([p for p in args.corpus if p.is_dir()], config)
     if args.html.exists() and not args.html.is_dir():
@@ -562,13 +562,13 @@ def campaign_main(argv: Sequence[str]) -> int:
     # Files next to libFuzzer flags are libFuzzer's business (-minimize_crash, running single inputs).
     if args.seeds is not None and args.seeds < 0:
         raise UsageError("--seeds must be >= 0")
-    from fuzzer import travel
+    from fuzzer.artifacts import travel
 
     # settings travel: from a crash file's sidecar (-minimize_crash), else the corpus manifest
     if not travel.is_child() and not travel.adopt_sidecar(args, [p for p in args.corpus if p.is_file()]):
         travel.adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
     if not travel.is_child() and args.max_steps is None:
-        from fuzzer.manifest import recorded_max_steps
+        from fuzzer.artifacts.manifest import recorded_max_steps
 
         args.max_steps = recorded_max_steps(args.corpus, args.op)
     config, _ = _config(args)
@@ -649,7 +649,7 @@ def _view_main(argv: Sequence[str]) -> int:
 
 def _missing_artifact(path: Path) -> bool:
     """A path named like a crash file that does not exist (a typo, not a new corpus folder)."""
-    from fuzzer.paths import looks_like_artifact
+    from fuzzer.input.paths import looks_like_artifact
 
     return looks_like_artifact(path) and not path.exists() and not path.is_symlink()
 

@@ -8,7 +8,7 @@ default the campaign goes on past divergences. With ``stop_on_divergence`` the
 first one raises, libFuzzer writes ``crash-<sha1>`` and exits.
 
 The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
-a high-difference one), applies one registered mutator (``fuzzer.mutators``,
+a high-difference one), applies one registered mutator (``fuzzer.mutation.mutators``,
 or for ``--op scenario`` the sequence mutators of ``fuzzer.scenario.mutate``,
 given as ``mutate_message``/``crossover_message``) with an RNG seeded by
 libFuzzer, records it in the lineage, and encodes. It never raises: an
@@ -27,17 +27,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from fuzzer import mutators
-from fuzzer.artifacts import ArtifactStore
-from fuzzer.divlog import CampaignLog, closer_to_command, near_zero_count
-from fuzzer.evaluate import Evaluation, Evaluator, Verdict
+from fuzzer.artifacts.divlog import CampaignLog, closer_to_command, near_zero_count
+from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution.evaluate import Evaluation, Evaluator, Verdict
 from fuzzer.generation.spacefill import configuration_message
 from fuzzer.generation.sweep import CENTRES, Sweep
-from fuzzer.guidance import Features, input_features, step_bigrams
-from fuzzer.mapping import FkCall, MoveCall
+from fuzzer.input.mapping import FkCall, MoveCall
+from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.mutation import mutators
 from fuzzer.selection.floatcmp import FloatCompareTracer
+from fuzzer.selection.guidance import Features, input_features, step_bigrams
 from fuzzer.selection.state import SPACEFILL, Pool, Sources, Stats
-from fuzzer.testcase import TestCase, TestCaseError, decode
 
 SNAPSHOT_SECONDS = 5.0
 POOL_PARENT_CHANCE = 0.2
@@ -49,7 +49,7 @@ class DivergenceFound(Exception):
 
 
 class MessageMutator(Protocol):
-    """``fuzzer.mutators.mutate``'s signature: ``(message, ctx, name=None) -> (message, name)``."""
+    """``fuzzer.mutation.mutators.mutate``'s signature: ``(message, ctx, name=None) -> (message, name)``."""
 
     def __call__(
         self, message: dict[str, Any], ctx: mutators.MutationContext, name: str | None = None
@@ -57,7 +57,7 @@ class MessageMutator(Protocol):
 
 
 class MessageCrossover(Protocol):
-    """``fuzzer.mutators.crossover``'s signature: ``(a, b, ctx) -> message``. A crossover may
+    """``fuzzer.mutation.mutators.crossover``'s signature: ``(a, b, ctx) -> message``. A crossover may
     name itself in the lineage with a ``lineage_name`` attribute (default ``splice``)."""
 
     def __call__(

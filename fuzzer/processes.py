@@ -16,7 +16,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzer.artifacts import sidecar_path
+from fuzzer.artifacts.store import sidecar_path
 
 CHILD_ENV = "RROSFUZZ_CHILD"
 DEADLINE_ENV = "RROSFUZZ_DEADLINE"

@@ -7,7 +7,7 @@ documents the protocol), with the project's interpreter::
     python ros/target_node.py --spec python --urdf robot.urdf --name t1 [--tip-link LINK]
 
 It answers each JSON request on ``/rrosfuzz/<name>/request`` with the outcome
-of ``fuzzer.targets.Runner.run`` on ``/rrosfuzz/<name>/response``. Requests are
+of ``fuzzer.execution.targets.Runner.run`` on ``/rrosfuzz/<name>/response``. Requests are
 data only (``call_from_json``); nothing in them is evaluated.
 """
 
@@ -23,11 +23,11 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fuzzer.mapping import CallError, call_from_json
-from fuzzer.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status
+from fuzzer.execution.targets import Runner
+from fuzzer.input.mapping import CallError, call_from_json
 from fuzzer.ros import env
 from fuzzer.ros.transport import decode, encode
-from fuzzer.targets import Runner
 
 
 def main(argv: list[str] | None = None) -> int:

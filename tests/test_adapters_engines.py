@@ -44,7 +44,7 @@ import pytest
 import native
 import python_impl
 import python_impl.kinematics
-from fuzzer.targets import load_target
+from fuzzer.execution.targets import load_target
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
 from robot_api.protocol import GROUP_METHODS, MODEL_METHODS, MODEL_PROPERTIES, MoveGroupAPI, RobotModelAPI
 from robot_api.records import Pose

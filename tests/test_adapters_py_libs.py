@@ -50,7 +50,7 @@ import pytest
 import native
 import python_impl
 import python_impl.kinematics
-from fuzzer.targets import load_target
+from fuzzer.execution.targets import load_target
 from robot_api.constants import IK_EPS
 from robot_api.errors import ErrorCode, InvalidInputError, RobotAPIError, URDFError
 from robot_api.protocol import GROUP_METHODS, MODEL_METHODS, MODEL_PROPERTIES, MoveGroupAPI, RobotModelAPI

@@ -10,7 +10,7 @@ import pytest
 import native
 from benchmarks import bench_zoo
 from benchmarks.zoo import BY_NAME, CONTROL, ZOO
-from fuzzer.targets import load_target
+from fuzzer.execution.targets import load_target
 
 
 def test_the_zoo_has_at_least_twelve_documented_bugs() -> None:

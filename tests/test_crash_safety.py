@@ -22,8 +22,8 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer.artifacts import KILL_HOOK, STALE_SECONDS, ArtifactStore, clean_temporaries, crash_name
-from fuzzer.testcase import decode
+from fuzzer.artifacts.store import KILL_HOOK, STALE_SECONDS, ArtifactStore, clean_temporaries, crash_name
+from fuzzer.input.testcase import decode
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = str(ROOT / "fuzz_diff.py")
@@ -54,7 +54,7 @@ def _sidecar(key: str) -> dict[str, object]:
 RECORD_SCRIPT = """
 import sys
 from pathlib import Path
-from fuzzer.artifacts import ArtifactStore
+from fuzzer.artifacts.store import ArtifactStore
 store = ArtifactStore(Path(sys.argv[1]))
 for i in range(int(sys.argv[2])):
     key = f"sig{i:03d}"

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import python_impl
-from fuzzer.testcase import decode
+from fuzzer.input.testcase import decode
 from robot_api.robots import default_robot_path
 
 ROOT = Path(__file__).resolve().parents[1]

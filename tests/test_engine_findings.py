@@ -19,7 +19,7 @@ import pytest
 
 import native
 import python_impl
-from fuzzer.targets import load_target
+from fuzzer.execution.targets import load_target
 from robot_api.errors import ErrorCode, URDFError
 from tests.support import import_or_skip, robot_path
 from tests.test_adapters_engines import ENGINES, URDFS, fk_gap

@@ -7,8 +7,8 @@ import types
 
 import atheris
 
-from fuzzer.guidance import Features
 from fuzzer.selection.floatcmp import FLOAT_CMP, FloatCompareTracer
+from fuzzer.selection.guidance import Features
 
 
 def _instrumented() -> types.ModuleType:
@@ -86,12 +86,12 @@ def test_the_campaign_instruments_the_targets_and_the_oracle_it_names() -> None:
     script = (
         "import dis\n"
         "from fuzzer import campaign\n"
-        "from fuzzer.session import RunConfig\n"
+        "from fuzzer.execution.session import RunConfig\n"
         "campaign.instrument(RunConfig(op='fk', targets=('native', 'python')))\n"
-        "import fuzzer.oracle as o, python_impl.model as m\n"
+        "import fuzzer.execution.oracle as o, python_impl.model as m\n"
         "calls = lambda f: {i.argval for i in dis.get_instructions(f)}\n"
         "print('_trace_cmp' in calls(o.compare), '_trace_cmp' in calls(m.RobotModel.check_vector))\n"
-        "print(campaign.instrument_loaded(['fuzzer.oracle', 'python_impl']))\n"
+        "print(campaign.instrument_loaded(['fuzzer.execution.oracle', 'python_impl']))\n"
     )
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True

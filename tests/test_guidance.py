@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from fuzzer.guidance import INPUT, INSIDE, NEAR_PI, OUTSIDE, Features, input_features
+from fuzzer.selection.guidance import INPUT, INSIDE, NEAR_PI, OUTSIDE, Features, input_features
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = ROOT / "tests" / "plugins" / "guidance_probe.py"

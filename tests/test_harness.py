@@ -9,13 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer import campaign, mutators
-from fuzzer.artifacts import ArtifactStore, load_sidecar
-from fuzzer.guidance import Features
+from fuzzer import campaign
+from fuzzer.artifacts.store import ArtifactStore, load_sidecar
+from fuzzer.execution.session import RunConfig, Session
 from fuzzer.harness import DivergenceFound, Harness
+from fuzzer.input.testcase import TestCase, decode
+from fuzzer.mutation import mutators
+from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import Pool
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import TestCase, decode
 
 
 def make_harness(tmp_path: Path, targets: tuple[str, str] = ("native", "python"), **kw) -> Harness:  # type: ignore[no-untyped-def]

@@ -108,7 +108,7 @@ def test_verbose_shows_libfuzzer_lines(tmp_path: Path) -> None:
 
 
 def test_jobs_run_in_parallel_and_keep_their_logs_in_the_artifacts_folder(tmp_path: Path) -> None:
-    from fuzzer.divlog import STATS, read_lines
+    from fuzzer.artifacts.divlog import STATS, read_lines
 
     work = tmp_path / "work"
     work.mkdir()

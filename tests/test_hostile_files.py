@@ -608,8 +608,8 @@ def test_settings_travel_with_the_corpus_and_the_crash_file(tmp_path: Path) -> N
 
 def test_shipped_corpus_has_the_default_campaigns_manifest() -> None:
     """`make run` (fuzz_diff.py corpus/ -max_total_time=60) must accept the shipped corpus."""
-    from fuzzer import manifest
-    from fuzzer.session import RunConfig
+    from fuzzer.artifacts import manifest
+    from fuzzer.execution.session import RunConfig
 
     found = manifest.read(ROOT / "corpus")
     assert found is not None

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer.msgdef import MAX_FIXED_VALUES, MAX_MSG_BYTES, MessageRegistry, MsgError, parse_msg
+from fuzzer.input.msgdef import MAX_FIXED_VALUES, MAX_MSG_BYTES, MessageRegistry, MsgError, parse_msg
 
 BIG = "9" * 5000  # past Python's int-string limit (4300 digits)
 

@@ -1,4 +1,4 @@
-"""Tests of fuzzer.msgdef: .msg parsing, registry lookup, validation and message classes."""
+"""Tests of fuzzer.input.msgdef: .msg parsing, registry lookup, validation and message classes."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from fuzzer.msgdef import (
+from fuzzer.input.msgdef import (
     SHIPPED_MSG_ROOT,
     ConstantSpec,
     FieldSpec,

@@ -1,4 +1,5 @@
-"""Unit tests of the seed mutators (fuzzer/mutators.py): registry, type safety, per-mutator semantics."""
+"""Unit tests of the seed mutators (fuzzer/mutation/mutators.py): registry, type safety,
+per-mutator semantics."""
 
 from __future__ import annotations
 
@@ -13,8 +14,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fuzzer import mutators as m
-from fuzzer.mutators import MUTATORS, NOOP, WEIGHTS, LeafOp, MutationContext, NotApplicable, crossover, mutate
+from fuzzer.mutation import mutators as m
+from fuzzer.mutation.mutators import (
+    MUTATORS,
+    NOOP,
+    WEIGHTS,
+    LeafOp,
+    MutationContext,
+    NotApplicable,
+    crossover,
+    mutate,
+)
 
 Message = dict[str, Any]
 

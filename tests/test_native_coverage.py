@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from fuzzer import mutators
+from fuzzer.mutation import mutators
 
 ROOT = Path(__file__).resolve().parents[1]
 

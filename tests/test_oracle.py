@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from fuzzer.oracle import bucket, compare
-from fuzzer.records import Kind, Outcome, Status, signature_of
-from fuzzer.tolerance import Tolerance
+from fuzzer.execution.oracle import bucket, compare
+from fuzzer.execution.records import Kind, Outcome, Status, signature_of
+from fuzzer.execution.tolerance import Tolerance
 
 TOL = Tolerance(1e-6, 1e-6)
 Q = (0.1, 0.2, 0.3, math.sqrt(1 - 0.14))

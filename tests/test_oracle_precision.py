@@ -16,13 +16,13 @@ from typing import Any
 
 import pytest
 
-from fuzzer.evaluate import Evaluator, history_of
-from fuzzer.mapping import CallError, FkCall, IkCall, call_from_json, call_to_json, mapping_for
-from fuzzer.oracle import compare
-from fuzzer.records import Comparison, Kind, Outcome, Signature, Status, describe, signature_of
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import TestCase
-from fuzzer.tolerance import Tolerance, default_tolerance
+from fuzzer.execution.evaluate import Evaluator, history_of
+from fuzzer.execution.oracle import compare
+from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, describe, signature_of
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.execution.tolerance import Tolerance, default_tolerance
+from fuzzer.input.mapping import CallError, FkCall, IkCall, call_from_json, call_to_json, mapping_for
+from fuzzer.input.testcase import TestCase
 
 ROOT = Path(__file__).resolve().parents[1]
 TOL = Tolerance(1e-6, 1e-6)

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer.artifacts import load_sidecar
-from fuzzer.regressions import PromoteError, promote, suite_files
-from fuzzer.replay import Result, replay_file
-from fuzzer.session import RunConfig
+from fuzzer.artifacts.store import load_sidecar
+from fuzzer.execution.session import RunConfig
+from fuzzer.triage.regressions import PromoteError, promote, suite_files
+from fuzzer.triage.replay import Result, replay_file
 
 FILES = suite_files()
 ROOT = Path(__file__).resolve().parents[1]  # sidecars name crafted URDFs relative to the repository

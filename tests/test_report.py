@@ -18,9 +18,10 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from fuzzer.divlog import DIVERGENCES, NEAR_ZERO, STATS
-from fuzzer.mapping import MoveCall
-from fuzzer.records import Signature
+from fuzzer.artifacts.divlog import DIVERGENCES, NEAR_ZERO, STATS
+from fuzzer.execution.records import Signature
+from fuzzer.execution.session import RunConfig
+from fuzzer.input.mapping import MoveCall
 from fuzzer.report import write_report
 from fuzzer.report.arm import Sessions, _command, chain
 from fuzzer.report.data import (
@@ -41,7 +42,6 @@ from fuzzer.report.data import (
     strategies,
     table_iii,
 )
-from fuzzer.session import RunConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = str(ROOT / "fuzz_diff.py")

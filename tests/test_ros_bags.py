@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from fuzzer.testcase import TestCase, decode
+from fuzzer.input.testcase import TestCase, decode
 from tests.support import skip_or_fail
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer.mapping import FkCall, IkCall, MoveCall
-from fuzzer.records import Status
-from fuzzer.targets import Runner
-from fuzzer.testcase import TestCase
+from fuzzer.execution.records import Status
+from fuzzer.execution.targets import Runner
+from fuzzer.input.mapping import FkCall, IkCall, MoveCall
+from fuzzer.input.testcase import TestCase
 from robot_api import robots
 from tests import ros_faulty_target as faulty
 from tests.support import skip_or_fail

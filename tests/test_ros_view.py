@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzer.testcase import TestCase
+from fuzzer.input.testcase import TestCase
 from tests.support import skip_or_fail
 from tests.test_ros_tf import _processes_with
 

@@ -16,13 +16,13 @@ from typing import Any
 import pytest
 
 import python_impl
-from fuzzer.mapping import CallError, call_from_json, call_to_json, mapping_for
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.records import Status
+from fuzzer.execution.records import Status
+from fuzzer.execution.session import ConfigError, RunConfig, Session
+from fuzzer.execution.targets import Runner
+from fuzzer.input.mapping import CallError, call_from_json, call_to_json, mapping_for
+from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.scenario.execute import run_scenario
 from fuzzer.scenario.steps import MAX_STEPS, MSG_TYPE, TOPICS, ScenarioCall, to_call, validate
-from fuzzer.session import ConfigError, RunConfig, Session
-from fuzzer.targets import Runner
 from robot_api import robots
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,17 +12,17 @@ from typing import Any
 import pytest
 
 import python_impl
-from fuzzer import mutators
-from fuzzer.artifacts import ArtifactStore
-from fuzzer.guidance import START, Features, step_bigrams
+from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution.session import RunConfig, Session
 from fuzzer.harness import Harness
-from fuzzer.minimize import Minimizer, ddmin, joints_that_matter
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.mutators import MutationContext
+from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.input.testcase import TestCase, decode
+from fuzzer.mutation import mutators
+from fuzzer.mutation.mutators import MutationContext
 from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_registry
 from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import TestCase, decode
+from fuzzer.selection.guidance import START, Features, step_bigrams
+from fuzzer.triage.minimize import Minimizer, ddmin, joints_that_matter
 
 REGISTRY = MessageRegistry()
 MAX = 12

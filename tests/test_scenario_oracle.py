@@ -8,15 +8,15 @@ from typing import Any
 
 import pytest
 
-from fuzzer.evaluate import Evaluator, history_of, stored_call
-from fuzzer.mapping import MoveCall
-from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.evaluate import Evaluator, history_of, stored_call
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.targets import Runner
+from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.mapping import MoveCall
+from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
 from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
-from fuzzer.targets import Runner
-from fuzzer.testcase import TestCase
-from fuzzer.tolerance import Tolerance
 from robot_api import robots
 
 TOL = Tolerance(1e-6, 1e-6)

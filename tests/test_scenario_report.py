@@ -22,16 +22,16 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from fuzzer import triage
-from fuzzer.evaluate import Evaluation, Verdict
-from fuzzer.records import Comparison, Kind, Outcome, Signature, Status
-from fuzzer.replay import scenario_lines
+from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
+from fuzzer.execution.evaluate import Evaluation, Verdict
+from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status
+from fuzzer.input.testcase import TestCase
 from fuzzer.report import write_report
 from fuzzer.report.data import ROW_COORDINATES, ROW_OTHER, ROW_ROTATIONS, Divergence, classify
 from fuzzer.report.scenario import COLORS, Trajectory, TrajectoryStep, figure, file_name, trajectory, view_of
 from fuzzer.report.steps import LISTED_STEPS, shown_steps
-from fuzzer.sidecar import SidecarError, config_from, read_sidecar
-from fuzzer.testcase import TestCase
+from fuzzer.triage import pipeline as triage
+from fuzzer.triage.replay import scenario_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = str(ROOT / "fuzz_diff.py")

@@ -5,13 +5,13 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
-from fuzzer import mutators
+from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.spacefill import SpaceFill, fresh_inputs, scenario_with_configuration
 from fuzzer.harness import Harness
+from fuzzer.input.testcase import decode
+from fuzzer.mutation import mutators
 from fuzzer.selection.bandit import Bandit
 from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import decode
 from tests.test_harness import make_harness
 
 

@@ -1,4 +1,4 @@
-"""Tests of fuzzer.strategies (Table I) and fuzzer.seeds (Algorithm 1)."""
+"""Tests of fuzzer.generation.strategies (Table I) and fuzzer.generation.seeds (Algorithm 1)."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ import pytest
 from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
 
-from fuzzer.msgdef import MessageRegistry, MessageSpec, MsgError
-from fuzzer.seeds import canonical_json, generate_seeds
-from fuzzer.strategies import strategy_for, strategy_table
+from fuzzer.generation.seeds import canonical_json, generate_seeds
+from fuzzer.generation.strategies import strategy_for, strategy_table
+from fuzzer.input.msgdef import MessageRegistry, MessageSpec, MsgError
 
 REPO = Path(__file__).resolve().parents[1]
 SYSTEM_ROOT = Path("/usr/share")
@@ -215,9 +215,9 @@ def test_seeds_distinct_valid_and_deterministic(registry: MessageRegistry) -> No
 
 SCRIPT = """
 import json, sys
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.seeds import generate_seeds
-from fuzzer.strategies import strategy_for
+from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.generation.seeds import generate_seeds
+from fuzzer.generation.strategies import strategy_for
 registry = MessageRegistry()
 strategy = strategy_for(registry, "geometry_msgs/PoseStamped", allow_special_floats=True)
 sys.stdout.write(json.dumps(generate_seeds(strategy, 15, seed=1234)))

@@ -11,10 +11,10 @@ import pytest
 import native
 import python_impl
 from benchmarks.zoo import deep
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.generation.sweep import CONFIRM, NOISE, ROWS, SCALES, Sweep, differences
 from fuzzer.harness import Harness
-from fuzzer.testcase import decode
-from fuzzer.tolerance import Tolerance
+from fuzzer.input.testcase import decode
 from robot_api import robots
 from tests.test_harness import make_harness
 

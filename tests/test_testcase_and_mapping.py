@@ -9,10 +9,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fuzzer.mapping import FkCall, IkCall, MappingError, MoveCall, RobotFacts, mapping_for, seed_hints
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.strategies import strategy_for
-from fuzzer.testcase import LINEAGE_KEEP, TestCase, TestCaseError, decode
+from fuzzer.generation.strategies import strategy_for
+from fuzzer.input.mapping import FkCall, IkCall, MappingError, MoveCall, RobotFacts, mapping_for, seed_hints
+from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.input.testcase import LINEAGE_KEEP, TestCase, TestCaseError, decode
 from robot_api.robots import default_robot_path
 from tests.support import IMPLEMENTATIONS
 

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer import triage
-from fuzzer.divlog import append_line
-from fuzzer.minimize import Minimizer, joints_that_matter
-from fuzzer.records import Signature
-from fuzzer.session import RunConfig, Session
-from fuzzer.testcase import TestCase
+from fuzzer.artifacts.divlog import append_line
+from fuzzer.execution.records import Signature
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.input.testcase import TestCase
+from fuzzer.triage import pipeline as triage
+from fuzzer.triage.minimize import Minimizer, joints_that_matter
 
 ROOT = Path(__file__).resolve().parents[1]
 TIGHT = ("native", "tests.plugins.faults:tight_tolerance")

@@ -13,11 +13,11 @@ import pytest
 
 import native
 from benchmarks.zoo import BY_NAME, CONTROLS, STATEFUL, ZOO
-from fuzzer.mapping import MoveCall
-from fuzzer.oracle import compare
-from fuzzer.records import Kind
-from fuzzer.targets import Runner, load_target
-from fuzzer.tolerance import Tolerance
+from fuzzer.execution.oracle import compare
+from fuzzer.execution.records import Kind
+from fuzzer.execution.targets import Runner, load_target
+from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.mapping import MoveCall
 from robot_api.constants import ACCELERATION_LIMIT
 from robot_api.records import JointType
 from robot_api.robots import resolve
@@ -289,8 +289,8 @@ def test_ops_markdown_says_which_op_detects_each_bug(tmp_path: Any) -> None:
 
 def test_the_scenario_speed_benchmark_measures_steps_by_kind() -> None:
     from benchmarks import bench_scenario
+    from fuzzer.execution.session import RunConfig, Session
     from fuzzer.scenario.steps import to_call
-    from fuzzer.session import RunConfig, Session
 
     session = Session.open(RunConfig(op="scenario"))
     cases = bench_scenario.scenarios(session, 1, 4)

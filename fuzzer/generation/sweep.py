@@ -41,8 +41,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.generation.spacefill import SpaceFill
-from fuzzer.tolerance import Tolerance
 
 ROWS = 1024
 """Configurations per sweep (a power of two keeps the Sobol block balanced)."""

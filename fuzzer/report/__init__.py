@@ -9,7 +9,7 @@ Modules: :mod:`~fuzzer.report.data` reads and aggregates (pure),
 :mod:`~fuzzer.report.steps` and :mod:`~fuzzer.report.scenario` read scenarios,
 :mod:`~fuzzer.report.figures` and :mod:`~fuzzer.report.arm` draw,
 :mod:`~fuzzer.report.page` renders the HTML, :mod:`~fuzzer.report.build` writes it all.
-This package imports nothing heavy itself: :mod:`fuzzer.triage` uses
+This package imports nothing heavy itself: :mod:`fuzzer.triage.pipeline` uses
 :mod:`~fuzzer.report.steps` without loading matplotlib.
 """
 

@@ -28,14 +28,14 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
-from fuzzer.evaluate import Verdict
-from fuzzer.mapping import FkCall, IkCall, MoveCall
-from fuzzer.records import Outcome, Status
-from fuzzer.session import Session
-from fuzzer.sidecar import SidecarError, config_from, validate_config
-from fuzzer.targets import Runner
-from fuzzer.testcase import TestCase, TestCaseError, decode, from_json
-from fuzzer.triage import Bucket
+from fuzzer.artifacts.sidecar import SidecarError, config_from, validate_config
+from fuzzer.execution.evaluate import Verdict
+from fuzzer.execution.records import Outcome, Status
+from fuzzer.execution.session import Session
+from fuzzer.execution.targets import Runner
+from fuzzer.input.mapping import FkCall, IkCall, MoveCall
+from fuzzer.input.testcase import TestCase, TestCaseError, decode, from_json
+from fuzzer.triage.pipeline import Bucket
 
 COLORS = ("#1f5fbf", "#e8710a")
 COMMAND_COLOR = "#7a7a7a"
@@ -73,7 +73,7 @@ class ArmScene:
 class Sessions:
     """Sessions cached per configuration (a failure is cached as its message).
 
-    A recorded configuration is untrusted (:mod:`fuzzer.sidecar`): targets other than
+    A recorded configuration is untrusted (:mod:`fuzzer.artifacts.sidecar`): targets other than
     the builtins are imported only with ``trust``, robots only by shipped name or
     existing file.
     """

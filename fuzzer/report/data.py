@@ -1,7 +1,7 @@
 """What the report shows, as plain data: logs and buckets in, dataclasses out.
 
 Everything here is pure (no plotting, no HTML) except :func:`gather`, which reads
-an artifacts folder. The two campaign logs (``fuzzer.divlog``) are read leniently:
+an artifacts folder. The two campaign logs (``fuzzer.artifacts.divlog``) are read leniently:
 a line that is not JSON, or lacks the fields a record needs, is skipped and
 counted, never fatal.
 
@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.divlog import DIVERGENCES, NEAR_ZERO, STATS
-from fuzzer.triage import Bucket, collect
+from fuzzer.artifacts.divlog import DIVERGENCES, NEAR_ZERO, STATS
+from fuzzer.triage.pipeline import Bucket, collect
 
 PAPER_STRATEGIES = ("bit_flip", "arithmetic", "interesting", "comb1", "comb2", "comb3", "comb4")
 """The paper's basic and combination mutation strategies (Table II), in its order."""
@@ -853,7 +853,7 @@ class ReportData:
 
 def outside_links(directory: Path) -> list[Path]:
     """Entries of the folder that are symlinks leading outside it (never read by the report)."""
-    from fuzzer.paths import contained
+    from fuzzer.input.paths import contained
 
     if not directory.is_dir():
         return []
@@ -862,7 +862,7 @@ def outside_links(directory: Path) -> list[Path]:
 
 def _sidecars(directory: Path) -> list[dict[str, Any]]:
     """Every readable sidecar of the folder (all crash files, not only representatives)."""
-    from fuzzer.paths import contained
+    from fuzzer.input.paths import contained
 
     out = []
     for path in sorted(directory.glob("*.json")) if directory.is_dir() else []:

@@ -32,7 +32,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from fuzzer.records import Outcome
+from fuzzer.execution.records import Outcome
 from fuzzer.report.steps import ScenarioSteps, clean, scenario_of
 
 MAX_PLOTS = 4

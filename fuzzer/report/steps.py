@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from fuzzer.records import Outcome
+from fuzzer.execution.records import Outcome
 
 SCENARIO_TYPE = "rrosfuzz/Scenario"
 ARGUMENT_CHARS = 72

@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
+from fuzzer.execution.session import ConfigError
 from fuzzer.ros import env
-from fuzzer.session import ConfigError
 
 TOPICS = {
     "sensor_msgs/JointState": "/joint_states",
@@ -140,8 +140,8 @@ def export_bag(crash: Path, output: Path) -> list[str]:
         The crash file or its sidecar cannot be used, or the bag cannot be written.
     """
     import python_impl
-    from fuzzer.sidecar import read_sidecar, safe_robot
-    from fuzzer.testcase import decode
+    from fuzzer.artifacts.sidecar import read_sidecar, safe_robot
+    from fuzzer.input.testcase import decode
     from robot_api import robots
 
     try:

@@ -15,7 +15,7 @@ node ``/rrosfuzz/<name>``:
   engine's handshake after the ready message, repeated until answered);
 * ``/rrosfuzz/<name>/response`` (``std_msgs/String``): the node answers
   ``"<n>\n{"id": n, "outcome": Outcome.to_json()}"``, the outcome of
-  ``fuzzer.targets.Runner.run``: the same records, oracle and artifacts as in
+  ``fuzzer.execution.targets.Runner.run``: the same records, oracle and artifacts as in
   process. A rejected call's outcome may carry the contract's code only (the C++
   node); the engine names its class (``robot_api.errors.error_class``).
 
@@ -52,8 +52,8 @@ from pathlib import Path
 from typing import Any
 
 import python_impl
-from fuzzer.mapping import Call, call_to_json
-from fuzzer.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status
+from fuzzer.input.mapping import Call, call_to_json
 from fuzzer.ros import env, node, processes
 from robot_api.errors import error_class
 

@@ -36,8 +36,8 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from fuzzer import reporting
+from fuzzer.execution.session import ConfigError
 from fuzzer.ros import env, processes
-from fuzzer.session import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
 RVIZ_CONFIG = ROOT / "ros" / "rviz" / "view.rviz"
@@ -196,8 +196,8 @@ def start_xvfb(log_dir: str) -> tuple[str, processes.Process]:
 def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
     """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
     import python_impl
-    from fuzzer.sidecar import read_sidecar, safe_robot
-    from fuzzer.testcase import decode
+    from fuzzer.artifacts.sidecar import read_sidecar, safe_robot
+    from fuzzer.input.testcase import decode
     from python_impl.urdf import load_urdf
     from robot_api import robots
 

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
 from robot_api.errors import RobotAPIError
@@ -238,7 +238,7 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: tuple[int, float] | Non
 
     Parameters
     ----------
-    runner : fuzzer.targets.Runner
+    runner : fuzzer.execution.targets.Runner
         The target (its ``impl`` and loaded ``model``).
     call : ScenarioCall
         The steps.

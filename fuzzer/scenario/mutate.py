@@ -1,10 +1,10 @@
-"""Sequence mutators for scenarios: a registry in the style of :mod:`fuzzer.mutators`.
+"""Sequence mutators for scenarios: a registry in the style of :mod:`fuzzer.mutation.mutators`.
 
 A scenario is ``{"steps": [{"topic": TOPIC, "msg": MSG}, ...]}`` (``fuzzer.scenario.steps``).
 Every sequence mutator is a small named function ``(steps, ctx) -> (steps, name)`` registered
 with a weight; it works on a deep copy of the steps and raises
-:class:`fuzzer.mutators.NotApplicable` when it cannot apply (the dispatcher then falls back to
-another one by weight, as :func:`fuzzer.mutators.mutate` does). The only source of randomness
+:class:`fuzzer.mutation.mutators.NotApplicable` when it cannot apply (the dispatcher then falls back to
+another one by weight, as :func:`fuzzer.mutation.mutators.mutate` does). The only source of randomness
 is the injected ``ctx.rng``.
 
 Mutators
@@ -14,7 +14,7 @@ Mutators
   recombined column by column from the scenario's joint targets, a scaling factor...).
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
-* ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutators.mutate`
+* ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
@@ -32,10 +32,10 @@ from dataclasses import dataclass
 from random import Random
 from typing import Any, Final
 
-from fuzzer import mutators
-from fuzzer.mapping import FOCUS
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.mutators import NOOP, MutationContext, NotApplicable
+from fuzzer.input.mapping import FOCUS
+from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.mutation import mutators
+from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
 
 StepDict = dict[str, Any]
@@ -359,7 +359,7 @@ class SequenceMutator:
     """``mutate(message, ctx, name=None) -> (message, name)`` for scenarios (as ``mutators.mutate``).
 
     ``name`` is a sequence mutator (``seq_delete``) or ``seq_step:<value mutator>``; when it
-    does not apply, others are tried by :data:`SEQ_WEIGHTS`; :data:`fuzzer.mutators.NOOP` and an
+    does not apply, others are tried by :data:`SEQ_WEIGHTS`; :data:`fuzzer.mutation.mutators.NOOP` and an
     unchanged copy when none applies. ``ctx.other``, when a scenario, is the other parent.
     """
 
@@ -426,8 +426,8 @@ def for_registry(
     Returns
     -------
     tuple
-        ``(mutate, crossover)`` with the signatures of :func:`fuzzer.mutators.mutate` and
-        :func:`fuzzer.mutators.crossover`; the crossover's ``lineage_name`` is ``seq_splice``.
+        ``(mutate, crossover)`` with the signatures of :func:`fuzzer.mutation.mutators.mutate` and
+        :func:`fuzzer.mutation.mutators.crossover`; the crossover's ``lineage_name`` is ``seq_splice``.
 
     Raises
     ------

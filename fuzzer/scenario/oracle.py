@@ -17,7 +17,7 @@ trajectory.positions       per point, as joint values          campaign    rad (
 trajectory.velocities      absolute per point and joint        1e-6        rad/s (m/s)
 trajectory.accelerations   absolute per point and joint        1e-6        rad/s^2 (m/s^2)
 joint_target, named        as joint values                     campaign    rad (m)
-joint_values, position,    ``fuzzer.oracle.compare`` (modulo   campaign    rad (m), m, rad
+joint_values, position,    ``fuzzer.execution.oracle.compare`` (modulo   campaign    rad (m), m, rad
 orientation                2pi, q ~ -q, canonical boundary)
 =========================  ==================================  ==========  =================
 
@@ -38,8 +38,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from fuzzer import oracle
-from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import (
     FRACTION_TOLERANCE,
@@ -52,7 +53,6 @@ from fuzzer.scenario.oracle_ik import (
 )
 from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall
-from fuzzer.tolerance import Tolerance
 
 TIME_TOLERANCE = 1e-9
 """time_from_start (s)."""

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from fuzzer.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import DEFAULT_VELOCITY_LIMIT, GOAL_JOINT_TOLERANCE
 from robot_api.records import JointType

@@ -2,7 +2,7 @@
 
 A step solves IK when it is ``go`` or ``plan`` with a pose or position target in effect, or
 ``cartesian_path``. IK's answer is a pose within the solver's tolerance, not a unique joint
-vector (``fuzzer.oracle`` compares single IK calls by pose only). At such a step a divergence
+vector (``fuzzer.execution.oracle`` compares single IK calls by pose only). At such a step a divergence
 (other than of the status) is ``known_limitation`` when
 
 * ``cartesian_path``: a segment is on the knife edge of its step count (``d / eef_step``
@@ -26,7 +26,7 @@ tolerance: FK amplifies a joint gap within tolerance (rad) into a pose gap beyon
 
 A status divergence (ok vs failed) of ``go``/``plan`` with a pose target is
 ``known_limitation`` when the requested orientation is within ``DEAD_ZONE`` of a half turn
-from the orientation the state before the step gives the link (``fuzzer.evaluate``'s rule
+from the orientation the state before the step gives the link (``fuzzer.execution.evaluate``'s rule
 for single IK calls). Other IK divergences go to the evaluator's nudge check
 (``ik_answer_changed``).
 """
@@ -39,11 +39,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from fuzzer import oracle
-from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
 from fuzzer.scenario.steps import ScenarioCall
-from fuzzer.tolerance import Tolerance
 
 FRACTION_TOLERANCE = 1e-9
 """Cartesian path fraction."""
@@ -54,7 +54,7 @@ IK_EXACT = 1e-12
 KNIFE_EDGE = 1e-9
 """Relative distance of ``d / eef_step`` to an integer within which its floor is rounding."""
 DEAD_ZONE = 1e-6
-"""KDL's rotation dead zone at a half turn (rad; ``fuzzer.evaluate.DEAD_ZONE``)."""
+"""KDL's rotation dead zone at a half turn (rad; ``fuzzer.execution.evaluate.DEAD_ZONE``)."""
 DERIVED = (
     "trajectory.points",
     "trajectory.time_from_start",
@@ -95,7 +95,7 @@ def absolute(
 def joints_apart(
     key: str, a: Sequence[float], b: Sequence[float], tol: Tolerance, facts: ScenarioFacts
 ) -> Comparison | None:
-    """``fuzzer.oracle.compare`` on two joint vectors (modulo 2pi, canonical boundary rule):
+    """``fuzzer.execution.oracle.compare`` on two joint vectors (modulo 2pi, canonical boundary rule):
     its divergence with ``field = key``, or None when they agree."""
     c = oracle.compare(
         Outcome(Status.OK, values={"joint_values": tuple(a)}),

@@ -33,8 +33,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from fuzzer import oracle
-from fuzzer.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.constants import ACCELERATION_LIMIT

@@ -131,7 +131,7 @@ def validate(message: Any, registry: Any, max_steps: int = MAX_STEPS) -> None:
     ----------
     message : Any
         ``{"steps": [{"topic": TOPIC, "msg": MSG}, ...]}`` as decoded from a test case.
-    registry : fuzzer.msgdef.MessageRegistry
+    registry : fuzzer.input.msgdef.MessageRegistry
         Where the topics' message types are looked up and validated.
     max_steps : int
         Largest number of steps accepted.

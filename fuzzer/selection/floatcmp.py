@@ -1,7 +1,7 @@
 """Float comparisons of the Python targets as coverage: a distance-to-flip feature per site.
 
 Atheris instruments every ``COMPARE_OP`` of the modules imported under
-``atheris.instrument_imports`` (the Python targets and ``fuzzer.oracle``: see
+``atheris.instrument_imports`` (the Python targets and ``fuzzer.execution.oracle``: see
 ``fuzzer.campaign.instrument``) with a call ``atheris._trace_cmp(a, b, op, site, is_const)``,
 looked up on the module at each call. Atheris turns integer and bytes comparisons into
 libFuzzer's CMP traces; floats it ignores, so a branch on a computed float (``if x < 0.1234``,
@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.guidance import Features
+from fuzzer.selection.guidance import Features
 
 FLOAT_CMP = 11
 """Tag of float-comparison features (guidance's integer feature tuples start with a tag)."""

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A branch-free libFuzzer target whose only coverage is fuzzer.guidance.Features.
+"""A branch-free libFuzzer target whose only coverage is fuzzer.selection.guidance.Features.
 
     guidance_probe.py on|off [libFuzzer flags]
 
@@ -12,7 +12,7 @@ import zlib
 
 import atheris
 
-from fuzzer.guidance import Features
+from fuzzer.selection.guidance import Features
 
 mode = sys.argv.pop(1)
 features = Features(count=1024, enabled=True)

@@ -102,7 +102,7 @@ def generate_seeds(strategy: SearchStrategy[dict[str, Any]], n: int, seed: int) 
     Parameters
     ----------
     strategy : SearchStrategy
-        Strategy of message values, e.g. from :func:`fuzzer.strategies.strategy_for`.
+        Strategy of message values, e.g. from :func:`fuzzer.generation.strategies.strategy_for`.
     n : int
         Number of distinct seeds wanted.
     seed : int

@@ -12,10 +12,10 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzer.mapping import mapping_for
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.session import RunConfig
-from fuzzer.testcase import TestCaseError, decode
+from fuzzer.execution.session import RunConfig
+from fuzzer.input.mapping import mapping_for
+from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.input.testcase import TestCaseError, decode
 from robot_api import robots
 
 
@@ -52,7 +52,7 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
     cov = coverage.Coverage(branch=True, source_pkgs=["python_impl"], data_file=None)
     cov.start()
     try:
-        from fuzzer.targets import Runner
+        from fuzzer.execution.targets import Runner
 
         runner = Runner.create("python", robots.resolve(config.robot), config.tip_link)
         registry = MessageRegistry(config.msg_path)

@@ -12,8 +12,8 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from fuzzer.mapping import Call, FkCall, IkCall, MoveCall
-from fuzzer.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status
+from fuzzer.input.mapping import Call, FkCall, IkCall, MoveCall
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.errors import RobotAPIError
 

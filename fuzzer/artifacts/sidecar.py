@@ -14,7 +14,7 @@ and nothing it names is imported or opened without the user's say-so:
 * **message paths** (``msg_path``): only existing folders; .msg files are parsed
   as data, never executed.
 
-The same rules apply to a corpus manifest (:mod:`fuzzer.manifest`).
+The same rules apply to a corpus manifest (:mod:`fuzzer.artifacts.manifest`).
 """
 
 from __future__ import annotations
@@ -27,11 +27,11 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts import sidecar_path
-from fuzzer.mapping import OPS
-from fuzzer.records import Status
-from fuzzer.session import ConfigError, RunConfig
-from fuzzer.tolerance import Tolerance
+from fuzzer.artifacts.store import sidecar_path
+from fuzzer.execution.records import Status
+from fuzzer.execution.session import ConfigError, RunConfig
+from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.mapping import OPS
 from robot_api import robots
 
 BUILTIN_TARGETS = ("native", "python")
@@ -282,7 +282,7 @@ def _outcome(raw: Any, where: str, limit: int, fail: Fail, nested: bool = False)
 
 def foreign_targets(targets: tuple[str, ...] | list[str]) -> list[str]:
     """The targets that are not builtins (importing them runs their code)."""
-    from fuzzer.targets import BUILTIN  # shipped aliases (ros_tf) import only shipped code
+    from fuzzer.execution.targets import BUILTIN  # shipped aliases (ros_tf) import only shipped code
 
     return [t for t in targets if t not in BUILTIN_TARGETS and t not in BUILTIN]
 

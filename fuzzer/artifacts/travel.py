@@ -23,11 +23,12 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from fuzzer import manifest, reporting
-from fuzzer.artifacts import sidecar_path
-from fuzzer.paths import check_input_file, prepare_folder
-from fuzzer.session import RunConfig
-from fuzzer.sidecar import config_from, read_sidecar
+from fuzzer import reporting
+from fuzzer.artifacts import manifest
+from fuzzer.artifacts.sidecar import config_from, read_sidecar
+from fuzzer.artifacts.store import sidecar_path
+from fuzzer.execution.session import RunConfig
+from fuzzer.input.paths import check_input_file, prepare_folder
 
 OPTIONS = ("op", "robot", "tip_link", "msg_type", "tolerance", "targets")
 CHILD_ENV = "RROSFUZZ_CHILD"
@@ -43,8 +44,8 @@ def _given(args: argparse.Namespace) -> set[str]:
 
 
 def _is_default(name: str, value: str, op: str) -> bool:
-    from fuzzer.mapping import DEFAULT_MSG_TYPE
-    from fuzzer.tolerance import Tolerance, default_tolerance
+    from fuzzer.execution.tolerance import Tolerance, default_tolerance
+    from fuzzer.input.mapping import DEFAULT_MSG_TYPE
     from robot_api import robots
 
     if name == "tolerance":
@@ -76,7 +77,7 @@ def adopt_sidecar(args: argparse.Namespace, files: Sequence[Path]) -> bool:
 
     Raises
     ------
-    fuzzer.sidecar.SidecarError
+    fuzzer.artifacts.sidecar.SidecarError
         A damaged sidecar, or one naming targets that may not be imported.
     """
     for path in files:
@@ -110,7 +111,7 @@ def adopt_manifest(args: argparse.Namespace, folders: Sequence[Path]) -> None:
 
     Raises
     ------
-    fuzzer.sidecar.SidecarError
+    fuzzer.artifacts.sidecar.SidecarError
         A damaged manifest, or an unusable robot in it.
     """
     for folder in folders:
@@ -137,7 +138,7 @@ def check_manifests(folders: Sequence[Path], config: RunConfig) -> None:
 
     Raises
     ------
-    fuzzer.sidecar.SidecarError
+    fuzzer.artifacts.sidecar.SidecarError
         Saying what the corpus was made for.
     """
     for folder in folders:
@@ -163,7 +164,7 @@ def prepare_campaign(corpus: Sequence[Path], artifacts: Path) -> list[Path]:
 
     Raises
     ------
-    fuzzer.paths.PathError
+    fuzzer.input.paths.PathError
         A corpus entry that is a FIFO or device, a folder that cannot be created,
         listed or written, an artifacts path that is a file.
     """

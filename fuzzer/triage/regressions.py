@@ -15,12 +15,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts import atomic_write, load_sidecar, sidecar_path
-from fuzzer.replay import Result, replay_file
-from fuzzer.session import ConfigError, RunConfig
-from fuzzer.sidecar import SidecarError, read_sidecar
+from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
+from fuzzer.artifacts.store import atomic_write, load_sidecar, sidecar_path
+from fuzzer.execution.session import ConfigError, RunConfig
+from fuzzer.triage.replay import Result, replay_file
 
-SUITE = Path(__file__).resolve().parents[1] / "tests" / "regressions"
+SUITE = Path(__file__).resolve().parents[2] / "tests" / "regressions"
 
 
 class PromoteError(ValueError):

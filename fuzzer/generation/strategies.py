@@ -1,9 +1,9 @@
 """Hypothesis strategies for ROS message values (Table I of the RROSFuzz paper).
 
 Algorithm 1 maps each ``(name, type)`` pair of a message class to a strategy and combines
-them; here the message class is a :class:`~fuzzer.msgdef.MessageSpec` and the combination
+them; here the message class is a :class:`~fuzzer.input.msgdef.MessageSpec` and the combination
 is :func:`hypothesis.strategies.fixed_dictionaries` (with its key order restored), so a
-drawn value is a plain message dict (see :mod:`fuzzer.msgdef`) in field order.
+drawn value is a plain message dict (see :mod:`fuzzer.input.msgdef`) in field order.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any
 from hypothesis import strategies as st
 from hypothesis.strategies import SearchStrategy
 
-from fuzzer.msgdef import INT_RANGES, NSECS_MAX, SECS_RANGES, MessageRegistry, MessageSpec, MsgError
+from fuzzer.input.msgdef import INT_RANGES, NSECS_MAX, SECS_RANGES, MessageRegistry, MessageSpec, MsgError
 
 __all__ = ["strategy_for", "strategy_table"]
 

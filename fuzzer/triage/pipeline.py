@@ -20,9 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts import load_sidecar
-from fuzzer.divlog import DIVERGENCES, read_lines
-from fuzzer.records import Outcome, Signature, describe
+from fuzzer.artifacts.divlog import DIVERGENCES, read_lines
+from fuzzer.artifacts.store import load_sidecar
+from fuzzer.execution.records import Outcome, Signature, describe
 from fuzzer.report.steps import ScenarioSteps, scenario_of
 
 SEVERITY = {
@@ -120,7 +120,7 @@ class Bucket:
 
 def _artifacts(directory: Path) -> list[Path]:
     """The artifacts of a folder; symlinks that lead outside it are ignored with a warning."""
-    from fuzzer.paths import contained
+    from fuzzer.input.paths import contained
     from fuzzer.reporting import warn
 
     out = []
@@ -140,10 +140,10 @@ def _artifacts(directory: Path) -> list[Path]:
 
 def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
     """The validated sidecar of an artifact (None and why when it has no usable one)."""
-    from fuzzer.artifacts import sidecar_path
-    from fuzzer.paths import contained
+    from fuzzer.artifacts.sidecar import SidecarError, validate
+    from fuzzer.artifacts.store import sidecar_path
+    from fuzzer.input.paths import contained
     from fuzzer.reporting import warn
-    from fuzzer.sidecar import SidecarError, validate
 
     side = sidecar_path(path)
     if side.is_symlink() and not contained(directory, side):

@@ -14,12 +14,12 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fuzzer.mapping import DEFAULT_MSG_TYPE, RobotFacts, mapping_for
-from fuzzer.msgdef import MessageRegistry
-from fuzzer.records import Outcome
+from fuzzer.execution.records import Outcome
+from fuzzer.execution.targets import Runner
+from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.mapping import DEFAULT_MSG_TYPE, RobotFacts, mapping_for
+from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.scenario import steps as scenario_steps
-from fuzzer.targets import Runner
-from fuzzer.tolerance import Tolerance
 from robot_api import robots
 from robot_api.records import JointType
 
@@ -105,8 +105,8 @@ class Session:
 
     @classmethod
     def open(cls, config: RunConfig) -> Session:
-        from fuzzer.msgdef import MsgError
-        from fuzzer.targets import TargetError
+        from fuzzer.execution.targets import TargetError
+        from fuzzer.input.msgdef import MsgError
         from robot_api.errors import RobotAPIError
 
         scenario = config.op == "scenario"
@@ -178,7 +178,7 @@ class Session:
             self.registry.validate(self.config.message_type, message)
 
     def evaluator(self) -> Any:
-        from fuzzer.evaluate import Evaluator
+        from fuzzer.execution.evaluate import Evaluator
 
         return Evaluator(
             op=self.config.op,

@@ -2,14 +2,14 @@
 
 A crash file is replayed under the configuration its sidecar records (op,
 robot, targets, tolerance, message type), unless the command line overrides
-it. The sidecar is untrusted data (:mod:`fuzzer.sidecar`): it is validated
+it. The sidecar is untrusted data (:mod:`fuzzer.artifacts.sidecar`): it is validated
 strictly, and targets other than the builtins are imported only when the
 command line passes ``--targets`` or ``--trust-sidecar``.
 
 A file without a sidecar (a native crash or a timeout written by libFuzzer
 itself, or a corpus input) replays like libFuzzer replays an input: under the
 configuration of its folder's corpus manifest when there is one
-(:mod:`fuzzer.manifest`), else under the command line's (the defaults when none
+(:mod:`fuzzer.artifacts.manifest`), else under the command line's (the defaults when none
 is given). Nothing is recorded to compare with, so the verdict says so instead
 of "now agrees", and the configuration used is named.
 """
@@ -22,14 +22,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer import manifest
-from fuzzer.artifacts import sidecar_path
-from fuzzer.evaluate import Evaluation, Verdict
-from fuzzer.paths import crash_inputs
+from fuzzer.artifacts import manifest
+from fuzzer.artifacts.sidecar import config_from, describe, read_sidecar
+from fuzzer.artifacts.store import sidecar_path
+from fuzzer.execution.evaluate import Evaluation, Verdict
+from fuzzer.execution.session import ConfigError, RunConfig, Session
+from fuzzer.input.paths import crash_inputs
+from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.report.steps import SCENARIO_TYPE, scenario_steps
-from fuzzer.session import ConfigError, RunConfig, Session
-from fuzzer.sidecar import config_from, describe, read_sidecar
-from fuzzer.testcase import TestCase, TestCaseError, decode
 
 
 class Result(enum.StrEnum):
@@ -72,7 +72,7 @@ def config_for(
 
     Raises
     ------
-    fuzzer.sidecar.SidecarError
+    fuzzer.artifacts.sidecar.SidecarError
         A damaged sidecar, or one naming targets that may not be imported.
     """
     sidecar = read_sidecar(path)
@@ -107,7 +107,7 @@ def replay_file(
 
     Raises
     ------
-    fuzzer.session.ConfigError
+    fuzzer.execution.session.ConfigError
         The sidecar cannot be used, or its configuration cannot be opened.
     """
     config, sidecar = config_for(path, base, overrides, trust)
@@ -135,7 +135,7 @@ def replay_file(
             config,
             not unrecorded,
         )
-    from fuzzer.evaluate import history_of
+    from fuzzer.execution.evaluate import history_of
 
     try:
         history = history_of(sidecar)
@@ -186,5 +186,5 @@ def scenario_lines(case: TestCase, evaluation: Evaluation, targets: tuple[str, .
 
 
 def expand(paths: Iterable[Path]) -> list[Path]:
-    """Files and the test files inside folders; sidecars skipped (:func:`fuzzer.paths.crash_inputs`)."""
+    """Files and the test files inside folders; sidecars skipped (:func:`fuzzer.input.paths.crash_inputs`)."""
     return crash_inputs(paths)

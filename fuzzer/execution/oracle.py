@@ -37,8 +37,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fuzzer.records import Comparison, Kind, Outcome, Status
-from fuzzer.tolerance import Tolerance
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.tolerance import Tolerance
 from robot_api.constants import IK_EPS
 
 TWO_PI = 2.0 * math.pi

@@ -18,7 +18,7 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
-from fuzzer.session import ConfigError
+from fuzzer.execution.session import ConfigError
 
 
 class PathError(ConfigError):

@@ -33,10 +33,10 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from typing import Any, TypeVar
 
-from fuzzer.evaluate import Verdict
+from fuzzer.execution.evaluate import Verdict
+from fuzzer.execution.session import Session
+from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.steps import MSG_TYPE as SCENARIO
-from fuzzer.session import Session
-from fuzzer.testcase import TestCase
 
 Loc = tuple[Any, ...]
 JOINTS = "/joint_target"
@@ -143,7 +143,7 @@ class Minimizer:
         self.evaluator = session.evaluator()
         self.budget = budget
         self.history = history
-        """A state_dependent divergence's call history (``fuzzer.evaluate.history_of``): each
+        """A state_dependent divergence's call history (``fuzzer.execution.evaluate.history_of``): each
         candidate then runs on fresh targets after those calls."""
 
     def _key(self, case: TestCase) -> str | None:

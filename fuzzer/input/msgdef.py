@@ -50,7 +50,7 @@ __all__ = [
 ]
 
 #: Root of the definitions shipped with the fuzzer (``<root>/<pkg>/msg/<Type>.msg``).
-SHIPPED_MSG_ROOT = Path(__file__).resolve().parent / "msgs"
+SHIPPED_MSG_ROOT = Path(__file__).resolve().parents[1] / "msgs"
 
 INT_RANGES: dict[str, tuple[int, int]] = {
     "int8": (-(2**7), 2**7 - 1),

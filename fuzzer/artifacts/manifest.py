@@ -9,7 +9,7 @@ What it does:
 
 * options not given on the command line are taken from it (op, robot, tip link,
   message type, tolerance, ``max_steps`` of a scenario corpus, and targets when they
-  are the builtins, see :mod:`fuzzer.sidecar`), for campaigns, ``-merge`` and ``coverage``;
+  are the builtins, see :mod:`fuzzer.artifacts.sidecar`), for campaigns, ``-merge`` and ``coverage``;
 * a corpus made for another op, message type or robot is refused (the robot
   counts as the same when its name or its file's SHA-256 matches; the same name
   with a changed file is a warning);
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts import atomic_write
-from fuzzer.session import RunConfig
-from fuzzer.sidecar import SidecarError, read_json_file, validate_config
+from fuzzer.artifacts.sidecar import SidecarError, read_json_file, validate_config
+from fuzzer.artifacts.store import atomic_write
+from fuzzer.execution.session import RunConfig
 from robot_api import robots
 
 MANIFEST = Path(".rrosfuzz") / "manifest.json"
@@ -127,7 +127,7 @@ def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, 
     Targets are taken only when they are builtins (or with ``trust``); the robot
     only when it is a shipped name or an existing regular file.
     """
-    from fuzzer.sidecar import foreign_targets, safe_robot
+    from fuzzer.artifacts.sidecar import foreign_targets, safe_robot
 
     c = manifest.config
     out: dict[str, str] = {}
@@ -158,7 +158,7 @@ def recorded_max_steps(paths: Sequence[Path], op: str | None) -> int | None:
     SidecarError
         A damaged sidecar or manifest.
     """
-    from fuzzer.sidecar import read_sidecar
+    from fuzzer.artifacts.sidecar import read_sidecar
 
     configs: list[dict[str, Any]] = []
     for path in paths:

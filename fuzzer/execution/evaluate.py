@@ -39,17 +39,17 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from fuzzer import oracle
-from fuzzer.mapping import Call, IkCall, call_from_json, call_to_json
-from fuzzer.records import Comparison, Kind, Outcome, Signature, Status, signature_of
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
+from fuzzer.execution.targets import Runner
+from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
+from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall, ScenarioError, to_call, to_message
-from fuzzer.targets import Runner
-from fuzzer.testcase import TestCase
-from fuzzer.tolerance import Tolerance
 from robot_api.errors import RobotAPIError
 from robot_api.records import JointType
 
@@ -367,7 +367,7 @@ def history_of(sidecar: dict[str, Any] | None) -> list[tuple[AnyCall, tuple[floa
     Raises
     ------
     ValueError
-        When it is not a list of calls (``fuzzer.mapping.CallError`` names the field).
+        When it is not a list of calls (``fuzzer.input.mapping.CallError`` names the field).
     """
     raw = sidecar.get("history", []) if isinstance(sidecar, dict) else []
     if not isinstance(raw, list):
@@ -379,7 +379,7 @@ def history_of(sidecar: dict[str, Any] | None) -> list[tuple[AnyCall, tuple[floa
 
 def _stored(item: Any) -> tuple[AnyCall, tuple[float, ...] | None]:
     if isinstance(item, dict) and item.get("kind") == "ScenarioCall":
-        from fuzzer.msgdef import MessageRegistry
+        from fuzzer.input.msgdef import MessageRegistry
         from fuzzer.scenario.steps import MAX_STEPS_LIMIT, validate
 
         try:

@@ -138,7 +138,7 @@ def call_from_json(data: Any) -> tuple[Call, tuple[float, ...] | None]:
 @functools.cache
 def _shipped_registry() -> Any:
     """The registry of the shipped message types (every scenario topic's type is one)."""
-    from fuzzer.msgdef import MessageRegistry
+    from fuzzer.input.msgdef import MessageRegistry
 
     return MessageRegistry()
 
@@ -293,10 +293,10 @@ def scenario_strategy(
     in (0, 1], goal tolerances and Cartesian settings in sensible ranges.
 
     Each step's message is drawn from the registry's strategy of its type
-    (``fuzzer.strategies.strategy_for``) with the robot hints of :func:`seed_hints`.
+    (``fuzzer.generation.strategies.strategy_for``) with the robot hints of :func:`seed_hints`.
     """
+    from fuzzer.generation.strategies import strategy_for
     from fuzzer.scenario.steps import KINDS, TOPICS
-    from fuzzer.strategies import strategy_for
 
     def message(msg_type: str, **extra: SearchStrategy[Any]) -> SearchStrategy[dict[str, Any]]:
         hints = {**seed_hints(msg_type, facts), **extra}

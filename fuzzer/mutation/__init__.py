@@ -1,0 +1,1 @@
+"""Mutation (Fig. 2): the registry of message mutators and crossover."""
