@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fuzzer.mutation import base
 from fuzzer.mutation import mutators as m
 from fuzzer.mutation.mutators import (
     MUTATORS,
@@ -509,7 +510,7 @@ def test_bit_flip_changes_only_the_integer_part(x: float) -> None:
         else:
             assert abs((r - math.trunc(r)) - fraction) <= math.ulp(r)
         assert math.copysign(1.0, r) == math.copysign(1.0, x) or math.trunc(r) == 0
-        assert is_flip_mask(abs(math.trunc(r)) ^ abs(whole), m.FLOAT_FLIP_WINDOW), (x, r)
+        assert is_flip_mask(abs(math.trunc(r)) ^ abs(whole), base.FLOAT_FLIP_WINDOW), (x, r)
 
 
 def test_bit_flip_turns_half_into_one_and_a_half() -> None:
@@ -526,7 +527,7 @@ def test_bit_flip_turns_half_into_one_and_a_half() -> None:
 def test_bit_flip_fraction_property(x: float, seed: int) -> None:
     r = run_one("bit_flip", {"x": x}, make_ctx(seed, {"x": "float64"}))
     assert abs((r - math.trunc(r)) - (x - math.trunc(x))) <= math.ulp(r)
-    assert is_flip_mask(abs(math.trunc(r)) ^ abs(math.trunc(x)), m.FLOAT_FLIP_WINDOW)
+    assert is_flip_mask(abs(math.trunc(r)) ^ abs(math.trunc(x)), base.FLOAT_FLIP_WINDOW)
 
 
 @pytest.mark.parametrize(
@@ -641,7 +642,7 @@ def test_interesting_float_table_contents() -> None:
     table = {bits(v) for v in m.INTERESTING_FLOATS}
     expected = [0.0, -0.0, 1e-9, -1e-9, math.pi, -math.pi, math.pi / 2, 2 * math.pi, -3 * math.pi,
                 5e-324, 2.2250738585072014e-308, 1e-300, 1e300, 1.7976931348623157e308,
-                2.0**31, 2.0**53, 2.0**63, m.FLOAT32_MAX]  # fmt: skip
+                2.0**31, 2.0**53, 2.0**63, base.FLOAT32_MAX]  # fmt: skip
     assert {bits(v) for v in expected} <= table
     assert all(math.isfinite(v) for v in m.INTERESTING_FLOATS)
 
@@ -650,9 +651,9 @@ def test_interesting_float32_stays_in_range() -> None:
     seen = set()
     for seed in range(300):
         r = run_one("interesting", {"x": 1.0}, make_ctx(seed, {"x": "float32"}))
-        assert abs(r) <= m.FLOAT32_MAX and struct.unpack("<f", struct.pack("<f", r))[0] == r
+        assert abs(r) <= base.FLOAT32_MAX and struct.unpack("<f", struct.pack("<f", r))[0] == r
         seen.add(r)
-    assert m.FLOAT32_MAX in seen
+    assert base.FLOAT32_MAX in seen
 
 
 @pytest.mark.parametrize(
@@ -913,7 +914,7 @@ def test_libfuzzer_float32_and_string() -> None:
 def test_libfuzzer_rejects_special_results_unless_allowed() -> None:
     fake = FakeMutate(struct.pack("<d", math.inf))
     _, used = mutate({"x": 1.5}, make_ctx(0, {"x": "float64"}, libfuzzer_mutate=fake), "libfuzzer")
-    assert used != "libfuzzer" and len(fake.calls) == m.LIBFUZZER_ATTEMPTS
+    assert used != "libfuzzer" and len(fake.calls) == base.LIBFUZZER_ATTEMPTS
     r = run_one(
         "libfuzzer", {"x": 1.5}, make_ctx(0, {"x": "float64"}, libfuzzer_mutate=fake, allow_special=True)
     )

@@ -35,6 +35,7 @@ from typing import Any, Final
 from fuzzer.input.mapping import FOCUS
 from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.mutation import mutators
+from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
 
@@ -167,7 +168,7 @@ def register(name: str, weight: float = 1.0) -> Callable[[SeqMutator], SeqMutato
 
         @functools.wraps(fn)
         def wrapper(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
-            return fn(mutators._clone(steps), ctx)
+            return fn(clone(steps), ctx)
 
         SEQ_MUTATORS[name] = wrapper
         SEQ_WEIGHTS[name] = weight
@@ -193,7 +194,7 @@ def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, 
         vectors = [m for m in same if isinstance(m.get("position"), list) and m["position"]]
         if not vectors:
             raise NotApplicable("no joint target to make a new one from")
-        msg = mutators._clone(ctx.rng.choice(vectors))
+        msg = clone(ctx.rng.choice(vectors))
         width = range(len(msg["position"]))
         columns = [[v["position"][i] for v in vectors if i < len(v["position"])] for i in width]
         msg["position"] = [ctx.rng.choice(column) for column in columns]
@@ -212,7 +213,7 @@ def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, 
         pose = ctx.rng.choice(poses) if poses else ctx.tables.registry.default("geometry_msgs/Pose")
         msg["poses"] = [_unit_quaternions(pose)]
     elif same and msg:  # poses, points: a copy of one of the scenario's
-        msg = mutators._clone(ctx.rng.choice(same))
+        msg = clone(ctx.rng.choice(same))
     return msg
 
 
@@ -220,7 +221,7 @@ def _new_step(steps: Steps, ctx: SequenceContext) -> StepDict:
     """A copy of a step of this scenario or the other parent, or a fresh step."""
     copies = [s for s in (*steps, *(ctx.other or ())) if _msg_type_of(s, ctx) is not None]
     if copies and ctx.rng.random() < COPY_PROBABILITY:
-        return mutators._clone(ctx.rng.choice(copies))
+        return clone(ctx.rng.choice(copies))
     pool = {topic: FRESH_WEIGHTS.get(topic, 1.0) for topic in ctx.tables.types}
     while pool:
         topic = ctx.rng.choices(list(pool), weights=list(pool.values()))[0]
@@ -255,7 +256,7 @@ def seq_duplicate(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     if not steps or len(steps) >= ctx.max_steps:
         raise NotApplicable("no room for a duplicate")
     index = ctx.rng.randrange(len(steps))
-    steps.insert(index + 1, mutators._clone(steps[index]))
+    steps.insert(index + 1, clone(steps[index]))
     return steps, "seq_duplicate"
 
 
@@ -313,14 +314,14 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 
 def _splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:
     """``a[:i] + b[j:]`` with 1..max_steps steps, avoiding a copy of a parent when possible."""
-    child = mutators._clone(a)
+    child = clone(a)
     for _ in range(SPLICE_ATTEMPTS):
         i = rng.randint(0, min(len(a), max_steps))
         # the suffix length s = len(b) - j must satisfy 1 <= i + s <= max_steps
         low, high = max(1 - i, 0), min(max_steps - i, len(b))
         if low > high:
             continue
-        child = mutators._clone(a[:i] + b[len(b) - rng.randint(low, high) :])
+        child = clone(a[:i] + b[len(b) - rng.randint(low, high) :])
         if a == b or (child != a and child != b):
             break
     return child
@@ -349,7 +350,7 @@ def _steps_of(message: Any, what: str = "message") -> Steps:
 
 def _with_steps(message: dict[str, Any], steps: Steps) -> dict[str, Any]:
     """A copy of ``message`` whose steps are ``steps``."""
-    out = {key: mutators._clone(value) for key, value in message.items() if key != "steps"}
+    out = {key: clone(value) for key, value in message.items() if key != "steps"}
     out["steps"] = steps
     return out
 
@@ -393,7 +394,7 @@ class SequenceMutator:
                 try:
                     pick = mutators._weighted_choice(pool, ctx.rng)
                 except NotApplicable:
-                    return mutators._clone(message), NOOP
+                    return clone(message), NOOP
 
 
 @dataclass(frozen=True)
