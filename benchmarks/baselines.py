@@ -31,6 +31,7 @@ from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
+from fuzzer.generation import corpus
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
@@ -82,7 +83,7 @@ def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
 def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: int) -> Harness:
     session = Session.open(config)
     rng = random.Random(seed)
-    seeds = campaign.make_seeds(session, 32, seed)
+    seeds = corpus.make_seeds(session, 32, seed)
     harness = _harness(session, artifacts, seeds, seed)
     deadline = time.monotonic() + seconds
     if engine == "paper":
@@ -101,7 +102,7 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     elif engine == "hypothesis":
         batch = 0
         while time.monotonic() < deadline:
-            for case in campaign.make_seeds(session, 128, seed * 100_003 + batch):
+            for case in corpus.make_seeds(session, 128, seed * 100_003 + batch):
                 harness.test_one_input(case.encode())
                 if time.monotonic() >= deadline:
                     break

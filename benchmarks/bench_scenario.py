@@ -6,7 +6,7 @@
 Two measurements, each repeated ``--runs`` times (run ``i`` uses seed ``i``), medians reported:
 
 (a) the executor alone: ``run_scenario`` (through ``Runner.run``) over the scenarios the
-    campaign generates from that seed (``fuzzer.campaign.make_seeds``, as many as a fresh
+    campaign generates from that seed (``fuzzer.generation.corpus.make_seeds``, as many as a fresh
     campaign writes), on each target separately; steps are the step outcomes returned;
 (b) a whole campaign: ``fuzz_diff.py --op scenario`` for ``--seconds``, execs and elapsed
     time from its ``stats.jsonl``; steps per second estimated as execs/s x the mean number
@@ -40,8 +40,8 @@ from unittest import mock
 
 from benchmarks.bench_zoo import ROOT, replace_section
 from fuzzer.artifacts.divlog import STATS, read_lines
-from fuzzer.campaign import make_seeds
 from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation.corpus import make_seeds
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.scenario import execute
 from fuzzer.scenario.steps import ScenarioCall, to_call

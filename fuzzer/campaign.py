@@ -1,7 +1,7 @@
 """Running a campaign under libFuzzer (Atheris).
 
-Order matters: the Python targets and the oracle are imported inside
-``atheris.instrument_imports`` before anything else loads them, the feature
+Order matters: the Python targets and the oracle are instrumented
+(``fuzzer.selection.instrument``) before the session loads them, the feature
 counters are reserved before ``atheris.Fuzz()``, and the argv handed to Atheris
 carries our options as ``--name=value`` tokens, which libFuzzer ignores but
 copies to the child processes of ``-fork``/``-jobs``/``-merge``.
@@ -9,7 +9,6 @@ copies to the child processes of ``-fork``/``-jobs``/``-merge``.
 
 from __future__ import annotations
 
-import contextlib
 import datetime
 import hashlib
 import math
@@ -17,17 +16,16 @@ import os
 import random
 import sys
 import time
-import types
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
-from fuzzer.artifacts.store import ArtifactStore, atomic_write, clean_temporaries
-from fuzzer.execution.session import ConfigError, RunConfig, Session, outcome_json, versions
-from fuzzer.execution.targets import module_of
-from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
+from fuzzer.generation.corpus import bag_seeds, make_seeds, prescan, write_seeds
+from fuzzer.input.testcase import TestCase
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
@@ -42,6 +40,7 @@ from fuzzer.processes import (
     supervises,
 )
 from fuzzer.processes import deadline as child_deadline
+from fuzzer.selection.instrument import instrument
 
 DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
 
@@ -64,64 +63,6 @@ class CampaignOptions:
     verbose: bool = False
     seeds_from_bag: Path | None = None
     """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
-
-
-def instrument(config: RunConfig) -> None:
-    """Import the Python targets and the oracle with Atheris coverage instrumentation."""
-    import atheris
-
-    names = sorted({module_of(spec) for spec in config.targets} - {"native"} | {"fuzzer.execution.oracle"})
-    # a malformed spec (":x", "a..b") is left to load_target, which reports it by name
-    fresh = [n for n in names if n not in sys.modules and all(s.isidentifier() for s in n.split("."))]
-    if fresh:
-        with atheris.instrument_imports(include=fresh):
-            for name in fresh:
-                with contextlib.suppress(Exception):  # a bad target is reported when it is loaded
-                    __import__(name)
-    instrument_loaded(names)
-
-
-def instrument_loaded(names: list[str]) -> int:
-    """Instrument, in place, the functions of the modules ``names`` and their submodules that
-    Atheris' import hook left as they were; returns how many it patched.
-
-    ``atheris.instrument_imports`` rewrites code as its loader reads it, but a module found by
-    another finder (the editable install's redirect: ``fuzzer``, ``python_impl``...) comes in
-    through that finder's loader: Atheris warns about a "custom loader" and the code stays
-    uninstrumented, so no edge and no comparison of it would reach libFuzzer. Each function,
-    method, static/class method and property of those modules gets
-    ``atheris.instrument_func`` (nested functions and lambdas with it; code already
-    instrumented is left alone)."""
-    import atheris
-
-    prefixes = tuple(f"{n}." for n in names)
-    patched = 0
-    for modname, module in list(sys.modules.items()):
-        if module is None or not (modname in names or modname.startswith(prefixes)):
-            continue
-        for obj in list(vars(module).values()):
-            for func in _own_functions(obj, modname):
-                if "__ATHERIS_INSTRUMENTED__" not in func.__code__.co_consts:
-                    atheris.instrument_func(func)
-                    patched += 1
-    return patched
-
-
-def _own_functions(obj: Any, modname: str) -> list[Any]:
-    """The Python functions defined by module ``modname`` in ``obj`` (a function or a class)."""
-    if isinstance(obj, types.FunctionType):
-        return [obj] if obj.__module__ == modname else []
-    if not isinstance(obj, type) or obj.__module__ != modname:
-        return []
-    out = []
-    for member in vars(obj).values():
-        if isinstance(member, staticmethod | classmethod):
-            member = member.__func__
-        if isinstance(member, property):
-            out += [f for f in (member.fget, member.fset, member.fdel) if isinstance(f, types.FunctionType)]
-        elif isinstance(member, types.FunctionType):
-            out.append(member)
-    return out
 
 
 def parse_dictionary(path: str) -> list[str | float]:
@@ -162,70 +103,6 @@ def interesting_values(session: Session) -> list[float]:
             if math.isfinite(bound):
                 values.extend(bound + s * e for e in eps for s in (-1.0, 1.0))
     return values
-
-
-def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
-    """n seeds from Hypothesis strategies of the message definition, with robot-aware hints
-    (for ``--op scenario`` a sequence strategy over the topics' step strategies)."""
-    from fuzzer.generation.seeds import generate_seeds
-    from fuzzer.generation.strategies import strategy_for
-    from fuzzer.input.mapping import scenario_strategy, seed_hints
-
-    msg_type = session.config.message_type
-    special = not session.config.filtering
-    if session.config.op == "scenario":
-        strategy = scenario_strategy(session.registry, session.facts(), session.config.max_steps, special)
-    else:
-        strategy = strategy_for(
-            session.registry,
-            msg_type,
-            hints=seed_hints(msg_type, session.facts()),
-            allow_special_floats=special,
-        )
-    messages = generate_seeds(strategy, n, seed)
-    return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
-
-
-def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
-    """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
-    from fuzzer.ros.bags import read_seeds
-
-    msg_type = session.config.message_type
-    if session.config.op == "scenario":
-        raise ConfigError("--seeds-from-bag with --op scenario is not supported yet")
-    messages = read_seeds(bag, msg_type, session.validate)
-    return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
-
-
-def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
-    for case in seeds:
-        data = case.encode()
-        atomic_write(corpus / f"seed-{case.sequence:05d}-{hashlib.sha1(data).hexdigest()[:10]}", data)
-
-
-def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestCase]]:
-    """Warn about every corpus file that is not a valid test case of this campaign.
-
-    libFuzzer still feeds them in; they are skipped as malformed. Returns
-    (number of usable files, the generated seeds found among them).
-    """
-    usable, seeds = 0, []
-    msg_type = session.config.message_type
-    for directory in corpus:
-        clean_temporaries(directory)
-        for path in sorted(p for p in directory.iterdir() if p.is_file() and not p.name.startswith(".")):
-            try:
-                case = decode(path.read_bytes())
-                if case.msg_type != msg_type:
-                    raise TestCaseError(f"message type {case.msg_type}, this campaign fuzzes {msg_type}")
-                session.validate(case.message)
-            except (OSError, ValueError) as exc:
-                reporting.warn(f"skipping corpus file {path}: {exc}")
-                continue
-            usable += 1
-            if case.origin == "hypothesis":
-                seeds.append(case)
-    return usable, seeds
 
 
 def libfuzzer_mutate(data: bytes, max_size: int) -> bytes:

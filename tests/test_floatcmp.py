@@ -78,20 +78,20 @@ def test_non_float_comparisons_are_left_alone_and_special_floats_bucketed() -> N
 
 def test_the_campaign_instruments_the_targets_and_the_oracle_it_names() -> None:
     """The editable install's finder loads ``fuzzer`` and ``python_impl`` with its own loader,
-    which Atheris' import hook leaves uninstrumented ("custom loader"): ``campaign.instrument``
+    which Atheris' import hook leaves uninstrumented ("custom loader"): ``instrument``
     must patch them in place, or no comparison of theirs reaches libFuzzer. In a subprocess
     (instrumentation rewrites the code of the running process)."""
     import subprocess
 
     script = (
         "import dis\n"
-        "from fuzzer import campaign\n"
+        "from fuzzer.selection import instrument\n"
         "from fuzzer.execution.session import RunConfig\n"
-        "campaign.instrument(RunConfig(op='fk', targets=('native', 'python')))\n"
+        "instrument.instrument(RunConfig(op='fk', targets=('native', 'python')))\n"
         "import fuzzer.execution.oracle as o, python_impl.model as m\n"
         "calls = lambda f: {i.argval for i in dis.get_instructions(f)}\n"
         "print('_trace_cmp' in calls(o.compare), '_trace_cmp' in calls(m.RobotModel.check_vector))\n"
-        "print(campaign.instrument_loaded(['fuzzer.execution.oracle', 'python_impl']))\n"
+        "print(instrument.instrument_loaded(['fuzzer.execution.oracle', 'python_impl']))\n"
     )
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True

@@ -12,6 +12,7 @@ import pytest
 from fuzzer import campaign
 from fuzzer.artifacts.store import ArtifactStore, load_sidecar
 from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation import corpus
 from fuzzer.harness import DivergenceFound, Harness
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.mutation import mutators
@@ -22,7 +23,7 @@ from fuzzer.selection.state import Pool
 def make_harness(tmp_path: Path, targets: tuple[str, str] = ("native", "python"), **kw) -> Harness:  # type: ignore[no-untyped-def]
     config = RunConfig(targets=targets, **kw)
     session = Session.open(config)
-    seeds = campaign.make_seeds(session, 8, 0)
+    seeds = corpus.make_seeds(session, 8, 0)
     ctx = mutators.MutationContext(
         rng=random.Random(0),
         field_types=campaign.field_types(session, config.message_type),

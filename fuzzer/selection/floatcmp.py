@@ -2,7 +2,7 @@
 
 Atheris instruments every ``COMPARE_OP`` of the modules imported under
 ``atheris.instrument_imports`` (the Python targets and ``fuzzer.execution.oracle``: see
-``fuzzer.campaign.instrument``) with a call ``atheris._trace_cmp(a, b, op, site, is_const)``,
+``fuzzer.selection.instrument``) with a call ``atheris._trace_cmp(a, b, op, site, is_const)``,
 looked up on the module at each call. Atheris turns integer and bytes comparisons into
 libFuzzer's CMP traces; floats it ignores, so a branch on a computed float (``if x < 0.1234``,
 a near-singular wrist, an ``atan2`` quadrant, a calibration band) is invisible to the search

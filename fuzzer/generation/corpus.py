@@ -1,0 +1,77 @@
+"""The seed corpus of a campaign: Hypothesis seeds of the campaign's message type (or scenario),
+seeds from a ROS bag, writing them into the corpus folder, and the check of the files already
+there (Algorithm 1's initial seeds)."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from fuzzer import reporting
+from fuzzer.artifacts.store import atomic_write, clean_temporaries
+from fuzzer.execution.session import ConfigError, Session
+from fuzzer.input.testcase import TestCase, TestCaseError, decode
+
+
+def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
+    """n seeds from Hypothesis strategies of the message definition, with robot-aware hints
+    (for ``--op scenario`` a sequence strategy over the topics' step strategies)."""
+    from fuzzer.generation.seeds import generate_seeds
+    from fuzzer.generation.strategies import strategy_for
+    from fuzzer.input.mapping import scenario_strategy, seed_hints
+
+    msg_type = session.config.message_type
+    special = not session.config.filtering
+    if session.config.op == "scenario":
+        strategy = scenario_strategy(session.registry, session.facts(), session.config.max_steps, special)
+    else:
+        strategy = strategy_for(
+            session.registry,
+            msg_type,
+            hints=seed_hints(msg_type, session.facts()),
+            allow_special_floats=special,
+        )
+    messages = generate_seeds(strategy, n, seed)
+    return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
+
+
+def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
+    """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
+    from fuzzer.ros.bags import read_seeds
+
+    msg_type = session.config.message_type
+    if session.config.op == "scenario":
+        raise ConfigError("--seeds-from-bag with --op scenario is not supported yet")
+    messages = read_seeds(bag, msg_type, session.validate)
+    return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
+
+
+def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
+    for case in seeds:
+        data = case.encode()
+        atomic_write(corpus / f"seed-{case.sequence:05d}-{hashlib.sha1(data).hexdigest()[:10]}", data)
+
+
+def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestCase]]:
+    """Warn about every corpus file that is not a valid test case of this campaign.
+
+    libFuzzer still feeds them in; they are skipped as malformed. Returns
+    (number of usable files, the generated seeds found among them).
+    """
+    usable, seeds = 0, []
+    msg_type = session.config.message_type
+    for directory in corpus:
+        clean_temporaries(directory)
+        for path in sorted(p for p in directory.iterdir() if p.is_file() and not p.name.startswith(".")):
+            try:
+                case = decode(path.read_bytes())
+                if case.msg_type != msg_type:
+                    raise TestCaseError(f"message type {case.msg_type}, this campaign fuzzes {msg_type}")
+                session.validate(case.message)
+            except (OSError, ValueError) as exc:
+                reporting.warn(f"skipping corpus file {path}: {exc}")
+                continue
+            usable += 1
+            if case.origin == "hypothesis":
+                seeds.append(case)
+    return usable, seeds
