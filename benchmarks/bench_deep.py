@@ -26,6 +26,7 @@ import platform
 import random
 import statistics
 import sys
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -144,15 +145,24 @@ def markdown(runs: list[Run], mode: Mode, cmd: str) -> str:
             if hits and median == "-":
                 median = f">{mode.budget:.0f}"
             cells.append(f"{median} ({len(hits)}/{len(mine)})")
-        full = censored(by_engine[mode.engines[0]], mode.budget)
-        for engine in mode.engines[1:]:
-            if not by_engine[engine]:
-                cells.append("n/a")
-                continue
-            p, effect, verdict = compare(full, censored(by_engine[engine], mode.budget))
-            cells.append(f"{verdict} (p={p:.3g}, A12={effect:.2f})")
+        cells += verdicts(by_engine, mode, censored)
         lines.append(f"| {bug} | " + " | ".join(cells) + " |")
     return "\n".join([*lines, "", *search_table(runs, mode)])
+
+
+def verdicts(
+    by_engine: dict[str, list[Run]], mode: Mode, times: Callable[[list[Run], float], list[float]]
+) -> list[str]:
+    """One cell per baseline: the full engine's ``times`` against the baseline's (MWU, A12)."""
+    full = times(by_engine[mode.engines[0]], mode.budget)
+    cells = []
+    for engine in mode.engines[1:]:
+        if not by_engine[engine]:
+            cells.append("n/a")
+            continue
+        p, effect, verdict = compare(full, times(by_engine[engine], mode.budget))
+        cells.append(f"{verdict} (p={p:.3g}, A12={effect:.2f})")
+    return cells
 
 
 def search_table(runs: list[Run], mode: Mode) -> list[str]:
@@ -177,13 +187,7 @@ def search_table(runs: list[Run], mode: Mode) -> list[str]:
         for engine in mode.engines:
             start = _median([r.first_input for r in by_engine[engine] if r.first_input is not None])
             cells.append("n/a" if start is None else f"{start:.2f}")
-        full = censored_search(by_engine[mode.engines[0]], mode.budget)
-        for engine in mode.engines[1:]:
-            if not by_engine[engine]:
-                cells.append("n/a")
-                continue
-            p, effect, verdict = compare(full, censored_search(by_engine[engine], mode.budget))
-            cells.append(f"{verdict} (p={p:.3g}, A12={effect:.2f})")
+        cells += verdicts(by_engine, mode, censored_search)
         lines.append(f"| {bug} | " + " | ".join(cells) + " |")
     return lines
 
