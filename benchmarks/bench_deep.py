@@ -251,7 +251,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
         try:
             runs = load_runs(args.from_json)
             mode = Mode(
-                tuple(dict.fromkeys(r.bug for r in runs)),
+                tuple(sorted(dict.fromkeys(r.bug for r in runs), key=_bug_order)),
                 max(sum(r.bug == b.bug and r.engine == b.engine for r in runs) for b in runs),
                 max(float(r.budget) for r in runs),
                 tuple(sorted({r.engine for r in runs}, key=lambda e: (e != "full", ALL_ENGINES.index(e)))),
@@ -275,6 +275,12 @@ def main(argv: list[str] | None = None) -> list[Run]:
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget), jobs))
     return _report(runs, mode, args, argv, copy=True)
+
+
+def _bug_order(name: str) -> tuple[int, str]:
+    """The zoo's order (``DEEP``), then other names alphabetically."""
+    order = [b.name for b in DEEP]
+    return (order.index(name), "") if name in order else (len(order), name)
 
 
 def load_runs(path: Path) -> list[Run]:
