@@ -24,7 +24,7 @@ from fuzzer import reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
-from fuzzer.generation.corpus import bag_seeds, make_seeds, prescan, write_seeds
+from fuzzer.generation.corpus import bag_seeds, make_seeds, prescan, space_filling_seeds, write_seeds
 from fuzzer.input.testcase import TestCase
 from fuzzer.processes import (
     CHILD_ENV,
@@ -158,10 +158,18 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     )
     if wanted and not child and folders:
         generated = make_seeds(session, wanted, options.seed)
-        write_seeds(folders[0], generated)
+        # the full engine's corpus also starts with as many points covering the joint space
+        filling = (
+            space_filling_seeds(session, wanted, options.seed, len(generated))
+            if options.mutator == "rrosfuzz"
+            else []
+        )
+        write_seeds(folders[0], generated + filling)
         seeds = generated + seeds
         reporting.info(
-            f"wrote {len(generated)} seeds from Hypothesis ({config.message_type}) to {folders[0]}"
+            f"wrote {len(generated)} seeds from Hypothesis ({config.message_type})"
+            + (f" and {len(filling)} space-filling configurations" if filling else "")
+            + f" to {folders[0]}"
         )
     if not seeds:
         seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs

@@ -582,9 +582,10 @@ def test_settings_travel_with_the_corpus_and_the_crash_file(tmp_path: Path) -> N
     recorded = json.loads((tmp_path / "fk" / ".rrosfuzz" / "manifest.json").read_text())["config"]
     assert (recorded["op"], recorded["robot"]) == ("fk", "ur5")
     replayed = cli("replay", "fk", cwd=tmp_path)  # corpus inputs have no sidecar: the manifest's settings
-    assert replayed.returncode == 0 and replayed.stdout.count("replayed under op fk, robot ur5") == 4
+    # 4 seeds from Hypothesis and 4 space-filling ones
+    assert replayed.returncode == 0 and replayed.stdout.count("replayed under op fk, robot ur5") == 8
     cov = cli("coverage", "fk", "--html", str(tmp_path / "html"), cwd=tmp_path)
-    assert cov.returncode == 0 and "over 4 inputs (0 skipped)" in cov.stdout, cov.stderr[-2000:]
+    assert cov.returncode == 0 and "over 8 inputs (0 skipped)" in cov.stdout, cov.stderr[-2000:]
     (tmp_path / "merged").mkdir()
     merged = cli("-merge=1", "merged", "fk", "--no-progress", f"--artifacts={tmp_path / 'a'}", cwd=tmp_path)
     assert "Traceback" not in merged.stderr and "--op=fk" in merged.stderr, merged.stderr[-2000:]

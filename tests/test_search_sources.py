@@ -116,3 +116,26 @@ def test_a_scenario_without_targets_gets_a_state_and_a_pose_goal_from_it() -> No
     goal = next(s["msg"] for s in out["steps"] if s["topic"] == "/pose_target")
     session.registry.validate("geometry_msgs/PoseStamped", goal)
     assert set(goal["pose"]) == {"position", "orientation"}
+
+
+def test_the_corpus_starts_with_space_filling_seeds_beside_the_hypothesis_ones() -> None:
+    from fuzzer.generation.corpus import space_filling_seeds
+
+    session = Session.open(RunConfig(op="move"))
+    seeds = space_filling_seeds(session, 16, 1, first=32)
+    limits = session.reference.joint_limits
+    assert [s.sequence for s in seeds] == list(range(32, 48)) and {s.origin for s in seeds} == {"spacefill"}
+    positions = [tuple(s.message["position"]) for s in seeds]
+    assert len(set(positions)) == 16
+    for case, values in zip(seeds, positions, strict=True):
+        session.validate(case.message)
+        assert all(lim.lower <= v <= lim.upper for v, lim in zip(values, limits, strict=True))
+    # stratified: each of the 16 points in its own sixteenth of every joint's range
+    for j, lim in enumerate(limits):
+        bins = {int(16 * (v[j] - lim.lower) / (lim.upper - lim.lower)) for v in positions}
+        assert len(bins) == 16
+    assert [s.message for s in space_filling_seeds(session, 16, 1, first=32)] == [s.message for s in seeds]
+    assert space_filling_seeds(session, 16, 2)[0].message != seeds[0].message
+    assert space_filling_seeds(Session.open(RunConfig(op="scenario")), 8, 1) == []
+    ik = space_filling_seeds(Session.open(RunConfig(op="ik")), 4, 1)
+    assert len(ik) == 4 and all(set(s.message["pose"]) == {"position", "orientation"} for s in ik)

@@ -35,6 +35,39 @@ def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
     return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
 
 
+SPACEFILL_SEED = 0xC0DE5
+"""Added to ``-seed`` for the space-filling seeds' Sobol stream (not the harness's own)."""
+
+
+def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
+    """``n`` seeds covering the joint space (issue 11, "beside the Hypothesis seeds"): the first
+    points of a scrambled Sobol sequence inside the limits (``fuzzer.generation.spacefill``), each in
+    the zero message of the campaign's type (a JointState's positions, a Float64MultiArray's
+    data, for IK the pose FK gives the configuration). Numbered from ``first``, origin
+    ``spacefill``. None at all for a scenario (its configurations come during the campaign), a chain
+    without joints or a message type without a joint-space or pose field."""
+    from fuzzer.generation.spacefill import SpaceFill, configuration_message
+
+    config = session.config
+    limits = session.reference.joint_limits
+    if config.op == "scenario" or not limits or n <= 0:
+        return []
+    facts = session.facts()
+    stream = SpaceFill(
+        [lim.lower for lim in limits], [lim.upper for lim in limits], seed=seed + SPACEFILL_SEED
+    )
+    base = session.registry.default(config.message_type)
+    out = []
+    for i in range(n):
+        message = configuration_message(
+            config.message_type, base, stream.next(), facts.joint_names, facts.reachable
+        )
+        if message is None:
+            return []
+        out.append(TestCase(config.message_type, message, sequence=first + i, origin="spacefill"))
+    return out
+
+
 def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
     """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
     from fuzzer.ros.bags import read_seeds
