@@ -109,14 +109,15 @@ class Harness:
             self.on_exec()
             return
         seen, signatures = len(self.features.seen), len(self.stats.signatures)
+        first = self.stats.first_input is None
         self._execute(case, data, trusted)
         if self.sources is not None and case.origin == "mutation":
             paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
             self.sources.reward(case.strategy, paid)
         if self.sweep is not None and self.sweep.due():
             self._sweep()
-        if self.log is not None and not self.stats.execs & 255:
-            self.maybe_snapshot()
+        if self.log is not None and (first or not self.stats.execs & 255):
+            self.maybe_snapshot()  # the first right away: stats.jsonl then says when the search began
         self.on_exec()
 
     def _execute(self, case: TestCase, data: bytes, trusted: bool) -> Evaluation:

@@ -1,12 +1,11 @@
 """Float comparisons of the Python targets as coverage: a distance-to-flip feature per site.
 
-Atheris instruments every ``COMPARE_OP`` of the modules imported under
-``atheris.instrument_imports`` (the Python targets and ``fuzzer.execution.oracle``: see
-``fuzzer.selection.instrument``) with a call ``atheris._trace_cmp(a, b, op, site, is_const)``,
-looked up on the module at each call. Atheris turns integer and bytes comparisons into
-libFuzzer's CMP traces; floats it ignores, so a branch on a computed float (``if x < 0.1234``,
-a near-singular wrist, an ``atan2`` quadrant, a calibration band) is invisible to the search
-until an input happens to flip it.
+Atheris instruments every ``COMPARE_OP`` of the instrumented modules (the Python targets and
+``fuzzer.execution.oracle``: see ``fuzzer.selection.instrument``) with a call
+``atheris._trace_cmp(a, b, op, site, is_const)``, looked up on the module at each call.
+Atheris turns integer and bytes comparisons into libFuzzer's CMP traces; floats it ignores,
+so a branch on a computed float (``if x < 0.1234``, a near-singular wrist, an ``atan2``
+quadrant, a calibration band) is invisible to the search until an input happens to flip it.
 
 :class:`FloatCompareTracer` wraps ``_trace_cmp``: for a comparison with a float operand it
 adds the feature (site, side, binary exponent of ``|a - b|``), then calls Atheris' own
