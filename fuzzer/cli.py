@@ -371,12 +371,8 @@ def triage_main(argv: Sequence[str]) -> int:
 
 
 def minimize_main(argv: Sequence[str]) -> int:
-    from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
-    from fuzzer.artifacts.store import ArtifactStore, sidecar_path
-    from fuzzer.execution.evaluate import history_of
-    from fuzzer.execution.session import ConfigError, Session
-    from fuzzer.input.testcase import TestCaseError, decode
-    from fuzzer.triage.minimize import Minimizer, joints_that_matter
+    from fuzzer.execution.session import ConfigError
+    from fuzzer.triage import crashfiles
 
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py minimize",
@@ -406,21 +402,7 @@ def minimize_main(argv: Sequence[str]) -> int:
     errors = 0
     for path in files:
         try:
-            sidecar = read_sidecar(path)
-            if sidecar is None:
-                raise SidecarError(
-                    f"{path}: no sidecar ({sidecar_path(path).name}); only divergence crash files "
-                    "written by RROSFuzz can be minimized (use -minimize_crash=1 for others)"
-                )
-            config = config_from(sidecar, sidecar_path(path), given, args.trust_sidecar)
-            if config not in sessions:
-                sessions[config] = Session.open(config)
-            session = sessions[config]
-            try:
-                raw = path.read_bytes()
-                case = decode(raw)
-            except (OSError, TestCaseError) as exc:
-                raise SidecarError(f"{path}: not a test case: {exc}") from None
+            loaded = crashfiles.load(path, given, args.trust_sidecar, sessions)
         except ConfigError as exc:
             if len(files) == 1:
                 raise
@@ -428,40 +410,14 @@ def minimize_main(argv: Sequence[str]) -> int:
             errors += 1
             continue
         try:
-            history = history_of(sidecar) if "history" in sidecar else None  # state_dependent
-            shrunk = Minimizer(session, args.budget, history).minimize(case, sidecar["signature"]["key"])
+            shrunk = crashfiles.shrink(loaded, args.budget)
         except ValueError as exc:
             reporting.verdict(str(path), f"not minimized: {exc}")
             continue
-        data = shrunk.case.encode()
-        out = dict(
-            sidecar,
-            config=config.to_json(),
-            testcase=shrunk.case.to_json(),
-            minimized_from=path.name,
-            joints_that_matter=joints_that_matter(shrunk.case, session.reference.joint_names),
-            shrink={
-                "evaluations": shrunk.evaluations,
-                "accepted": shrunk.accepted,
-                "complete": shrunk.complete,
-            },
-        )
-        # the call, outcomes and comparison of the minimized input, not the original's (a
-        # scenario's step list shrinks; the sidecar's schema checks they match the test case)
-        from fuzzer.campaign import build_sidecar
-
-        again = session.evaluator().evaluate(shrunk.case, history=history)
-        if again.signature is not None:
-            versions, digest = sidecar.get("versions", {}), sidecar.get("robot_sha256", "")
-            fresh = build_sidecar(session, shrunk.case, data, again, versions, digest)
-            for name in ("sha1", "comparison", "difference", "call", "outcomes", "lineage", "strategy"):
-                out[name] = fresh[name]
+        data, out = crashfiles.minimized_sidecar(loaded, shrunk)
         folder = args.output or path.parent
         try:
-            written = ArtifactStore(folder).write(data, out)
-            minimized = written.with_name("minimized-" + written.name.split("-", 1)[1])
-            written.replace(minimized)
-            written.with_name(written.name + ".json").replace(minimized.with_name(minimized.name + ".json"))
+            minimized = crashfiles.write_minimized(folder, data, out)
         except OSError as exc:
             sys.stderr.write(f"fuzz_diff.py: error: cannot write into {folder}: {exc.strerror or exc}\n")
             errors += 1
@@ -469,7 +425,7 @@ def minimize_main(argv: Sequence[str]) -> int:
         reporting.verdict(
             str(path),
             f"minimized to {minimized}",
-            f"{len(raw)} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
+            f"{len(loaded.raw)} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
             f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
             + ("" if shrunk.complete else ", budget exhausted"),
         )
