@@ -401,7 +401,7 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
     if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
         return {"float_tracer": FloatCompareTracer(features)}
     facts = session.facts()
-    stream = SpaceFill([lim.lower for lim in limits], [lim.upper for lim in limits], seed=options.seed)
+    stream = SpaceFill(facts.lower, facts.upper, seed=options.seed)
     fresh = fresh_inputs(
         config.op, config.message_type, stream, facts.joint_names, facts.reachable, config.max_steps
     )

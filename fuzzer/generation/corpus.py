@@ -53,9 +53,7 @@ def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> 
     if config.op == "scenario" or not limits or n <= 0:
         return []
     facts = session.facts()
-    stream = SpaceFill(
-        [lim.lower for lim in limits], [lim.upper for lim in limits], seed=seed + SPACEFILL_SEED
-    )
+    stream = SpaceFill(facts.lower, facts.upper, seed=seed + SPACEFILL_SEED)
     base = session.registry.default(config.message_type)
     out = []
     for i in range(n):
