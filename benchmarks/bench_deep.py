@@ -2,19 +2,24 @@
 
     .venv/bin/python -m benchmarks.bench_deep --mode full --write-md   # 10 trials x 60 s per (bug, engine)
     .venv/bin/python -m benchmarks.bench_deep --mode short --write-md  # 10 trials x 10 s, 5 engines
+    .venv/bin/python -m benchmarks.bench_deep --mode zoo --write-md    # the 22 shallow zoo bugs, 10 x 10 s
     .venv/bin/python -m benchmarks.bench_deep --mode quick             # 2 trials x 10 s, two bugs (CI-sized)
 
 Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of the input
-space) runs under every engine of ``benchmarks.bench_zoo`` (``full``, ``libfuzzer``,
-``paper``, ``hypothesis``, ``uniform``), N trials each (``-seed`` = the trial number), on the
-same budget, each trial a subprocess started the same way (``bench_zoo.run_one``). Per (bug,
+space), or with ``--mode zoo`` every bug of the shallow zoo (``benchmarks.zoo.ZOO``), runs
+under every engine of ``benchmarks.bench_zoo`` (``full``, ``libfuzzer``, ``paper``,
+``hypothesis``, ``uniform``; a bug of the scenario op only under the engines that have it),
+N trials each (``-seed`` = the trial number), on the same budget, each trial a subprocess
+started the same way (``bench_zoo.run_one``). A trial stops at its first detection
+(``stop_at_detection``): its time to first detection is the engine's own timestamp in its
+log, which stopping does not change, and what it would find later is not measured. Per (bug,
 engine): detection rate and median time to first detection; per bug, the full engine against
 each baseline: the two-sided Mann-Whitney U test on the times to detection (a trial that
 never detects counts as the budget: censored) and the Vargha-Delaney A12 (the probability that
 a full-engine trial detects sooner than a baseline trial, ties half; 0.5 = no difference). A
 survival plot (the share of trials that have found the bug over time) goes to
 ``benchmarks/results/deep-<mode>.png``; with ``--write-md`` the table replaces the marked
-section of BENCHMARKS.md.
+section of BENCHMARKS.md (``--mode zoo``: a section of its own, under the zoo's).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import json
 import os
 import platform
 import random
+import signal
 import statistics
 import sys
 from collections.abc import Callable
@@ -34,11 +40,20 @@ from pathlib import Path
 from scipy.stats import mannwhitneyu
 
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, replace_section, run_one
-from benchmarks.zoo import DEEP
+from benchmarks.zoo import DEEP, ZOO, Bug
 
 ALPHA = 0.05
 MARKS = ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->")
 TITLE = "## Search strength on deep bugs (issue 11)"
+SECTIONS = {
+    "zoo": (
+        ("<!-- bench_deep_zoo:begin -->", "<!-- bench_deep_zoo:end -->"),
+        "### The zoo with FuzzBench statistics (issue 11)",
+    )
+}
+"""Modes with a BENCHMARKS.md section of their own: (marks, title); the others use MARKS, TITLE."""
+BUGS: dict[str, Bug] = {b.name: b for b in (*DEEP, *ZOO)}
+"""The bugs this benchmark runs, by name: the deep ones, then the shallow zoo."""
 
 
 @dataclass(frozen=True)
@@ -60,10 +75,19 @@ MODES = {
         engines=("full", "libfuzzer", "paper", "hypothesis", "uniform"),
     ),
     "full": Mode(bugs=tuple(b.name for b in DEEP), trials=10, budget=60.0),
+    "zoo": Mode(
+        bugs=tuple(b.name for b in ZOO),
+        trials=10,
+        budget=10.0,
+        engines=("full", "libfuzzer", "paper", "hypothesis", "uniform"),
+    ),
 }
 """quick: CI-sized (about a minute on 2 cores). short: every deep bug against the baselines the
-goal names, 10 trials x 10 s (about 55 minutes on 2 cores). full: 10 trials x 60 s, the old
-engine (``weights``) too (about 6 hours on 2 cores)."""
+goal names, 10 trials x 10 s (32 minutes on 2 cores; 55 before trials stopped at their first
+detection). full: 10 trials x 60 s, the old engine (``weights``) too (about 6 hours on 2 cores
+before trials stopped at their first detection; not run since). zoo: the 22 shallow zoo bugs
+(``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x 10 s; the 8 of the scenario op
+under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on 2 cores."""
 
 
 def runs_on(op: str, engine: str) -> bool:
@@ -115,8 +139,15 @@ def markdown(runs: list[Run], mode: Mode, cmd: str) -> str:
     lines = [
         f"{mode.trials} trials x {mode.budget:.0f} s per (bug, engine), two runs at a time on "
         f"{os.cpu_count()} CPUs ({platform.machine()}, Python {platform.python_version()}). Command: "
-        f"`{cmd}`. Cells: median time to first detection in s (detected within the budget/trials; "
-        f"'-' none). "
+        f"`{cmd}`. "
+        + (
+            "A trial stops at its first detection, which does not change its time to first "
+            "detection (the engine's own timestamp in its log). "
+            if any(r.returncode == -signal.SIGKILL for r in runs)
+            else ""
+        )
+        + f"Cells: median time to first detection "
+        f"in s (detected within the budget/trials; '-' none; 'n/a': the engine has no scenario op). "
         f"p: Mann-Whitney U (two-sided) of the full engine's times against the baseline's, a trial "
         f"without detection counted as the budget; A12: Vargha-Delaney (full engine sooner; 0.5 = "
         f"no difference); verdict at p < {ALPHA}.",
@@ -197,21 +228,27 @@ def plot(runs: list[Run], mode: Mode, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     cols = min(4, len(mode.bugs))
     rows = (len(mode.bugs) + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, sharey=True)
+    lines: dict[str, Line2D] = {}
     for ax, bug in zip(axes.flat, mode.bugs, strict=False):
-        for engine in mode.engines:
-            times, share = survival([r for r in runs if r.bug == bug and r.engine == engine], mode.budget)
-            ax.step(times, share, where="post", label=engine)
+        for i, engine in enumerate(mode.engines):
+            mine = [r for r in runs if r.bug == bug and r.engine == engine]
+            if not mine:  # no scenario op: no curve (not a curve at zero)
+                continue
+            times, share = survival(mine, mode.budget)
+            (lines[engine],) = ax.step(times, share, where="post", color=f"C{i}", label=engine)
         ax.set_title(bug, fontsize=9)
         ax.set_xlabel("s", fontsize=8)
         ax.set_ylim(-0.02, 1.02)
     for ax in list(axes.flat)[len(mode.bugs) :]:
         ax.axis("off")
     axes[0][0].set_ylabel("share of trials that found it")
-    axes[0][0].legend(fontsize=7)
+    shown = [e for e in mode.engines if e in lines]
+    axes[0][0].legend([lines[e] for e in shown], shown, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
 
@@ -221,7 +258,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--mode", choices=MODES, default="quick")
-    parser.add_argument("--bugs", nargs="+", default=None, choices=[b.name for b in DEEP])
+    parser.add_argument("--bugs", nargs="+", default=None, choices=list(BUGS))
     parser.add_argument("--engines", nargs="+", default=None, choices=ALL_ENGINES)
     parser.add_argument("--trials", type=int, default=None)
     parser.add_argument("--budget", type=float, default=None)
@@ -261,25 +298,26 @@ def main(argv: list[str] | None = None) -> list[Run]:
         if mode.engines[0] != "full":
             parser.error(f"{args.from_json}: no runs of the full engine")
         return _report(runs, mode, args, argv, copy=False)
-    by_name = {b.name: b for b in DEEP}
     jobs = [
-        (by_name[b], e, t)
+        (BUGS[b], e, t)
         for b in mode.bugs
         for e in mode.engines
-        if runs_on(by_name[b].op, e)
+        if runs_on(BUGS[b].op, e)
         for t in range(mode.trials)
     ]
     # a seeded random order, as FuzzBench does: a change of machine load during the sweep then
     # falls on every engine alike instead of on the engines that happen to run last
     random.Random(0).shuffle(jobs)
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget), jobs))
+        runs = list(
+            pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True), jobs)
+        )
     return _report(runs, mode, args, argv, copy=True)
 
 
 def _bug_order(name: str) -> tuple[int, str]:
-    """The zoo's order (``DEEP``), then other names alphabetically."""
-    order = [b.name for b in DEEP]
+    """The zoo's order (``DEEP``, then ``ZOO``), then other names alphabetically."""
+    order = list(BUGS)
     return (order.index(name), "") if name in order else (len(order), name)
 
 
@@ -312,7 +350,7 @@ def _report(
     print(text)
     if args.write_md:
         picture = f"\n\n![survival](benchmarks/results/deep-{args.mode}.png)"
-        replace_section(text + picture, MARKS, TITLE)
+        replace_section(text + picture, *SECTIONS.get(args.mode, (MARKS, TITLE)))
     return runs
 
 

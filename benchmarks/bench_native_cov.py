@@ -30,7 +30,8 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
-from benchmarks.bench_zoo import NOT_DETECTIONS, command, replace_section
+from benchmarks.bench_zoo import command, replace_section
+from benchmarks.trials import NOT_DETECTIONS
 from benchmarks.zoo import BY_NAME, CONTROL
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS, read_lines
 

@@ -44,6 +44,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from benchmarks.trials import NOT_DETECTIONS, run_until_detection
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS, read_lines
 
@@ -53,7 +54,6 @@ ENGINES = ("full", "libfuzzer", "paper", "hypothesis", "uniform")
 ALL_ENGINES = (*ENGINES, "weights")
 """``weights``: the full engine without its bandit, space-filling inputs and float features
 (``--mutator weights``, the engine before issue 11), for ``benchmarks.bench_deep``."""
-NOT_DETECTIONS = {"ill_conditioned", "known_limitation", "flaky"}
 CONTROL_ENGINES = ("full",)
 """Engines run on the control configurations (the plain ``control`` entry runs them all)."""
 SCENARIO_ENGINES = ("full", "libfuzzer")
@@ -180,20 +180,50 @@ def replay_fidelity(bug: Bug, artifacts: Path) -> tuple[int, int, tuple[str, ...
     return len(crashes), same, tuple(misses)
 
 
-def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = False) -> Run:
+def run_one(
+    bug: Bug, engine: str, seed: int, budget: float, replay: bool = False, *, stop_at_detection: bool = False
+) -> Run:
+    """Run one trial of ``engine`` against ``bug`` in a fresh folder and read its logs.
+
+    Parameters
+    ----------
+    bug, engine, seed, budget
+        What ``command`` runs (``budget``: seconds; the trial is killed, and
+        ``subprocess.TimeoutExpired`` raised, 180 s past it).
+    replay
+        Replay the full engine's crash files in a new process (``replay_fidelity``).
+    stop_at_detection
+        Kill the trial (its whole process group) once its logs show a detection and a stats
+        snapshot with its first input (``benchmarks.trials.run_until_detection``). The time to first detection
+        is the engine's own timestamp in the divergence log (``t``), so stopping, and how long
+        the kill takes, do not change it; the start-up (``first_input``) neither. The counts
+        that need the whole run (signatures, executions, elapsed) then cover only the part
+        before the kill, and ``returncode`` is ``-SIGKILL``: ``benchmarks.bench_deep`` uses it,
+        this module's tables (signatures, throughput) do not. The harness logs its first
+        snapshot right after its first input, so a trial stops soon after its detection.
+
+    Returns
+    -------
+    Run
+        The trial's record.
+    """
     with tempfile.TemporaryDirectory(prefix="rrosfuzz-bench-") as tmp:
         workdir = Path(tmp)
-        started = time.time()
-        done = subprocess.run(
-            command(bug, engine, seed, budget, workdir),
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=budget + 180,
-            check=False,
-            env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        )
         artifacts = workdir / "artifacts"
+        cmd = command(bug, engine, seed, budget, workdir)
+        started = time.time()
+        if stop_at_detection:
+            returncode = run_until_detection(cmd, artifacts, budget + 180, ROOT)
+        else:
+            returncode = subprocess.run(
+                cmd,
+                cwd=ROOT,
+                capture_output=True,
+                text=True,
+                timeout=budget + 180,
+                check=False,
+                env=dict(os.environ, PYTHONPATH=str(ROOT)),
+            ).returncode
         hits = [r for r in read_lines(artifacts / DIVERGENCES) if r.get("kind") not in NOT_DETECTIONS]
         first = min((float(r["t"]) - started for r in hits), default=None)
         last: dict[Any, dict[str, Any]] = {}
@@ -214,7 +244,7 @@ def run_one(bug: Bug, engine: str, seed: int, budget: float, replay: bool = Fals
         executions,
         elapsed or budget,
         bug.op,
-        done.returncode,
+        returncode,
         len(hits),
         *fidelity,
         found_fields(hits),

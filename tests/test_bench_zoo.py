@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import json
+import signal
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
 import native
-from benchmarks import bench_zoo
+from benchmarks import bench_zoo, trials
 from benchmarks.zoo import BY_NAME, CONTROL, ZOO
 from fuzzer.execution.targets import load_target
 
@@ -53,3 +56,64 @@ def test_a_small_benchmark_run(tmp_path: Path) -> None:
     assert cells["control/full"]["detected"] == 0 and cells["control/uniform"]["detected"] == 0
     assert cells["off_by_tolerance/full"]["median_exec_per_s"] > 0
     assert "| off_by_tolerance | move |" in bench_zoo.markdown(result)
+
+
+# -- run_one(stop_at_detection=True), without a real campaign -------------------------------------
+
+FAKE_TRIAL = """
+import json, os, sys, time
+artifacts = sys.argv[1]
+kind, sleep, code = sys.argv[2], float(sys.argv[3]), int(sys.argv[4])
+os.makedirs(artifacts, exist_ok=True)
+def log(name, record):
+    with open(os.path.join(artifacts, name), "a") as handle:
+        handle.write(json.dumps(record) + "\\n")
+now = time.time()
+log("stats.jsonl", {"pid": os.getpid(), "first_input": now, "execs": 3, "elapsed": 0.1})
+log("divergences.jsonl", {"kind": kind, "sig": "s", "t": now + 0.2, "field": "q", "difference": 0.5})
+time.sleep(sleep)
+sys.exit(code)
+"""
+
+
+def _fake(monkeypatch: pytest.MonkeyPatch, kind: str, sleep: float, code: int) -> None:
+    """``bench_zoo.command`` runs a script that logs a first input and a divergence of ``kind``,
+    then sleeps ``sleep`` s and exits with ``code``."""
+
+    def command(bug: object, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
+        return [sys.executable, "-c", FAKE_TRIAL, str(workdir / "artifacts"), kind, str(sleep), str(code)]
+
+    monkeypatch.setattr(bench_zoo, "command", command)
+
+
+def test_a_trial_stops_at_its_first_detection(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The trial is killed once its logs show a detection and a first input (it would sleep 60 s
+    more); the time to detection is the logged one, and the start-up too."""
+    _fake(monkeypatch, "value", 60.0, 0)
+    began = time.monotonic()
+    run = bench_zoo.run_one(BY_NAME["silent_clamp"], "full", 0, 1.0, stop_at_detection=True)
+    assert time.monotonic() - began < 30.0  # killed, not slept out
+    assert run.returncode == -signal.SIGKILL
+    assert run.detected_at is not None and run.first_input is not None
+    assert run.detected_at - run.first_input == pytest.approx(0.2)
+    assert run.divergences == 1 and run.executions == 3
+
+
+def test_a_non_detection_does_not_stop_a_trial(monkeypatch: pytest.MonkeyPatch) -> None:
+    _fake(monkeypatch, "known_limitation", 2.0, 7)
+    run = bench_zoo.run_one(BY_NAME["silent_clamp"], "full", 0, 1.0, stop_at_detection=True)
+    assert run.returncode == 7 and run.detected_at is None and run.first_input is not None
+
+
+def test_logs_are_read_incrementally(tmp_path: Path) -> None:
+    """A partial last line waits for its end; unparsable lines are skipped."""
+    path = tmp_path / "log.jsonl"
+    assert trials.read_new(path, 0) == ([], 0)
+    path.write_bytes(b'{"a": 1}\nnot json\n{"b"')
+    records, offset = trials.read_new(path, 0)
+    assert records == [{"a": 1}] and offset == len(b'{"a": 1}\nnot json\n')
+    with open(path, "ab") as handle:
+        handle.write(b": 2}\n")
+    assert trials.read_new(path, offset) == ([{"b": 2}], path.stat().st_size)
+    progress = trials.watch(trials.Progress(), tmp_path)
+    assert not progress.detected and not progress.done

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import signal
 from dataclasses import replace
 
 import pytest
@@ -11,7 +12,7 @@ import native
 import python_impl
 from benchmarks import bench_deep
 from benchmarks.bench_zoo import Run
-from benchmarks.zoo import deep
+from benchmarks.zoo import DEEP, STATEFUL, ZOO, deep
 from robot_api import robots
 
 ANNO = robots.resolve("probot_anno")
@@ -103,8 +104,8 @@ def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotMo
 
 
 
-def _run(engine: str, seed: int, at: float | None, bug: str = "narrow_band") -> Run:
-    return Run(bug, engine, seed, 10.0, at, 1 if at is not None else 0, 100, 10.0, "fk", 0)
+def _run(engine: str, seed: int, at: float | None, bug: str = "narrow_band", op: str = "fk") -> Run:
+    return Run(bug, engine, seed, 10.0, at, 1 if at is not None else 0, 100, 10.0, op, 0)
 
 
 def test_a12_and_censoring() -> None:
@@ -163,7 +164,12 @@ def test_the_quick_mode_runs_and_the_sweep_finds_the_narrower_band(tmp_path) -> 
     assert {(r.bug, r.engine) for r in runs} == {
         (bug, engine) for bug in ("narrower_band", "computed_branch") for engine in ("full", "uniform")
     }
-    assert all(r.returncode in (0, 1) for r in runs), [(r.bug, r.engine, r.returncode) for r in runs]
+    # a trial ends by itself (0, or 1 with a divergence), or killed at its first detection
+    stopped = [r for r in runs if r.returncode == -signal.SIGKILL]
+    assert all(r.returncode in (0, 1) or r in stopped for r in runs), [
+        (r.bug, r.engine, r.returncode) for r in runs
+    ]
+    assert all(r.detected_at is not None and r.first_input is not None for r in stopped)
     swept = [r for r in runs if r.bug == "narrower_band" and r.engine == "full"]
     assert len(swept) == 2 and all(r.detected_at is not None and r.detected_at < 10.0 for r in swept)
     assert (tmp_path / "deep-quick.json").is_file() and (tmp_path / "deep-quick.png").is_file()
@@ -188,3 +194,37 @@ def test_an_earlier_results_file_is_tabulated_again(tmp_path) -> None:  # type: 
         with pytest.raises(SystemExit) as exit_info:
             bench_deep.main(["--from-json", str(source), "--results", str(tmp_path)])
         assert exit_info.value.code == 2
+
+
+def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """``--mode zoo``: the 22 shallow zoo bugs in the zoo's order, with a section of its own; a
+    scenario bug's row says 'n/a' for the engines without a scenario op, and the plot copes."""
+    mode = bench_deep.MODES["zoo"]
+    assert mode.bugs == tuple(b.name for b in ZOO) and (mode.trials, mode.budget) == (10, 10.0)
+    assert mode.engines == ("full", "libfuzzer", "paper", "hypothesis", "uniform")
+    assert list(bench_deep.BUGS) == [b.name for b in (*DEEP, *ZOO)]
+    assert sorted(["silent_clamp", "tight_relation", "cached_pose"], key=bench_deep._bug_order) == [
+        "tight_relation",
+        "silent_clamp",
+        "cached_pose",
+    ]
+    assert bench_deep.SECTIONS["zoo"][0] == ("<!-- bench_deep_zoo:begin -->", "<!-- bench_deep_zoo:end -->")
+    scenario = STATEFUL[0].name
+    runs = [_run(e, i, 1.0 + i, "silent_clamp", "move") for e in mode.engines for i in range(3)]
+    runs += [_run(e, i, 2.0 + i, scenario, "scenario") for e in ("full", "libfuzzer") for i in range(3)]
+    runs = [replace(r, first_input=0.5, returncode=0) for r in runs]
+    small = bench_deep.Mode(("silent_clamp", scenario), 3, 10.0, mode.engines)
+    # the header says trials stopped at detection only when some were (an older results file: no)
+    assert "A trial stops" not in bench_deep.markdown(runs, small, "cmd")
+    runs = [replace(r, returncode=-9) for r in runs]
+    text = bench_deep.markdown(runs, small, "cmd")
+    assert "A trial stops at its first detection" in text
+    first, second = (line for line in text.splitlines() if line.startswith(f"| {scenario} "))
+    cells = first.strip("|").split("|")
+    assert [c.strip() for c in cells[1:6]] == ["3.0 (3/3)", "3.0 (3/3)", *["n/a (no scenario op)"] * 3]
+    assert [c.strip() for c in cells[7:]] == ["n/a"] * 3  # no verdict against paper, hypothesis, uniform
+    assert second.count("n/a") == 6 and "| 0.50 | 0.50 |" in second  # no start-up, no search verdict
+    move = next(line for line in text.splitlines() if line.startswith("| silent_clamp "))
+    assert "n/a" not in move
+    bench_deep.plot(runs, small, tmp_path / "zoo.png")
+    assert (tmp_path / "zoo.png").is_file()

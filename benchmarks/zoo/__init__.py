@@ -193,6 +193,7 @@ STATEFUL: tuple[Bug, ...] = (
 ``--op move`` (one call on a fresh group) is expected to miss them; ``--op scenario`` to find them."""
 
 ZOO: tuple[Bug, ...] = (*ONE_CALL, *STATEFUL)
+"""Every zoo bug: those one call shows, then the stateful ones."""
 
 DEEP: tuple[Bug, ...] = (
     Bug(
@@ -275,7 +276,6 @@ DEEP: tuple[Bug, ...] = (
 )
 """Deep bugs (issue 11, ``benchmarks/zoo/deep.py``): faults confined to narrow regions of
 the input space, for ``benchmarks.bench_deep``; not part of ``ZOO``'s runs."""
-"""Every zoo bug: those one call shows, then the stateful ones."""
 
 CONTROL = Bug("control", "the unmodified twin: no fault", "-")
 
