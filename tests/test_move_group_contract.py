@@ -98,7 +98,20 @@ def test_cartesian_paths_agree(robot: str) -> None:
         ta, fa = a.compute_cartesian_path(waypoints, step, jump)
         tb, fb = b.compute_cartesian_path(waypoints, step, jump)
         assert a.get_current_joint_values() == before == b.get_current_joint_values()  # nothing moved
-        assert fa == fb, case
+        fractions.append(fa)
+        lengths.append(len(ta))
+        if fa != fb:
+            # KDL's rotation dead zone again: the points differ by ~1e-6 rad, and near an IK branch
+            # point the next solve from the two seeds lands on different branches, so one path
+            # jumps (and is cut) a step before the other. Both cut, at consecutive points; the
+            # shared prefix reaches the same poses.
+            assert robot in DEAD_ZONE_ROBOTS and jump > 0.0, (case, fa, fb)
+            assert max(fa, fb) < 1.0 and abs(len(ta) - len(tb)) == 1, (case, fa, fb, len(ta), len(tb))
+            for qa, qb in zip(ta.positions, tb.positions, strict=False):
+                distance, angle = pose_gap(b._model, qa, qb)
+                assert distance <= REACHED_TOL and angle <= REACHED_TOL, (case, distance, angle)
+            explained += 1
+            continue
         assert len(ta) == len(tb), case
         assert ta.joint_names == tb.joint_names
         for traj, g in ((ta, a), (tb, b)):
@@ -119,8 +132,6 @@ def test_cartesian_paths_agree(robot: str) -> None:
         if robot not in DEAD_ZONE_ROBOTS:  # elsewhere IK agrees to ~1e-13: so do the timings
             for name in TIMED:
                 assert np.max(np.abs(getattr(ta, name) - getattr(tb, name))) <= TIMING_TOL, (case, name)
-        fractions.append(fa)
-        lengths.append(len(ta))
     # the sample is not trivial: whole paths, cut paths and long paths
     assert sum(f == 1.0 for f in fractions) >= 10 and sum(0.0 < f < 1.0 for f in fractions) >= 3
     assert max(lengths) >= 50
