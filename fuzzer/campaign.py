@@ -24,6 +24,7 @@ from fuzzer import reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
+from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import bag_seeds, make_seeds, prescan, space_filling_seeds, write_seeds
 from fuzzer.input.testcase import TestCase
 from fuzzer.processes import (
@@ -96,7 +97,7 @@ def field_types(session: Session, msg_type: str, prefix: str = "") -> dict[str, 
 
 def interesting_values(session: Session) -> list[float]:
     """Joint limits and the tolerance band around them: where divergences live."""
-    eps = (0.0, 1e-9, 1e-6, 5e-5, 1e-4, 1.5e-4)
+    eps = sorted(OFFSETS)
     values: list[float] = []
     for lim in session.reference.joint_limits:
         for bound in (lim.lower, lim.upper):
@@ -156,6 +157,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         if options.seeds is not None
         else (0 if usable or len(folders) < len(options.corpus) else 32)
     )
+    filling: list[TestCase] = []
     if wanted and not child and folders:
         generated = make_seeds(session, wanted, options.seed)
         # the full engine's corpus also starts with as many points covering the joint space
@@ -206,7 +208,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     features = Features()
     harness = Harness(
         **_scenario_mutators(session),
-        **_search(session, options, features),
+        **_search(session, options, features, seeded=len(filling)),
         evaluator=session.evaluator(),
         store=store,
         features=features,
@@ -380,11 +382,16 @@ SWEEP_SEED = 0x5EED
 """Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
 
 
-def _search(session: Session, options: CampaignOptions, features: Any) -> dict[str, Any]:
+def _search(
+    session: Session, options: CampaignOptions, features: Any, seeded: int = 0
+) -> dict[str, Any]:
     """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
-    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither."""
+    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither.
+    The fresh inputs carry the boundary probes the space-filling seeds did not (the first round
+    went into the first ``seeded`` space-filling seeds, if this campaign wrote them)."""
     if options.mutator != "rrosfuzz":
         return {}
+    from fuzzer.generation.boundary import Boundary
     from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
@@ -402,8 +409,15 @@ def _search(session: Session, options: CampaignOptions, features: Any) -> dict[s
         return {"float_tracer": FloatCompareTracer(features)}
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=options.seed)
+    first_round = Boundary(facts.lower, facts.upper, rounds=1).left
     fresh = fresh_inputs(
-        config.op, config.message_type, stream, facts.joint_names, facts.reachable, config.max_steps
+        config.op,
+        config.message_type,
+        stream,
+        facts.joint_names,
+        facts.reachable,
+        config.max_steps,
+        Boundary(facts.lower, facts.upper, start=min(seeded, first_round)),
     )
     sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(tuple(weights), weights), fresh)
     search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}

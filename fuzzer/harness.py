@@ -316,7 +316,7 @@ class Harness:
             try:
                 fresh = self._fresh(parent, rng)
                 if fresh is not None:
-                    message, name = fresh, SPACEFILL
+                    message, name = fresh
                 else:
                     wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
                     message, name = self.mutate_message(parent.message, ctx, wanted)
@@ -333,7 +333,7 @@ class Harness:
             a, b = self._parent(data1, rng, pool=False), self._parent(data2, rng, pool=False)
             fresh = self._fresh(a, rng)
             if fresh is not None:
-                return self._emit(a.child(fresh, SPACEFILL), a, max_size, data1)
+                return self._emit(a.child(*fresh), a, max_size, data1)
             ctx = self.context
             ctx.rng = rng
             message = self.crossover_message(a.message, b.message, ctx)
@@ -354,8 +354,9 @@ class Harness:
             return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
         return case
 
-    def _fresh(self, parent: TestCase, rng: random.Random) -> dict[str, Any] | None:
-        """A space-filling input made from ``parent`` when the source bandit picks one."""
+    def _fresh(self, parent: TestCase, rng: random.Random) -> tuple[dict[str, Any], str] | None:
+        """A space-filling input made from ``parent`` and its lineage name, when the source
+        bandit picks one."""
         if self.sources is None or self.sources.source.choose(rng) != SPACEFILL:
             return None
         return self.sources.fresh(parent.message, rng)

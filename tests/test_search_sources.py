@@ -5,6 +5,8 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
+import pytest
+
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.spacefill import SpaceFill, fresh_inputs, scenario_with_configuration
 from fuzzer.harness import Harness
@@ -109,8 +111,9 @@ def test_a_scenario_without_targets_gets_a_state_and_a_pose_goal_from_it() -> No
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=3)
     fresh = fresh_inputs("scenario", "", stream, facts.joint_names, facts.reachable, 16)
-    out = fresh({"steps": [{"topic": "/stop", "msg": {}}]}, random.Random(1))
-    assert out is not None
+    made = fresh({"steps": [{"topic": "/stop", "msg": {}}]}, random.Random(1))
+    assert made is not None and made[1] == SPACEFILL
+    out = made[0]
     topics = [s["topic"] for s in out["steps"]]
     assert [t for t in topics if t != "/stop"] == ["/joint_target", "/go", "/pose_target", "/go"]
     goal = next(s["msg"] for s in out["steps"] if s["topic"] == "/pose_target")
@@ -119,7 +122,8 @@ def test_a_scenario_without_targets_gets_a_state_and_a_pose_goal_from_it() -> No
 
 
 def test_the_corpus_starts_with_space_filling_seeds_beside_the_hypothesis_ones() -> None:
-    from fuzzer.generation.corpus import space_filling_seeds
+    from fuzzer.generation.boundary import probes
+    from fuzzer.generation.corpus import SPACEFILL_SEED, space_filling_seeds
 
     session = Session.open(RunConfig(op="move"))
     seeds = space_filling_seeds(session, 16, 1, first=32)
@@ -127,15 +131,26 @@ def test_the_corpus_starts_with_space_filling_seeds_beside_the_hypothesis_ones()
     assert [s.sequence for s in seeds] == list(range(32, 48)) and {s.origin for s in seeds} == {"spacefill"}
     positions = [tuple(s.message["position"]) for s in seeds]
     assert len(set(positions)) == 16
-    for case, values in zip(seeds, positions, strict=True):
+    # each seed is a Sobol point; the first ones carry the first round of boundary probes, in
+    # order: one joint 5e-5 past a limit (two sides of six joints: twelve)
+    facts = session.facts()
+    stream = SpaceFill(facts.lower, facts.upper, seed=1 + SPACEFILL_SEED)
+    points = [stream.next() for _ in range(16)]
+    edges = probes(facts.lower, facts.upper)[:12]
+    for j, e in edges:
+        assert min(abs(e - limits[j].lower), abs(e - limits[j].upper)) == pytest.approx(5e-5, abs=1e-12)
+    for case, values, point, (j, edge) in zip(seeds, positions, points, edges, strict=False):
         session.validate(case.message)
-        assert all(lim.lower <= v <= lim.upper for v, lim in zip(values, limits, strict=True))
+        assert values[j] == edge and not limits[j].lower <= edge <= limits[j].upper
+        assert values[:j] + values[j + 1 :] == point[:j] + point[j + 1 :]
+    assert positions[12:] == points[12:]
     # stratified: each of the 16 points in its own sixteenth of every joint's range
     for j, lim in enumerate(limits):
-        bins = {int(16 * (v[j] - lim.lower) / (lim.upper - lim.lower)) for v in positions}
+        bins = {int(16 * (v[j] - lim.lower) / (lim.upper - lim.lower)) for v in points}
         assert len(bins) == 16
     assert [s.message for s in space_filling_seeds(session, 16, 1, first=32)] == [s.message for s in seeds]
     assert space_filling_seeds(session, 16, 2)[0].message != seeds[0].message
     assert space_filling_seeds(Session.open(RunConfig(op="scenario")), 8, 1) == []
     ik = space_filling_seeds(Session.open(RunConfig(op="ik")), 4, 1)
     assert len(ik) == 4 and all(set(s.message["pose"]) == {"position", "orientation"} for s in ik)
+

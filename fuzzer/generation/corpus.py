@@ -43,9 +43,12 @@ def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> 
     """``n`` seeds covering the joint space (issue 11, "beside the Hypothesis seeds"): the first
     points of a scrambled Sobol sequence inside the limits (``fuzzer.generation.spacefill``), each in
     the zero message of the campaign's type (a JointState's positions, a Float64MultiArray's
-    data, for IK the pose FK gives the configuration). Numbered from ``first``, origin
-    ``spacefill``. None at all for a scenario (its configurations come during the campaign), a chain
-    without joints or a message type without a joint-space or pose field."""
+    data, for IK the pose FK gives the configuration), the first round of boundary probes put
+    into the first of them (one joint of each 5e-5 past a limit: ``fuzzer.generation.boundary``;
+    as many as the robot has finite limits). Numbered from ``first``,
+    origin ``spacefill``. None at all for a scenario (its configurations come during the
+    campaign), a chain without joints or a message type without a joint-space or pose field."""
+    from fuzzer.generation.boundary import Boundary
     from fuzzer.generation.spacefill import SpaceFill, configuration_message
 
     config = session.config
@@ -54,12 +57,12 @@ def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> 
         return []
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=seed + SPACEFILL_SEED)
+    probes = Boundary(facts.lower, facts.upper, rounds=1)
     base = session.registry.default(config.message_type)
     out = []
     for i in range(n):
-        message = configuration_message(
-            config.message_type, base, stream.next(), facts.joint_names, facts.reachable
-        )
+        values, _ = probes.apply(stream.next())
+        message = configuration_message(config.message_type, base, values, facts.joint_names, facts.reachable)
         if message is None:
             return []
         out.append(TestCase(config.message_type, message, sequence=first + i, origin="spacefill"))

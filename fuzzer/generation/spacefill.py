@@ -25,6 +25,9 @@ from typing import Any
 import numpy as np
 from scipy.stats import qmc
 
+from fuzzer.generation.boundary import Boundary
+from fuzzer.selection.state import BOUNDARY, SPACEFILL
+
 BLOCK = 256
 """Points drawn at a time (a power of two keeps Sobol's balance properties per block)."""
 
@@ -198,8 +201,13 @@ def fresh_inputs(
     joint_names: Sequence[str],
     reachable: Reachable | None = None,
     max_steps: int = 16,
-) -> Callable[[dict[str, Any], random.Random], dict[str, Any] | None]:
-    """The harness's ``Sources.fresh``: the parent message carrying the stream's next point."""
+    boundary: Boundary | None = None,
+) -> Callable[[dict[str, Any], random.Random], tuple[dict[str, Any], str] | None]:
+    """The harness's ``Sources.fresh``: the parent message carrying the stream's next point, and
+    its lineage name ``spacefill``. While ``boundary`` has probes left, every other call instead
+    carries the last point with one joint on an edge, named ``spacefill:boundary``
+    (``fuzzer.generation.boundary``), and the stream does not advance."""
+    last: list[tuple[float, ...]] = []
 
     def goal(values: tuple[float, ...]) -> dict[str, Any]:
         # the tip at a configuration a tenth of the way from ``values`` toward the stream's next
@@ -210,12 +218,22 @@ def fresh_inputs(
         assert pose is not None
         return pose
 
-    def fresh(message: dict[str, Any], rng: random.Random) -> dict[str, Any] | None:
-        values = stream.next()
+    def fresh(message: dict[str, Any], rng: random.Random) -> tuple[dict[str, Any], str] | None:
+        probed = boundary is not None and boundary.left > 0 and len(last) == 1
+        if probed:
+            assert boundary is not None
+            values, _ = boundary.apply(last.pop())
+        else:
+            values = stream.next()
+            last[:] = [values]
         if op == "scenario":
-            return scenario_with_configuration(
+            out = scenario_with_configuration(
                 message, values, joint_names, rng, max_steps, goal if reachable is not None else None
             )
-        return configuration_message(msg_type, message, values, joint_names, reachable)
+        else:
+            out = configuration_message(msg_type, message, values, joint_names, reachable)
+        if out is None:
+            return None
+        return out, (BOUNDARY if probed else SPACEFILL)
 
     return fresh

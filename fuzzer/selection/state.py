@@ -19,6 +19,10 @@ POOL_SIZE = 64
 SPACEFILL = "spacefill"
 """The arm (and lineage name) of a fresh space-filling input (``fuzzer.generation.spacefill``)."""
 
+BOUNDARY = f"{SPACEFILL}:boundary"
+"""The lineage name of a space-filling input carrying a boundary probe (``fuzzer.generation.boundary``);
+the ``spacefill`` arm made it."""
+
 
 MUTATE = "mutate"
 """The arm of a mutated (or crossed-over) corpus input."""
@@ -38,18 +42,19 @@ class Sources:
         Arms ``spacefill`` and ``mutate``; it also decides libFuzzer's crossovers.
     mutators : Bandit
         One arm per registered mutator.
-    fresh : callable (message, rng) -> message or None
-        A copy of the parent carrying the next space-filling configuration (None: not
-        applicable to this message; the harness then mutates).
+    fresh : callable (message, rng) -> (message, lineage name) or None
+        A copy of the parent carrying the next space-filling configuration, named ``spacefill``
+        or ``spacefill:boundary`` (None: not applicable to this message; the harness then
+        mutates).
     """
 
     source: Bandit
     mutators: Bandit
-    fresh: Callable[[dict[str, Any], random.Random], dict[str, Any] | None]
+    fresh: Callable[[dict[str, Any], random.Random], tuple[dict[str, Any], str] | None]
 
     def reward(self, strategy: str, paid: bool) -> None:
         """Credit the arms that made an input whose last step was ``strategy``."""
-        if strategy == SPACEFILL:
+        if strategy.partition(":")[0] == SPACEFILL:
             self.source.reward(SPACEFILL, paid)
             return
         self.source.reward(MUTATE, paid)

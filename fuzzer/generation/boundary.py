@@ -1,0 +1,108 @@
+"""Boundary probes: the first space-filling inputs of a campaign each put one joint on an edge.
+
+Space-filling points (``fuzzer.generation.spacefill``) lie inside the limits and never on a round
+number, while many real faults sit exactly there: a bounds check with the wrong tolerance, a
+target outside the limits clamped or set anyway, a continuous joint at exactly pi, a missing
+``lower`` read as unlimited. Mutation reaches them only when an ``interesting`` mutation picks
+the right value for the right joint (about one in a hundred of those mutations). This is AFL's
+deterministic interesting-value stage, done once per process and carried by space-filling
+points: a probe replaces one joint of a point with an edge value, round by round (every joint
+and side at the first offset, then every joint at the next...), so each probe is otherwise an
+ordinary in-limits configuration.
+
+The space-filling seeds (``fuzzer.generation.corpus``) carry the first round: 5e-5 past a
+limit, inside MoveIt's goal tolerance, so a correct target still accepts the input and the
+seed's other joints still count. The rest come during the campaign
+(``fuzzer.generation.spacefill.fresh_inputs``) as inputs of their own, every other fresh input,
+each on the last plain point: a probe past the tolerance is rejected as a whole, so it must not
+use up a point of the space-filling sequence. An input that carries one has the lineage
+``spacefill:boundary`` (``fuzzer.selection.state.BOUNDARY``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+OFFSETS = (5e-5, 1.5e-4, 0.0, 1e-4, 1e-6, 1e-9)
+"""How far past a finite limit each round puts a joint (rad or m), in round order: inside
+MoveIt's default goal tolerance (1e-4: accepted by a correct bounds check, rejected by one with
+a tighter tolerance), just beyond it (rejected, or clamped, or set anyway), exactly on the limit,
+on the tolerance itself, and the float-noise distances."""
+
+CONTINUOUS = (math.pi, -math.pi, 0.0, math.pi / 2, -math.pi / 2, 2 * math.pi)
+"""The values of a joint without limits (a continuous joint) in the same rounds: the wrap
+points first (``(-pi, pi]`` against ``[-pi, pi)``)."""
+
+
+def probes(lower: Sequence[float], upper: Sequence[float]) -> list[tuple[int, float]]:
+    """Every probe as (joint index, value), in the order they are used.
+
+    Parameters
+    ----------
+    lower, upper : sequence of float, length dof
+        Joint limits (rad, m); infinite on a side without a limit.
+
+    Returns
+    -------
+    list of (int, float)
+        Round ``k`` holds, joint by joint, ``upper + OFFSETS[k]`` and ``lower - OFFSETS[k]``
+        for each finite bound, and ``CONTINUOUS[k]`` for a joint with neither bound.
+    """
+    if len(lower) != len(upper):
+        raise ValueError("probes need lower and upper limits of the same length")
+    out: list[tuple[int, float]] = []
+    for k, offset in enumerate(OFFSETS):
+        for j, (lo, hi) in enumerate(zip(lower, upper, strict=True)):
+            values = [hi + offset] if math.isfinite(hi) else []
+            if math.isfinite(lo):
+                values.append(lo - offset)
+            if not values:
+                values = [CONTINUOUS[k]]
+            out.extend((j, v) for v in values)
+    return out
+
+
+@dataclass
+class Boundary:
+    """The probes of one process, handed out in order until they run out.
+
+    Parameters
+    ----------
+    lower, upper : sequence of float, length dof
+        Joint limits (see :func:`probes`).
+    start : int
+        Probes already used elsewhere (by the space-filling seeds this campaign wrote).
+    rounds : int
+        How many rounds to hand out at most (default all; the seeds take one).
+    """
+
+    lower: Sequence[float]
+    upper: Sequence[float]
+    start: int = 0
+    rounds: int = len(OFFSETS)
+    items: list[tuple[int, float]] = field(init=False, repr=False)
+    used: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.items = probes(self.lower, self.upper)
+        self.items = self.items[: len(self.items) * max(0, self.rounds) // len(OFFSETS)]
+        self.used = max(0, self.start)
+
+    @property
+    def left(self) -> int:
+        """Probes not handed out yet."""
+        return max(0, len(self.items) - self.used)
+
+    def apply(self, values: Sequence[float]) -> tuple[tuple[float, ...], bool]:
+        """``values`` with the next probe's joint set to its value, and whether a probe was
+        left to apply (if not, ``values`` unchanged)."""
+        if self.used >= len(self.items):
+            return tuple(values), False
+        j, value = self.items[self.used]
+        self.used += 1
+        out = list(values)
+        if j < len(out):
+            out[j] = value
+        return tuple(out), True
