@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -38,11 +39,7 @@ def sidecars(artifacts: Path) -> list[dict]:  # type: ignore[type-arg]
     return [json.loads(p.read_text()) for p in sorted(artifacts.glob("crash-*.json"))]
 
 
-def test_finds_a_planted_divergence_within_a_bounded_budget(tmp_path: Path) -> None:
-    """Tolerance 1e-5 instead of 1e-4: only values within 1e-4 of a limit show it,
-    which the seeds never contain, so mutation has to find them."""
-    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
-    run = fuzz(str(corpus), "-runs=5000", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}")
+def _assert_planted(run: subprocess.CompletedProcess[str], artifacts: Path) -> list[dict]:  # type: ignore[type-arg]
     assert run.returncode == 1, run.stderr[-2000:]  # new divergences: exit 1
     assert "campaign summary" in run.stderr
     found = sidecars(artifacts)
@@ -50,11 +47,41 @@ def test_finds_a_planted_divergence_within_a_bounded_budget(tmp_path: Path) -> N
     for sidecar in found:
         assert sidecar["signature"]["kind"] == "status"
         assert sidecar["signature"]["outcome_b"] == "rejected:OutOfBoundsError:30"
-        assert sidecar["lineage"], "found by mutation, not by a seed"
+    return found
+
+
+def test_finds_a_planted_divergence_within_a_bounded_budget(tmp_path: Path) -> None:
+    """Tolerance 1e-5 instead of 1e-4: only values 1e-5..1e-4 past a limit show it. Hypothesis'
+    seeds stay within the limits; the first round of boundary probes (5e-5 past a limit,
+    ``fuzzer.generation.boundary``) is in the space-filling seeds, so those find it."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    run = fuzz(str(corpus), "-runs=5000", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}")
+    found = _assert_planted(run, artifacts)
+    assert any(not s["lineage"] and s["testcase"]["origin"] == "spacefill" for s in found)
     limits = python_impl.RobotModel(default_robot_path()).joint_limits
-    for seed in corpus.glob("seed-*"):  # seeds stay within the limits, where the fault cannot show
-        values = decode(seed.read_bytes()).message["position"]
-        assert all(lim.lower <= v <= lim.upper for v, lim in zip(values, limits, strict=True))
+    outside = 0
+    for seed in corpus.glob("seed-*"):
+        case = decode(seed.read_bytes())
+        values = case.message["position"]
+        pairs = zip(values, limits, strict=True)
+        past = [max(lim.lower - v, v - lim.upper) for v, lim in pairs if not lim.lower <= v <= lim.upper]
+        if case.origin == "hypothesis":  # Hypothesis' seeds stay within the limits, where it cannot show
+            assert not past
+        else:  # a space-filling seed leaves them by one probe at most, 5e-5 on one joint
+            assert case.origin == "spacefill" and len(past) <= 1 and all(abs(p - 5e-5) < 1e-12 for p in past)
+            outside += len(past)
+    assert outside == 2 * len(limits)  # every joint and side once
+
+
+def test_finds_a_planted_divergence_from_the_hypothesis_seeds_alone(tmp_path: Path) -> None:
+    """From the shipped corpus (Hypothesis seeds, all within the limits: no seeds are written),
+    the campaign's own inputs have to find it: boundary probes or mutations."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    shutil.copytree(ROOT / "corpus", corpus)
+    run = fuzz(str(corpus), "-runs=5000", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}")
+    for sidecar in _assert_planted(run, artifacts):
+        assert sidecar["lineage"], "found by a seed"
+    assert sorted(corpus.glob("seed-*")) == sorted(corpus / p.name for p in (ROOT / "corpus").glob("seed-*"))
 
 
 def test_crash_files_replay_their_verdict(tmp_path: Path) -> None:
