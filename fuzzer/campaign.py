@@ -391,7 +391,7 @@ def _search(
     went into the first ``seeded`` space-filling seeds, if this campaign wrote them)."""
     if options.mutator != "rrosfuzz":
         return {}
-    from fuzzer.generation.boundary import Boundary
+    from fuzzer.generation.boundary import Boundary, probes
     from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
@@ -409,7 +409,7 @@ def _search(
         return {"float_tracer": FloatCompareTracer(features)}
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=options.seed)
-    first_round = Boundary(facts.lower, facts.upper, rounds=1).left
+    first_round = len(probes(facts.lower, facts.upper, rounds=1))
     fresh = fresh_inputs(
         config.op,
         config.message_type,

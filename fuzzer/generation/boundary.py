@@ -1,4 +1,4 @@
-"""Boundary probes: the first space-filling inputs of a campaign each put one joint on an edge.
+"""Boundary probes: space-filling points with one joint put on an edge, once per process.
 
 Space-filling points (``fuzzer.generation.spacefill``) lie inside the limits and never on a round
 number, while many real faults sit exactly there: a bounds check with the wrong tolerance, a
@@ -36,13 +36,17 @@ CONTINUOUS = (math.pi, -math.pi, 0.0, math.pi / 2, -math.pi / 2, 2 * math.pi)
 points first (``(-pi, pi]`` against ``[-pi, pi)``)."""
 
 
-def probes(lower: Sequence[float], upper: Sequence[float]) -> list[tuple[int, float]]:
-    """Every probe as (joint index, value), in the order they are used.
+def probes(
+    lower: Sequence[float], upper: Sequence[float], rounds: int = len(OFFSETS)
+) -> list[tuple[int, float]]:
+    """The probes of the first ``rounds`` rounds as (joint index, value), in the order they are used.
 
     Parameters
     ----------
     lower, upper : sequence of float, length dof
         Joint limits (rad, m); infinite on a side without a limit.
+    rounds : int
+        How many rounds (default all; the seeds take one).
 
     Returns
     -------
@@ -53,7 +57,7 @@ def probes(lower: Sequence[float], upper: Sequence[float]) -> list[tuple[int, fl
     if len(lower) != len(upper):
         raise ValueError("probes need lower and upper limits of the same length")
     out: list[tuple[int, float]] = []
-    for k, offset in enumerate(OFFSETS):
+    for k, offset in enumerate(OFFSETS[: max(0, rounds)]):
         for j, (lo, hi) in enumerate(zip(lower, upper, strict=True)):
             values = [hi + offset] if math.isfinite(hi) else []
             if math.isfinite(lo):
@@ -86,8 +90,7 @@ class Boundary:
     used: int = field(init=False)
 
     def __post_init__(self) -> None:
-        self.items = probes(self.lower, self.upper)
-        self.items = self.items[: len(self.items) * max(0, self.rounds) // len(OFFSETS)]
+        self.items = probes(self.lower, self.upper, self.rounds)
         self.used = max(0, self.start)
 
     @property
