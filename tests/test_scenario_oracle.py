@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
 import pytest
 
 from fuzzer.execution.evaluate import Evaluator, history_of, stored_call
@@ -16,6 +17,7 @@ from fuzzer.input.mapping import MoveCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
 from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
+from fuzzer.scenario.oracle_ik import absolute
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from robot_api import robots
 
@@ -495,3 +497,113 @@ def test_scenario_history_round_trips_through_a_sidecar() -> None:
         history_of(
             {"history": [{"kind": "ScenarioCall", "message": {"steps": [{"topic": "/nope", "msg": {}}]}}]}
         )
+
+
+# -- accelerations at a switch of the trapezoid (fuzzer.scenario.oracle_switch) ---------------
+
+
+def profile(switch: float, dt: float = 0.01, m: int = 8, a: float = 1.0, after: float = 0.0) -> Outcome:
+    """One joint (of FACTS' two) accelerating at ``a`` up to ``switch``, then at ``after``;
+    every sample on the switch reports the phase after it (``t < switch``)."""
+    t = np.arange(m) * dt
+    v = np.where(t < switch, a * t, a * switch + after * (t - switch))
+    acc = np.where(t < switch, a, after)
+    return ok(
+        success=(1.0,),
+        trajectory__time_from_start=tuple(t),
+        trajectory__positions=(0.0,) * (2 * m),
+        trajectory__velocities=tuple(x for s in v for x in (s, 0.0)),
+        trajectory__accelerations=tuple(x for s in acc for x in (s, 0.0)),
+        joint_values=(0.0, 0.0),
+    )
+
+
+def at_sample(outcome: Outcome, i: int, value: float) -> Outcome:
+    acc = list(outcome.values["trajectory.accelerations"])
+    acc[2 * i] = value
+    return with_value(outcome, "trajectory.accelerations", tuple(acc))
+
+
+@pytest.mark.parametrize(("after", "label"), [(0.0, "cruise"), (-1.0, "decelerate")])
+def test_a_sample_on_a_switch_agrees_with_either_sides_acceleration(after: float, label: str) -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.0, 0.0), joint_values=(0.0, 0.0))  # the plan's last point
+    right = profile(0.03, after=after)  # sample 3 is on the switch: it reports `after`
+    left = at_sample(right, 3, 1.0)
+    raw = absolute(
+        "",
+        np.asarray(left.values["trajectory.accelerations"]),
+        np.asarray(right.values["trajectory.accelerations"]),
+        1e-6,
+        "",
+    )
+    assert raw is not None and raw.difference == pytest.approx(1.0 - after), label
+    assert judge(call, run(first, right), run(first, left), FACTS_ANY_GOAL).kind is Kind.AGREE
+    assert judge(call, run(first, left), run(first, right), FACTS_ANY_GOAL).kind is Kind.AGREE
+
+
+@pytest.mark.parametrize("switch", [0.025, 0.03 + 1e-6])
+def test_a_switch_between_samples_reported_a_sample_early_diverges(switch: float) -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.0, 0.0), joint_values=(0.0, 0.0))  # the plan's last point
+    true = profile(switch)  # switch strictly inside (0.02, 0.03) or (0.03, 0.04)
+    i = 2 if switch < 0.03 else 3  # the last sample before it, still accelerating
+    early = at_sample(true, i, 0.0)
+    c = judge(call, run(first, true), run(first, early), FACTS_ANY_GOAL)
+    assert (c.kind, c.field, c.joints) == (Kind.VALUE, "plan.trajectory.accelerations", (0,))
+
+
+def test_a_value_on_a_switch_that_is_neither_side_diverges() -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.0, 0.0), joint_values=(0.0, 0.0))  # the plan's last point
+    right = profile(0.03)
+    for value in (0.5, 2.0, -1.0):
+        c = judge(call, run(first, right), run(first, at_sample(right, 3, value)), FACTS_ANY_GOAL)
+        assert (c.kind, c.field) == (Kind.VALUE, "plan.trajectory.accelerations"), value
+
+
+def test_the_switch_rule_on_live_targets_other_side_agrees_early_diverges() -> None:
+    # joint 1 moves 1 rad at 3 rad/s x 0.01 and 1 rad/s^2: ta = 0.03 s, exactly sample 3
+    steps = [
+        live("velocity_scaling", data=0.01),
+        live("joint_target", position=[1.0, 0, 0, 0, 0, 0]),
+        live("plan"),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    plugins = "tests.plugins.scenario_faults"
+    path = robots.resolve("probot_anno")
+    plans = []
+    for spec in ("python", f"{plugins}:left_side_at_switch"):
+        runner = Runner.create(spec, path, None)
+        group = runner.impl.MoveGroup(runner.model)
+        group.set_max_velocity_scaling_factor(0.01)
+        group.set_joint_value_target([1.0, 0, 0, 0, 0, 0])
+        plans.append(group.plan().trajectory.accelerations)
+    assert (plans[0][3, 0], plans[1][3, 0]) == (0.0, 1.0)  # the two sides of the switch, as planned
+    assert (
+        evaluator("scenario", f"{plugins}:left_side_at_switch").evaluate(case, validated=True).comparison.kind
+        is Kind.AGREE
+    )
+    c = evaluator("scenario", f"{plugins}:early_switch").evaluate(case, validated=True).comparison
+    assert (c.kind, c.step, c.field) == (Kind.VALUE, 2, "plan.trajectory.accelerations")
+
+
+def test_ik_answers_one_rounding_apart_on_a_switch_agree() -> None:
+    # found by `make run` (signature 2a3ec404f1fd): the IK answers differ by ~1e-15 rad, so the
+    # native ta is 0.030000000000000002 and the twin's 0.03, and sample 3 (t = 0.03) falls on
+    # either side of the switch to cruise: accelerations 1 vs 0 rad/s^2 there, all else equal
+    point = {"header": HEADER}
+    steps = [
+        live("position_target", **point, point={"x": -0.2284, "y": 0.1845, "z": 0.3493}),
+        live("velocity_scaling", data=0.01),
+        live(
+            "position_target",
+            **point,
+            point={"x": 0.21652527735553875, "y": -2.4161803651909497e-06, "z": 0.5792852939996957},
+        ),
+        live("plan"),
+    ]
+    c = evaluator("scenario", "python").evaluate(
+        TestCase("rrosfuzz/Scenario", {"steps": steps}), validated=True
+    )
+    assert c.comparison.kind is Kind.AGREE, c.comparison

@@ -15,7 +15,9 @@ trajectory.points          exact                               0           point
 trajectory.time_from_start absolute per point                  1e-9        s
 trajectory.positions       per point, as joint values          campaign    rad (m)
 trajectory.velocities      absolute per point and joint        1e-6        rad/s (m/s)
-trajectory.accelerations   absolute per point and joint        1e-6        rad/s^2 (m/s^2)
+trajectory.accelerations   absolute per point and joint (at    1e-6        rad/s^2 (m/s^2)
+                           a switch of the profile, either
+                           side: ``oracle_switch``)
 joint_target, named        as joint values                     campaign    rad (m)
 joint_values, position,    ``fuzzer.execution.oracle.compare`` (modulo   campaign    rad (m), m, rad
 orientation                2pi, q ~ -q, canonical boundary)
@@ -41,6 +43,7 @@ import numpy as np
 from fuzzer.execution import oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.execution.tolerance import Tolerance
+from fuzzer.scenario import oracle_switch
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import (
     FRACTION_TOLERANCE,
@@ -111,6 +114,21 @@ def _rows(
     return replace(worst, joints=joints, largest=max(c.largest for c in found))
 
 
+def _switches(a: Outcome, b: Outcome, va: np.ndarray, vb: np.ndarray, dof: int) -> np.ndarray:
+    """``vb`` (accelerations) with the entries on a switch of the profile taken from ``va``
+    (``fuzzer.scenario.oracle_switch``); unchanged when they agree or a profile is incomplete."""
+    if absolute("", va, vb, ACCELERATION_TOLERANCE, "") is None:
+        return vb
+    profiles = []
+    for o, acc in ((a, va), (b, vb)):
+        times = np.asarray(o.values.get("trajectory.time_from_start", ()), dtype=float)
+        speeds = np.asarray(o.values.get("trajectory.velocities", ()), dtype=float)
+        if not (times.size >= 3 and speeds.size == acc.size == times.size * dof):
+            return vb
+        profiles.append((times, speeds.reshape(-1, dof), acc.reshape(-1, dof)))
+    return oracle_switch.canonical(profiles[0], profiles[1], ACCELERATION_TOLERANCE).reshape(-1)
+
+
 def _unit(base: str, facts: ScenarioFacts, joints: tuple[int, ...]) -> str:
     linear = bool(joints) and all(j < len(facts.prismatic) and facts.prismatic[j] for j in joints)
     return base.replace("rad", "m") if linear else base
@@ -169,6 +187,8 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
         elif key in ("trajectory.velocities", "trajectory.accelerations"):
             speed = key.endswith("velocities")
             unit, limit = ("rad/s", VELOCITY_TOLERANCE) if speed else ("rad/s^2", ACCELERATION_TOLERANCE)
+            if not speed and dof:
+                vb = _switches(a, b, va, vb, dof)
             c = absolute(field_name, va, vb, limit, unit, dof)
             c = c and replace(c, unit=_unit(unit, facts, c.joints))
         elif key == "trajectory.positions" and dof:

@@ -9,15 +9,23 @@ Each is the Python twin with one behaviour changed, exposed as an object with
   state a pose target is planned from flips its own answer (an ill-conditioned divergence).
 * ``no_pose_goal``: pose and position targets never find an IK solution (a status
   divergence that no nudge of the state changes).
+* ``left_side_at_switch``: *not* a fault. A plan's sample that falls exactly on a switch of the
+  trapezoid (``t == ta`` or ``t == total - ta``) reports the acceleration of the phase before
+  it, where the twin reports the phase after it (``t < ta``); both are right.
+* ``early_switch``: each phase's acceleration is reported one sample early (the fault).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
+
 import python_impl
-from robot_api.records import IKResult, IKStatus
+from robot_api.constants import ACCELERATION_LIMIT
+from robot_api.records import IKResult, IKStatus, RobotTrajectory
 
 
 class _StaleGroup(python_impl.MoveGroup):
@@ -59,6 +67,41 @@ class _NoPoseGoalGroup(python_impl.MoveGroup):
         return super()._goal()
 
 
+class _LeftSideGroup(python_impl.MoveGroup):
+    """At a sample exactly on a switch, the acceleration of the phase before it."""
+
+    def _plan(self) -> RobotTrajectory:
+        trajectory = super()._plan()
+        t, acc = trajectory.time_from_start, trajectory.accelerations.copy()
+        delta = trajectory.positions[-1] - trajectory.positions[0]
+        moving = np.abs(delta) > 0.0
+        if len(t) < 3 or not moving.any():
+            return trajectory
+        velocity = np.array([lim.velocity for lim in self._limits])[moving] * self._velocity_scaling
+        vs = float(np.min(velocity / np.abs(delta[moving])))
+        accel = float(np.min(ACCELERATION_LIMIT * self._acceleration_scaling / np.abs(delta[moving])))
+        ta = vs / accel if vs * vs < accel else float(np.sqrt(1.0 / accel))
+        total = 1.0 / vs + ta if vs * vs < accel else 2.0 * ta
+        for i in range(1, len(t) - 1):
+            if t[i] == ta or t[i] == total - ta:
+                acc[i] = acc[i - 1]
+        return dataclasses.replace(trajectory, accelerations=acc)
+
+
+class _EarlySwitchGroup(python_impl.MoveGroup):
+    """Each phase's acceleration one sample early (the fault)."""
+
+    def _plan(self) -> RobotTrajectory:
+        trajectory = super()._plan()
+        acc = trajectory.accelerations.copy()
+        for i in range(len(acc) - 2):  # the last row is the goal, at rest
+            if not np.array_equal(acc[i + 1], acc[i]):
+                acc[i] = acc[i + 1]
+        return dataclasses.replace(trajectory, accelerations=acc)
+
+
 stale_second_go = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_StaleGroup)
 seed_parity_ik = SimpleNamespace(RobotModel=_ParityModel, MoveGroup=python_impl.MoveGroup)
 no_pose_goal = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_NoPoseGoalGroup)
+left_side_at_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_LeftSideGroup)
+early_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_EarlySwitchGroup)
