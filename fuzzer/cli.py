@@ -2,6 +2,7 @@
 
     fuzz_diff.py CORPUS_DIR [CORPUS_DIR...] [-libfuzzer_flag=value ...] [--options]
     fuzz_diff.py CRASH_FILE... [--options]       replay files (like replay, below)
+    fuzz_diff.py show FILE...                    a crash file's test case as JSON
     fuzz_diff.py replay PATH... [--options]      replay files or folders (exit 1 if any diverges)
     fuzz_diff.py triage DIR|CRASH... [--json]    buckets of an artifacts folder, most severe first
     fuzz_diff.py minimize CRASH... [--budget N]  shrink to the simplest input with the same signature
@@ -31,9 +32,10 @@ from fuzzer.input.mapping import DEFAULT_MSG_TYPE, OPS
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT
 from robot_api import robots
 
-SUBCOMMANDS = ("replay", "triage", "minimize", "report", "promote", "coverage", "export-bag", "view")
+SUBCOMMANDS = ("show", "replay", "triage", "minimize", "report", "promote", "coverage", "export-bag", "view")
 COMMANDS_HELP = """\
 commands (fuzz_diff.py COMMAND --help for each):
+  show FILE...          print crash or corpus files' test cases as JSON (read as data, nothing run)
   replay PATH...        replay crash files or folders; exit 1 if any still diverges
   triage DIR|CRASH...   buckets of an artifacts folder, most severe first (--json)
   minimize CRASH...     shrink crash files to the simplest input with the same signature
@@ -527,6 +529,12 @@ def campaign_main(argv: Sequence[str]) -> int:
         from fuzzer.artifacts.manifest import recorded_max_steps
 
         args.max_steps = recorded_max_steps(args.corpus, args.op)
+    files = [p for p in args.corpus if p.is_file()]
+    if files and len(files) < len(args.corpus) and not travel.is_child():  # libFuzzer: "Not a directory"
+        raise UsageError(
+            f"{files[0]}: a file among corpus folders; a campaign takes folders "
+            "(`fuzz_diff.py replay FILE` replays a file, `fuzz_diff.py show FILE` prints it)"
+        )
     config, _ = _config(args)
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)
@@ -563,6 +571,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if argv and argv[0] in SUBCOMMANDS:
             handler = {
+                "show": _show_main,
                 "replay": replay_main,
                 "triage": triage_main,
                 "minimize": minimize_main,
@@ -589,6 +598,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()
         return 141
+
+
+def _show_main(argv: Sequence[str]) -> int:
+    from fuzzer.triage.show import show_main
+
+    return show_main(argv)
 
 
 def _export_bag_main(argv: Sequence[str]) -> int:

@@ -1,0 +1,67 @@
+"""``fuzz_diff.py show FILE...``: a crash or corpus file's test case, printed as JSON.
+
+The file is read as data (at most ``MAX_BYTES`` + 1 bytes, then parsed by
+``fuzzer.input.testcase.decode``); nothing it names is imported or run, and its
+sidecar is not read. One file prints its test case (``msg_type``, ``message``,
+``origin``, ``lineage``...) as one indented JSON object, ready for ``jq``; several
+print one object keyed by path. NaN and infinities print as JSON's usual
+extensions (``NaN``, ``Infinity``), as the files store them.
+
+Exit status: 0 when every file is a test case, 2 (with a message naming the
+file and the problem) when one is not, or cannot be read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from fuzzer import reporting
+from fuzzer.input.paths import PathError, crash_inputs
+from fuzzer.input.testcase import MAX_BYTES, TestCaseError, decode
+
+
+class ShowError(ValueError):
+    """A file that is not a test case, or cannot be read."""
+
+
+def load(path: Path) -> dict[str, Any]:
+    """The test case in ``path`` as its JSON object.
+
+    Raises
+    ------
+    ShowError
+        Naming the file and the problem.
+    """
+    try:
+        with path.open("rb") as stream:
+            data = stream.read(MAX_BYTES + 1)
+    except OSError as exc:
+        raise ShowError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    try:
+        return decode(data).to_json()
+    except TestCaseError as exc:
+        raise ShowError(f"{path}: not an RROSFuzz test case: {exc}") from None
+
+
+def show_main(argv: Sequence[str]) -> int:
+    """``fuzz_diff.py show FILE...``."""
+    parser = argparse.ArgumentParser(
+        prog="fuzz_diff.py show",
+        description="print crash or corpus files' test cases as JSON (read as data: nothing is run)",
+    )
+    parser.add_argument("files", type=Path, nargs="+", help="crash or corpus files, or folders of them")
+    args = parser.parse_args(argv)
+    try:
+        paths = crash_inputs(args.files)
+        cases = {str(p): load(p) for p in paths}
+    except (PathError, ShowError) as exc:
+        sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+        return 2
+    shown: Any = next(iter(cases.values())) if len(cases) == 1 else cases
+    reporting.out(json.dumps(shown, indent=1, ensure_ascii=False))
+    return 0
