@@ -382,20 +382,20 @@ SWEEP_SEED = 0x5EED
 """Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
 
 
-def _search(
-    session: Session, options: CampaignOptions, features: Any, seeded: int = 0
-) -> dict[str, Any]:
+def _search(session: Session, options: CampaignOptions, features: Any, seeded: int = 0) -> dict[str, Any]:
     """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
-    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither.
+    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither,
+    only the tracer's guard against Atheris' leak of comparison results (budget 0).
     The fresh inputs carry the boundary probes the space-filling seeds did not (the first round
     went into the first ``seeded`` space-filling seeds, if this campaign wrote them)."""
-    if options.mutator != "rrosfuzz":
-        return {}
+    from fuzzer.selection.floatcmp import FloatCompareTracer
+
+    if options.mutator != "rrosfuzz":  # no float features; still the guard of Atheris' leak
+        return {"float_tracer": FloatCompareTracer(features, budget=0)}
     from fuzzer.generation.boundary import Boundary, probes
     from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
-    from fuzzer.selection.floatcmp import FloatCompareTracer
     from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
 
     config = session.config

@@ -6,6 +6,7 @@ import sys
 import types
 
 import atheris
+import numpy as np
 
 from fuzzer.selection.floatcmp import FLOAT_CMP, FloatCompareTracer
 from fuzzer.selection.guidance import Features
@@ -53,12 +54,11 @@ def test_install_is_idempotent_and_follows_a_swap() -> None:
     tracer.install()
     tracer.install()
     assert tracer.inner is first
-    assert fake._trace_cmp(1.5, 2.5, 0, 9, False) is True
+    assert fake._trace_cmp(1, 2, 0, 9, False) is True  # int-int: Atheris traces it
     fake._trace_cmp = second  # Atheris swaps in its real function when fuzzing starts
     tracer.install()
-    assert tracer.inner is second and fake._trace_cmp(1.5, 2.5, 0, 9, False) is False
+    assert tracer.inner is second and fake._trace_cmp(1, 2, 0, 9, False) is False
     assert [c[0] for c in calls] == ["first", "second"]
-    assert tracer.sites == {9} and tracer.traced == 2
 
 
 def test_non_float_comparisons_are_left_alone_and_special_floats_bucketed() -> None:
@@ -110,9 +110,43 @@ def test_the_tracer_steps_aside_after_its_budget_until_the_next_input() -> None:
     tracer = FloatCompareTracer(Features(enabled=False), fake)
     tracer.install(budget=3)
     for i in range(5):
-        fake._trace_cmp(0.5 + i, 2.5, 0, 7, False)
-    assert tracer.traced == 3 and len(calls) == 5  # every comparison still reaches Atheris
-    assert fake._trace_cmp is atheris_own
+        assert fake._trace_cmp(0.5 + i, 2.5, 0, 7, False) is (0.5 + i < 2.5)
+    assert tracer.traced == 3 and calls == []  # floats: Atheris only compares them, so we do
+    assert fake._trace_cmp is tracer.guard
+    assert fake._trace_cmp(3, 4, 0, 7, False) is True and calls == ["own"]  # int-int still traced
     tracer.install(budget=3)  # the next input: traced again
     fake._trace_cmp(0.25, 2.5, 0, 7, False)
     assert tracer.traced == 4 and fake._trace_cmp == tracer.trace
+
+
+def _results_alive(compare: object, n: int) -> int:
+    """How many of ``n`` array comparison results are still referenced after the calls."""
+    import gc
+    import weakref
+
+    class Bools(np.ndarray):  # ndarray itself cannot be weakly referenced
+        pass
+
+    refs = []
+    a = np.arange(100.0).view(Bools)
+    for _ in range(n):
+        refs.append(weakref.ref(compare(a, 50.0, 0, 11, False)))  # type: ignore[operator]
+    gc.collect()
+    return sum(r() is not None for r in refs)
+
+
+def test_atheris_leaks_array_comparison_results_and_the_guard_does_not() -> None:
+    """Atheris' ``_trace_cmp`` keeps one reference too many to what it returns (a move campaign
+    ran out of memory after ~100 s); the guard compares arrays itself, with the same result."""
+    assert _results_alive(atheris._trace_cmp, 20) == 20  # the upstream leak, as documented
+    fake = types.SimpleNamespace(_trace_cmp=atheris._trace_cmp)
+    for budget in (0, 64):
+        tracer = FloatCompareTracer(Features(enabled=False), fake, budget=budget)
+        tracer.install()
+        assert _results_alive(fake._trace_cmp, 20) == 0
+        a = np.array([0.5, 2.0, np.nan, 3.0])
+        for opid in range(6):
+            expected = atheris._trace_cmp(a, 2.0, opid, 11, False)
+            assert np.array_equal(fake._trace_cmp(a, 2.0, opid, 11, False), expected)
+        assert fake._trace_cmp(b"ab", b"ac", 0, 11, False) is True
+        assert fake._trace_cmp("b", "a", 4, 11, False) is True

@@ -14,12 +14,24 @@ function. An input that brings a comparison within half the distance of any earl
 the search climbs toward the branch. Exponents are clipped to [-60, 16] (1e-18 .. 65,536); a
 difference of exactly 0 is its own bucket. The cost is one Python call per comparison in the
 instrumented modules (BENCHMARKS.md has the measured overhead), for the first ``PER_INPUT``
-float comparisons of each input; after those the tracer steps aside until the next input.
+float comparisons of each input; after those only the guard below runs until the next input.
+
+**Atheris' ``_trace_cmp`` leaks the result of every comparison** (3.0.0, and 3.1.0's source:
+``core.cc`` returns the new reference from ``PyObject_RichCompare`` as a ``py::handle``, which
+pybind11 increments once more). For ``True``/``False`` that is harmless; for a numpy array
+comparison (``t < ta`` over a trajectory) the array is never freed: a ``move`` campaign grew by
+about 15 MB/s and libFuzzer stopped it as out-of-memory after about 100 s. Atheris' function
+only traces int-int, bytes-bytes and str-str comparisons (libFuzzer's CMP traces) and does a
+plain ``PyObject_RichCompare`` for anything else, so the tracer passes exactly those pairs to it
+(their result is a bool) and compares everything else itself, with the same operator: the
+same result, no leak, and no CMP trace lost. Budget 0 is the guard alone (the baselines).
 """
 
 from __future__ import annotations
 
 import math
+import operator
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -37,6 +49,10 @@ takes over until the next input. A ``move`` through the twin's planner makes abo
 tracing them all took a third of the campaign's time (BENCHMARKS.md)."""
 _FLOATS = (float, np.float64, np.float32)
 _NUMBERS = (*_FLOATS, int, np.int64)
+_ATHERIS_TRACES = (int, bytes, str)
+"""Operand types Atheris' ``_trace_cmp`` traces (both operands of the same one of these)."""
+_OPID_SHIFT = 0 if sys.version_info < (3, 12) else (4 if sys.version_info < (3, 13) else 5)
+"""COMPARE_OP's argument holds the operator in its high bits from Python 3.12 (as Atheris reads it)."""
 
 
 class FloatCompareTracer:
@@ -50,42 +66,46 @@ class FloatCompareTracer:
         The module holding ``_trace_cmp`` (``atheris``; a stand-in in tests).
     """
 
-    def __init__(self, features: Features, module: Any = None) -> None:
+    def __init__(self, features: Features, module: Any = None, budget: int = PER_INPUT) -> None:
         if module is None:
             import atheris
 
             module = atheris
         self.features = features
         self.module = module
+        self.budget = budget
+        """Float comparisons traced per input (0: only the leak guard)."""
         self.inner: Callable[..., Any] | None = None
+        self.guard = make_guard(None)
+        """Compares as ``COMPARE_OP`` would; the pairs Atheris traces go through ``inner``."""
         self.sites: set[int] = set()
         """Comparison sites that compared a float at least once."""
         self.traced = 0
-        self.remaining = PER_INPUT
+        self.remaining = budget
         self._keys: set[tuple[int, ...]] = set()
 
-    def install(self, budget: int = PER_INPUT) -> None:
+    def install(self, budget: int | None = None) -> None:
         """Wrap the module's current ``_trace_cmp`` unless it is already this tracer's, for the
-        next ``budget`` float comparisons (the harness calls this before every input)."""
-        self.remaining = budget
+        next ``budget`` float comparisons (default ``self.budget``; the harness calls this before
+        every input, which also catches Atheris swapping its function in when fuzzing starts)."""
+        self.remaining = self.budget if budget is None else budget
         current = getattr(self.module, "_trace_cmp", None)
-        if current is None or current == self.trace:
+        if current is None:
             return
-        self.inner = current
-        self.module._trace_cmp = self.trace
+        if current != self.trace and current is not self.guard:
+            self.inner = current
+            self.guard = make_guard(current)
+        self.module._trace_cmp = self.trace if self.remaining > 0 else self.guard
 
     def trace(self, obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
-        """The wrapper: record the float distance, then compare as Atheris does."""
+        """The wrapper: record the float distance, then compare (``guard``)."""
         t1, t2 = type(obj1), type(obj2)
         if (t1 in _FLOATS and t2 in _NUMBERS) or (t2 in _FLOATS and t1 in _NUMBERS):
             self._record(float(obj1), float(obj2), site)
             self.remaining -= 1
             if self.remaining <= 0 and self.inner is not None:
-                self.module._trace_cmp = self.inner  # the budget is spent: Atheris' own until install()
-        inner = self.inner
-        if inner is None:  # never installed: compare like COMPARE_OP would
-            return _compare(obj1, obj2, opid)
-        return inner(obj1, obj2, opid, site, is_const)
+                self.module._trace_cmp = self.guard  # the budget is spent: the guard until install()
+        return self.guard(obj1, obj2, opid, site, is_const)
 
     def _record(self, a: float, b: float, site: int) -> None:
         gap = a - b
@@ -105,15 +125,26 @@ class FloatCompareTracer:
             self.features.hit_ids((key,))
 
 
-_OPS: dict[int, Callable[[Any, Any], Any]] = {
-    0: lambda a, b: a < b,
-    1: lambda a, b: a <= b,
-    2: lambda a, b: a == b,
-    3: lambda a, b: a != b,
-    4: lambda a, b: a > b,
-    5: lambda a, b: a >= b,
-}
+_OPS: tuple[Callable[[Any, Any], Any], ...] = (
+    operator.lt,
+    operator.le,
+    operator.eq,
+    operator.ne,
+    operator.gt,
+    operator.ge,
+)
+"""COMPARE_OP's operators in ``dis.cmp_op`` order."""
 
 
-def _compare(a: Any, b: Any, opid: int) -> Any:
-    return _OPS[opid](a, b)
+def make_guard(inner: Callable[..., Any] | None) -> Callable[..., Any]:
+    """A ``_trace_cmp`` that passes the pairs Atheris traces to ``inner`` (its function) and
+    compares the rest itself (a closure over locals: it runs for every comparison)."""
+    ops, traced, shift = _OPS, _ATHERIS_TRACES, _OPID_SHIFT
+
+    def guard(obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
+        t1 = type(obj1)
+        if t1 is type(obj2) and t1 in traced and inner is not None:
+            return inner(obj1, obj2, opid, site, is_const)
+        return ops[opid >> shift](obj1, obj2)
+
+    return guard
