@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+import os
+import subprocess
+import sys
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -16,6 +19,25 @@ from robot_api import robots
 from robot_api.records import JointType
 
 IMPLEMENTATIONS = {"native": native, "python": python_impl}
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = str(ROOT / "fuzz_diff.py")
+
+
+def fuzz(
+    *args: str, cwd: Path = ROOT, timeout: float = 120, path: Sequence[Path] = ()
+) -> subprocess.CompletedProcess[str]:
+    """``fuzz_diff.py ARGS`` in a subprocess (PYTHONPATH: the repository, then ``path``)."""
+    return subprocess.run(
+        [sys.executable, SCRIPT, *args],
+        cwd=cwd,
+        env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), *map(str, path)])),
+        text=True,
+        capture_output=True,
+        timeout=timeout,
+        check=False,
+    )
+
 
 # (robot name, tip link or None for the default tip)
 AGREEMENT_ROBOTS = [

@@ -4,27 +4,13 @@ status, never a traceback. Also ``--help`` and the exit status of campaigns."""
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-SCRIPT = str(ROOT / "fuzz_diff.py")
+from tests.support import fuzz
+
 TIGHT = "tests.plugins.faults:tight_tolerance"
-
-
-def fuzz(*args: str, cwd: Path = ROOT, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, SCRIPT, *args],
-        cwd=cwd,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        text=True,
-        capture_output=True,
-        timeout=timeout,
-        check=False,
-    )
 
 
 HOSTILE = [

@@ -3,30 +3,14 @@
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 from fuzzer.input.testcase import MAX_BYTES, decode
+from tests.support import ROOT, fuzz
 
-ROOT = Path(__file__).resolve().parents[1]
-SCRIPT = str(ROOT / "fuzz_diff.py")
 REGRESSIONS = ROOT / "tests" / "regressions"
 CRASH = REGRESSIONS / "crash-364397c4d569c4ab0b32ab7ec9ef57821af1a621"
-
-
-def fuzz(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, SCRIPT, *args],
-        cwd=cwd,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        text=True,
-        capture_output=True,
-        timeout=120,
-        check=False,
-    )
 
 
 def test_show_prints_the_test_case_as_json() -> None:
@@ -53,15 +37,7 @@ def test_show_never_imports_what_a_sidecar_names(tmp_path: Path) -> None:
     crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
     marker = tmp_path / "imported"
     (tmp_path / "evil_show_module.py").write_text(f"open({str(marker)!r}, 'w').close()\napi = None\n")
-    done = subprocess.run(
-        [sys.executable, SCRIPT, "show", crash.name],
-        cwd=tmp_path,
-        env=dict(os.environ, PYTHONPATH=f"{ROOT}{os.pathsep}{tmp_path}"),
-        text=True,
-        capture_output=True,
-        timeout=120,
-        check=False,
-    )
+    done = fuzz("show", crash.name, cwd=tmp_path, path=[tmp_path])
     assert done.returncode == 0, done.stderr
     assert not marker.exists()
     assert json.loads(done.stdout)["message"]["position"]

@@ -15,18 +15,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
+from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import PathError, crash_inputs
 from fuzzer.input.testcase import MAX_BYTES, TestCaseError, decode
-
-
-class ShowError(ValueError):
-    """A file that is not a test case, or cannot be read."""
 
 
 def load(path: Path) -> dict[str, Any]:
@@ -34,18 +30,18 @@ def load(path: Path) -> dict[str, Any]:
 
     Raises
     ------
-    ShowError
-        Naming the file and the problem.
+    ConfigError
+        Naming the file and the problem (``fuzz_diff.py`` prints it and exits 2).
     """
     try:
         with path.open("rb") as stream:
             data = stream.read(MAX_BYTES + 1)
     except OSError as exc:
-        raise ShowError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
         return decode(data).to_json()
     except TestCaseError as exc:
-        raise ShowError(f"{path}: not an RROSFuzz test case: {exc}") from None
+        raise ConfigError(f"{path}: not an RROSFuzz test case: {exc}") from None
 
 
 def show_main(argv: Sequence[str]) -> int:
@@ -58,10 +54,9 @@ def show_main(argv: Sequence[str]) -> int:
     args = parser.parse_args(argv)
     try:
         paths = crash_inputs(args.files)
-        cases = {str(p): load(p) for p in paths}
-    except (PathError, ShowError) as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
-        return 2
+    except PathError as exc:
+        raise ConfigError(str(exc)) from None
+    cases = {str(p): load(p) for p in paths}
     shown: Any = next(iter(cases.values())) if len(cases) == 1 else cases
     reporting.out(json.dumps(shown, indent=1, ensure_ascii=False))
     return 0
