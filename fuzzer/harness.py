@@ -11,8 +11,10 @@ The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
 a high-difference one), applies one registered mutator (``fuzzer.mutation.mutators``,
 or for ``--op scenario`` the sequence mutators of ``fuzzer.scenario.mutate``,
 given as ``mutate_message``/``crossover_message``) with an RNG seeded by
-libFuzzer, records it in the lineage, and encodes. It never raises: an
-exception there would hang Atheris. Scenario outcomes also feed bigrams of
+libFuzzer, records it in the lineage, and encodes. With the bandit over sources and
+mutators, libFuzzer's crossover (``crossover``, half of its mutation calls) is the same step:
+it crosses with libFuzzer's second parent only when the bandit picks the crossover's arm. It
+never raises: an exception there would hang Atheris. Scenario outcomes also feed bigrams of
 consecutive (step kind, step status) to libFuzzer (``guidance.step_bigrams``).
 """
 
@@ -305,42 +307,42 @@ class Harness:
     # -- custom mutator / crossover ------------------------------------------------------------
 
     def mutate(self, data: bytes, max_size: int, seed: int) -> bytes:
+        return self._step(data, None, max_size, seed)
+
+    def crossover(self, data1: bytes, data2: bytes, max_size: int, seed: int) -> bytes:
+        """libFuzzer's CustomCrossOver, which it calls for about half of its mutations. With the
+        bandit (``sources``) this is one more bandit step on ``data1``: the crossover with
+        ``data2`` only when the bandit picks the crossover's arm (``splice``, ``seq_splice``),
+        so crossovers get the share they earn; without it, the crossover libFuzzer asked for."""
+        return self._step(data1, data2, max_size, seed)
+
+    def _step(self, data: bytes, partner: bytes | None, max_size: int, seed: int) -> bytes:
+        """One input made from ``data`` (and ``partner``, libFuzzer's second parent in a crossover):
+        a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
         try:
             rng = random.Random(seed)
-            parent = self._parent(data, rng)
+            parent = self._parent(data, rng, pool=partner is None)
+            fresh = self._fresh(parent, rng)
+            if fresh is not None:
+                return self._emit(parent.child(*fresh), parent, max_size, data)
             ctx = self.context
             ctx.rng = rng
-            uses_other = bool(getattr(self.mutate_message, "uses_other", False))
-            if uses_other:
-                ctx.other = self._other_parent(rng).message
+            splice = str(getattr(self.crossover_message, "lineage_name", "splice"))
+            if self.sources is None and partner is not None:
+                other = self._parent(partner, rng, False)
+                message = self.crossover_message(parent.message, other.message, ctx)
+                return self._emit(parent.child(message, splice), parent, max_size, data)
+            wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
+            if wanted == splice or getattr(self.mutate_message, "uses_other", False):
+                other = self._parent(partner, rng, False) if partner is not None else self._other_parent(rng)
+                ctx.other = other.message
             try:
-                fresh = self._fresh(parent, rng)
-                if fresh is not None:
-                    message, name = fresh
-                else:
-                    wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
-                    message, name = self.mutate_message(parent.message, ctx, wanted)
+                message, name = self.mutate_message(parent.message, ctx, wanted)
             finally:
-                if uses_other:
-                    ctx.other = None
+                ctx.other = None
             return self._emit(parent.child(message, name), parent, max_size, data)
         except Exception:  # noqa: BLE001 - must never raise into libFuzzer
             return data[:max_size]
-
-    def crossover(self, data1: bytes, data2: bytes, max_size: int, seed: int) -> bytes:
-        try:
-            rng = random.Random(seed)
-            a, b = self._parent(data1, rng, pool=False), self._parent(data2, rng, pool=False)
-            fresh = self._fresh(a, rng)
-            if fresh is not None:
-                return self._emit(a.child(*fresh), a, max_size, data1)
-            ctx = self.context
-            ctx.rng = rng
-            message = self.crossover_message(a.message, b.message, ctx)
-            name = str(getattr(self.crossover_message, "lineage_name", "splice"))
-            return self._emit(a.child(message, name), a, max_size, data1)
-        except Exception:  # noqa: BLE001 - must never raise into libFuzzer
-            return data1[:max_size]
 
     def _parent(self, data: bytes, rng: random.Random, pool: bool = True) -> TestCase:
         if pool and rng.random() < POOL_PARENT_CHANCE:
@@ -363,7 +365,8 @@ class Harness:
 
     def _other_parent(self, rng: random.Random) -> TestCase:
         """A second parent for a mutator that uses one (``uses_other``, the scenario mutator's
-        step copies): a high-difference input half the time when there is one, else a seed."""
+        step copies; the bandit's crossover arm outside libFuzzer's crossover): a high-difference
+        input half the time when there is one, else a seed."""
         data = self.pool.pick(rng) if rng.random() < 0.5 else None
         case = self._decode(data)[0] if data is not None else None
         return case if case is not None else rng.choice(self.seeds)

@@ -85,5 +85,5 @@ def test_a_boundary_input_credits_the_space_filling_arm() -> None:
     sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(("zero",)), lambda m, r: None)
     sources.reward(BOUNDARY, True)
     sources.reward("zero", False)
-    assert sources.source.arms[SPACEFILL].rewards == 1 and sources.source.arms[SPACEFILL].pulls == 0
+    assert sources.source.arms[SPACEFILL].rewards == 1 and sources.source.arms[SPACEFILL].pulls == 1
     assert sources.source.arms[MUTATE].rewards == 0 and sources.mutators.arms["zero"].losses > 0

@@ -154,3 +154,51 @@ def test_the_corpus_starts_with_space_filling_seeds_beside_the_hypothesis_ones()
     ik = space_filling_seeds(Session.open(RunConfig(op="ik")), 4, 1)
     assert len(ik) == 4 and all(set(s.message["pose"]) == {"position", "orientation"} for s in ik)
 
+
+
+def _forced(tmp_path: Path, arm: str) -> Harness:
+    """A harness whose bandits always mutate (never a space-filling input) with ``arm``."""
+    h, _ = _with_sources(tmp_path)
+    assert h.sources is not None
+    h.sources.source = Bandit((MUTATE, SPACEFILL), {MUTATE: 1e9}, floor=0.0)
+    h.sources.mutators = Bandit(tuple(mutators.WEIGHTS), {arm: 1e9}, floor=0.0)
+    return h
+
+
+def test_libfuzzers_crossover_is_a_bandit_step(tmp_path: Path) -> None:
+    """libFuzzer's crossover crosses only when the bandit picks the crossover's arm; else it is
+    the bandit's mutator on the first parent."""
+    h = _forced(tmp_path / "a", "arithmetic")
+    a, b = h.seeds[0], h.seeds[1]
+    children = [decode(h.crossover(a.encode(), b.encode(), 4096, s)) for s in range(40)]
+    assert {c.strategy for c in children} == {"arithmetic"}
+    h = _forced(tmp_path / "b", "splice")
+    crossed = [decode(h.crossover(a.encode(), b.encode(), 4096, s)) for s in range(40)]
+    assert {c.strategy for c in crossed} == {"splice"}
+    mixed = [
+        c
+        for c in crossed
+        if any(x not in a.message["position"] for x in c.message["position"])
+    ]
+    assert mixed and all(
+        set(c.message["position"]) <= {*a.message["position"], *b.message["position"]} for c in mixed
+    )
+    # a mutation that picks the crossover's arm crosses too (with a high-difference input or a seed)
+    spliced = [decode(h.mutate(a.encode(), 4096, s)) for s in range(40)]
+    assert {c.strategy for c in spliced} == {"splice"}
+    assert any(c.message["position"] != a.message["position"] for c in spliced)
+
+
+def test_every_arm_is_credited_no_more_rewards_than_inputs(tmp_path: Path) -> None:
+    h, _ = _with_sources(tmp_path)
+    seeds = [s.encode() for s in h.seeds]
+    made = 0
+    for s in range(120):
+        data = seeds[s % len(seeds)]
+        child = h.crossover(data, seeds[(s + 1) % len(seeds)], 4096, s) if s % 2 else h.mutate(data, 4096, s)
+        made += decode(child).origin == "mutation"  # not: a parent again, its child too large (_emit)
+        h.test_one_input(child)
+    assert h.sources is not None
+    for bandit in (h.sources.source, h.sources.mutators):
+        assert all(arm.rewards <= arm.pulls for arm in bandit.arms.values())
+    assert made > 100 and sum(arm.pulls for arm in h.sources.source.arms.values()) == made

@@ -28,6 +28,11 @@ FLOOR = 0.02
 
 @dataclass
 class Arm:
+    """One arm: its discounted pseudo-counts, and plain counts of the inputs credited to it
+    (``pulls``) and of those that paid off (``rewards``). An input is credited to the arm that
+    made it, which is not always the one chosen (a mutator that does not apply hands over to
+    another), so both counts are kept where the reward arrives."""
+
     name: str
     wins: float = 0.0
     losses: float = 0.0
@@ -71,14 +76,11 @@ class Bandit:
         }
 
     def choose(self, rng: random.Random) -> str:
-        """The arm to pull next (counts the pull)."""
+        """The arm to pull next."""
         if rng.random() < self.floor:
-            name = rng.choice(list(self.names))
-        else:
-            arms = self.arms
-            name = max(self.names, key=lambda n: rng.betavariate(arms[n].wins + 1.0, arms[n].losses + 1.0))
-        self.arms[name].pulls += 1
-        return name
+            return rng.choice(list(self.names))
+        arms = self.arms
+        return max(self.names, key=lambda n: rng.betavariate(arms[n].wins + 1.0, arms[n].losses + 1.0))
 
     def reward(self, name: str, paid: bool) -> None:
         """Tell arm ``name`` whether its input paid off (unknown names are ignored)."""
@@ -88,6 +90,7 @@ class Bandit:
         for other in self.arms.values():
             other.wins *= self.discount
             other.losses *= self.discount
+        arm.pulls += 1
         if paid:
             arm.wins += 1.0
             arm.rewards += 1
