@@ -10,6 +10,7 @@ $(shell mkdir -p build && find fuzzer python_impl robot_api native adapters -nam
 	| LC_ALL=C sort > build/python-modules.new && (cmp -s build/python-modules.new $(MODULES) \
 	|| mv build/python-modules.new $(MODULES)); rm -f build/python-modules.new)
 BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh \
+	constraints.txt \
 	$(MODULES)
 
 .PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-quick

@@ -29,7 +29,9 @@ if [ ! -x "$VENV/bin/python" ]; then
   "$PYTHON" -m venv "$VENV"
 fi
 echo "setup: installing the project into $VENV (native build in build/)"
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[${RROSFUZZ_EXTRAS:-test,adapters,engines}]" 2>&1 \
+# constraints.txt: the tested versions of every package (pyproject.toml has the supported ranges)
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -c constraints.txt \
+  -e ".[${RROSFUZZ_EXTRAS:-test,adapters,engines}]" 2>&1 \
   | grep -v "is ignored: it is neither a file nor a directory" || true
 "$VENV/bin/python" -c "import native, python_impl" \
   || { echo "setup: the install did not produce an importable native module" >&2; exit 1; }
