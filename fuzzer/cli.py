@@ -25,7 +25,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from fuzzer import reporting
 from fuzzer.execution.session import ConfigError, RunConfig
 from fuzzer.execution.tolerance import Tolerance, default_tolerance
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE, OPS
@@ -302,216 +301,6 @@ def _forwarded(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(out)
 
 
-def replay_main(argv: Sequence[str]) -> int:
-    from fuzzer.execution.session import ConfigError
-    from fuzzer.triage.replay import replay_file, source_of
-
-    args = _replay_parser().parse_args(argv)
-    base, given = _config(args)
-    sessions: dict[Any, Any] = {}
-    diverging = errors = 0
-    files = _inputs(args.paths)
-    for path in files:
-        try:
-            result = replay_file(path, base, given, sessions, trust=args.trust_sidecar)
-        except ConfigError as exc:
-            if len(files) == 1:
-                raise
-            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
-            errors += 1
-            continue
-        if not result.has_sidecar and source_of(path) == "command line":
-            reporting.warn(
-                f"{path}: no sidecar, so no recorded configuration or signature to compare with; "
-                "replayed under the command line's configuration (give --op, --robot, --targets... "
-                "to choose another)"
-            )
-        diverging += result.diverges
-        reporting.verdict(str(path), str(result.result), result.detail)
-        for line in result.steps[1:]:
-            reporting.out("    " + line)
-    return 2 if errors else (1 if diverging else 0)
-
-
-def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
-    """Crash files from paths, folders and shell globs (sidecars skipped); missing ones are errors."""
-    from fuzzer.input.paths import PathError, crash_inputs
-
-    try:
-        return crash_inputs(paths, folders=folders)
-    except PathError as exc:
-        raise UsageError(str(exc)) from None
-
-
-def triage_main(argv: Sequence[str]) -> int:
-    from fuzzer.triage import pipeline as triage
-
-    parser = argparse.ArgumentParser(prog="fuzz_diff.py triage", description="List divergence buckets.")
-    parser.add_argument(
-        "paths", nargs="+", type=Path, help="an artifacts folder, or crash files of one folder (globs work)"
-    )
-    parser.add_argument("--json", action="store_true", help="machine-readable output")
-    args = parser.parse_args(argv)
-    if len(args.paths) == 1 and args.paths[0].is_dir():
-        directory, files = args.paths[0], None
-    else:
-        files = _inputs(args.paths, folders=False)
-        folders = {p.parent.resolve() for p in files}
-        if len(folders) > 1:
-            raise UsageError("crash files from several folders: give one artifacts folder at a time")
-        directory = files[0].parent
-    try:
-        buckets = triage.collect(directory, files)
-    except OSError as exc:
-        raise UsageError(f"{directory}: cannot read: {exc.strerror or exc}") from None
-    if args.json:
-        reporting.out(triage.dumps(buckets))
-    else:
-        for line in triage.table(buckets):
-            reporting.out(line)
-    return 0
-
-
-def minimize_main(argv: Sequence[str]) -> int:
-    from fuzzer.execution.session import ConfigError
-    from fuzzer.triage import crashfiles
-
-    parser = argparse.ArgumentParser(
-        prog="fuzz_diff.py minimize",
-        description="Shrink crash files to the simplest input with the same signature, under the "
-        "configuration their sidecars record (options given here override it).",
-    )
-    parser.add_argument("paths", nargs="+", type=Path, help="crash files with sidecars (globs work)")
-    _config_options(parser)
-    parser.add_argument("--budget", type=int, default=2000, help="evaluations per file (default 2000)")
-    parser.add_argument(
-        "-o",
-        "--output",
-        type=Path,
-        default=None,
-        help="folder for minimized files (default: next to each crash file)",
-    )
-    args = parser.parse_args(argv)
-    if args.budget < 1:
-        raise UsageError("--budget must be >= 1")
-    _, given = _config(args)
-    files = _inputs(args.paths, folders=False)
-    if args.output is not None:
-        from fuzzer.input.paths import prepare_folder
-
-        prepare_folder(args.output, "--output", writable=True)
-    sessions: dict[Any, Any] = {}
-    errors = 0
-    for path in files:
-        try:
-            loaded = crashfiles.load(path, given, args.trust_sidecar, sessions)
-        except ConfigError as exc:
-            if len(files) == 1:
-                raise
-            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
-            errors += 1
-            continue
-        try:
-            shrunk = crashfiles.shrink(loaded, args.budget)
-        except ValueError as exc:
-            reporting.verdict(str(path), f"not minimized: {exc}")
-            continue
-        data, out = crashfiles.minimized_sidecar(loaded, shrunk)
-        folder = args.output or path.parent
-        try:
-            minimized = crashfiles.write_minimized(folder, data, out)
-        except OSError as exc:
-            sys.stderr.write(f"fuzz_diff.py: error: cannot write into {folder}: {exc.strerror or exc}\n")
-            errors += 1
-            continue
-        reporting.verdict(
-            str(path),
-            f"minimized to {minimized}",
-            f"{len(loaded.raw)} -> {len(data)} bytes, {shrunk.evaluations} evaluations, "
-            f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
-            + ("" if shrunk.complete else ", budget exhausted"),
-        )
-    return 2 if errors else 0
-
-
-def report_main(argv: Sequence[str]) -> int:
-    from fuzzer.report import write_report
-
-    parser = argparse.ArgumentParser(
-        prog="fuzz_diff.py report", description="Write a self-contained HTML report of an artifacts folder."
-    )
-    parser.add_argument("directory", type=Path)
-    parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default DIR/report)")
-    _trust_option(parser)
-    args = parser.parse_args(argv)
-    if not args.directory.is_dir():
-        raise UsageError(f"{args.directory}: not a folder")
-    output = args.output
-    if output is None:
-        output = args.directory / "report"
-        if output.is_symlink():  # a crafted folder must not make us write elsewhere
-            raise UsageError(f"{output} is a symbolic link; choose the output folder with -o")
-    from fuzzer.input.paths import prepare_folder
-
-    prepare_folder(output, "report output", writable=True)
-    page = write_report(args.directory, output, trust=args.trust_sidecar)
-    reporting.out(f"report: {page}")
-    return 0
-
-
-def promote_main(argv: Sequence[str]) -> int:
-    from fuzzer.triage.regressions import SUITE, PromoteError, promote
-
-    parser = argparse.ArgumentParser(
-        prog="fuzz_diff.py promote", description="Add a crash file to the regression suite."
-    )
-    parser.add_argument("crash", nargs="+", type=Path, help="crash files with sidecars (globs work)")
-    parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
-    parser.add_argument("--note", default="", help="why it is kept")
-    parser.add_argument("--suite", type=Path, default=SUITE, help=f"suite folder (default {SUITE})")
-    _trust_option(parser)
-    args = parser.parse_args(argv)
-    status = 0
-    for crash in _inputs(args.crash, folders=False):
-        try:
-            done = promote(crash, args.fixed, args.note, args.suite, trust=args.trust_sidecar)
-        except PromoteError as exc:
-            reporting.out(f"not promoted: {exc}")
-            status = max(status, 1)
-            continue
-        reporting.out(f"promoted {done.path} (expect: {done.expect})")
-    return status
-
-
-def coverage_main(argv: Sequence[str]) -> int:
-    from fuzzer.report.coverage import measure
-
-    parser = argparse.ArgumentParser(
-        prog="fuzz_diff.py coverage", description="Line and branch coverage of python_impl over a corpus."
-    )
-    parser.add_argument("corpus", nargs="+", type=Path)
-    _config_options(parser)
-    parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
-    args = parser.parse_args(argv)
-    from fuzzer.input.paths import PathError, check_input_file
-
-    for path in args.corpus:
-        if not path.exists():
-            raise UsageError(f"{path}: no such file or folder")
-        check_input_file(path)
-    from fuzzer.artifacts.travel import adopt_manifest
-
-    adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
-    config, _ = _config(args)
-    from fuzzer.artifacts.travel import check_manifests
-
-    check_manifests([p for p in args.corpus if p.is_dir()], config)
-    if args.html.exists() and not args.html.is_dir():
-        raise PathError(f"--html {args.html}: is a file, not a folder")
-    reporting.out(measure(list(args.corpus), config, args.html).line())
-    return 0
-
-
 def campaign_main(argv: Sequence[str]) -> int:
     from fuzzer.campaign import CampaignOptions, run
 
@@ -570,6 +359,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         if argv and argv[0] in SUBCOMMANDS:
+            from fuzzer.cli_tools import (
+                coverage_main,
+                minimize_main,
+                promote_main,
+                replay_main,
+                report_main,
+                triage_main,
+            )
+
             handler = {
                 "show": _show_main,
                 "replay": replay_main,
@@ -586,6 +384,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not flags:
             known, _ = _parser().parse_known_args(rest)
             if known.corpus and all(p.is_file() for p in known.corpus):  # fuzz_diff.py CRASH...
+                from fuzzer.cli_tools import replay_main
+
                 return replay_main(rest)
         known, _ = _parser().parse_known_args(rest)
         for path in known.corpus:

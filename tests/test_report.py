@@ -24,7 +24,9 @@ from fuzzer.execution.session import RunConfig
 from fuzzer.input.mapping import MoveCall
 from fuzzer.report import write_report
 from fuzzer.report.arm import Sessions, _command, chain
-from fuzzer.report.data import (
+from fuzzer.report.data import gather, runs
+from fuzzer.report.records import Divergence, Snapshot, processes
+from fuzzer.report.tables import (
     ROW_1E2_1E1,
     ROW_ABOVE_1E1,
     ROW_BELOW_1E2,
@@ -33,12 +35,7 @@ from fuzzer.report.data import (
     ROW_OTHER,
     ROW_ROTATIONS,
     ROW_STATUS,
-    Divergence,
-    Snapshot,
     classify,
-    gather,
-    processes,
-    runs,
     strategies,
     table_iii,
 )

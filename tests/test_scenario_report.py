@@ -27,9 +27,10 @@ from fuzzer.execution.evaluate import Evaluation, Verdict
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status
 from fuzzer.input.testcase import TestCase
 from fuzzer.report import write_report
-from fuzzer.report.data import ROW_COORDINATES, ROW_OTHER, ROW_ROTATIONS, Divergence, classify
+from fuzzer.report.records import Divergence
 from fuzzer.report.scenario import COLORS, Trajectory, TrajectoryStep, figure, file_name, trajectory, view_of
 from fuzzer.report.steps import LISTED_STEPS, shown_steps
+from fuzzer.report.tables import ROW_COORDINATES, ROW_OTHER, ROW_ROTATIONS, classify
 from fuzzer.triage import pipeline as triage
 from fuzzer.triage.replay import scenario_lines
 

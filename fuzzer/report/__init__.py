@@ -5,7 +5,9 @@ shows executions and divergences over time, and gives one section per bucket wit
 a 3D view of where each target left the arm (the role RVIZ played in the paper);
 a scenario bucket also gets its step list and trajectory plots.
 
-Modules: :mod:`~fuzzer.report.data` reads and aggregates (pure),
+Modules: :mod:`~fuzzer.report.records` reads the logs, :mod:`~fuzzer.report.tables` makes
+the paper's tables and figures of them, :mod:`~fuzzer.report.buckets` the buckets' views, and
+:mod:`~fuzzer.report.data` gathers it all and adds the runs over time (all pure),
 :mod:`~fuzzer.report.steps` and :mod:`~fuzzer.report.scenario` read scenarios,
 :mod:`~fuzzer.report.figures` and :mod:`~fuzzer.report.arm` draw,
 :mod:`~fuzzer.report.page` renders the HTML, :mod:`~fuzzer.report.build` writes it all.

@@ -4,7 +4,9 @@ The page reproduces the paper's evaluation (Tables III and IV, Figs. 6, 7 and 8)
 shows executions and divergences over time, and gives one section per bucket with
 a 3D view of where each target left the arm (the role RVIZ played in the paper).
 
-Modules: :mod:`~fuzzer.report.data` reads and aggregates (pure),
+Modules: :mod:`~fuzzer.report.records` reads the logs, :mod:`~fuzzer.report.tables` makes
+the paper's tables and figures of them, :mod:`~fuzzer.report.buckets` the buckets' views, and
+:mod:`~fuzzer.report.data` gathers it all and adds the runs over time (all pure),
 :mod:`~fuzzer.report.figures` and :mod:`~fuzzer.report.arm` draw,
 :mod:`~fuzzer.report.page` renders the HTML.
 """

@@ -17,7 +17,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from fuzzer.report.data import Differences, NearZero, Run, StrategyRow
+from fuzzer.report.data import Run
+from fuzzer.report.tables import Differences, NearZero, StrategyRow
 
 PAPER_COLOR = "#1f5fbf"
 OTHER_COLOR = "#9aa5b1"

@@ -14,17 +14,10 @@ from html import escape
 from typing import Any
 
 from fuzzer.report.arm import ArmView
-from fuzzer.report.data import (
-    RUN_GAP_SECONDS,
-    TABLE_III_RULES,
-    BucketView,
-    CloserRow,
-    ReportData,
-    TableRow,
-    config_label,
-    tolerance_label,
-)
+from fuzzer.report.buckets import BucketView
+from fuzzer.report.data import RUN_GAP_SECONDS, ReportData, config_label, tolerance_label
 from fuzzer.report.figures import MAX_RUNS
+from fuzzer.report.tables import TABLE_III_RULES, CloserRow, TableRow
 
 CSS = """
 body { font-family: "DejaVu Sans", Arial, Helvetica, sans-serif; color: #1d2733; background: #f4f6f9;

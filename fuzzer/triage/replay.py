@@ -170,7 +170,7 @@ def replay_file(
     if unrecorded:
         detail = "; ".join(filter(None, [detail, f"replayed under {describe(config)}"]))
     if steps:
-        detail = f"{detail}; {steps[0]}"  # the step list follows the verdict line (cli.replay_main)
+        detail = f"{detail}; {steps[0]}"  # the step list follows the verdict line (cli_tools.replay_main)
     return Replay(path, result, evaluation, expected, detail, config, not unrecorded, steps=steps)
 
 

@@ -1,0 +1,200 @@
+"""The campaign logs as typed records: ``divergences.jsonl`` lines (:class:`Divergence`),
+``stats.jsonl`` snapshots (:class:`Snapshot`) and the processes they come from.
+
+Both logs (``fuzzer.artifacts.divlog``) are read leniently: a line that is not JSON, or lacks
+the fields a record needs, is skipped and counted, never fatal.
+
+``stats.jsonl`` holds cumulative snapshots per process id. A process is one pid whose counters
+never go backwards; a recycled pid (counters restart, or the start time moves) is a new
+process. The totals of the page sum the *last* snapshot of each process.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+# -- reading ----------------------------------------------------------------------------------------
+
+
+def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
+    """The JSON objects of a JSON Lines file and how many non-blank lines were not one.
+
+    Parameters
+    ----------
+    path : Path
+        A JSON Lines file; a missing file has no records.
+
+    Returns
+    -------
+    records : list of dict
+    skipped : int
+    """
+    records: list[dict[str, Any]] = []
+    skipped = 0
+    if not path.is_file():
+        return records, skipped
+    with open(path, encoding="utf-8", errors="replace") as handle:
+        for line in handle:
+            if not line.strip():
+                continue
+            try:
+                record = json.loads(line)
+            except (json.JSONDecodeError, RecursionError):
+                skipped += 1
+                continue
+            if isinstance(record, dict):
+                records.append(record)
+            else:
+                skipped += 1
+    return records, skipped
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value)
+
+
+def _int(value: Any, default: int = 0) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) else default
+
+
+def _counter(value: Any) -> dict[str, int]:
+    if not isinstance(value, dict):
+        return {}
+    return {str(k): v for k, v in value.items() if isinstance(v, int) and not isinstance(v, bool)}
+
+
+@dataclass(frozen=True)
+class Divergence:
+    """One line of ``divergences.jsonl`` (one divergent execution)."""
+
+    sig: str
+    kind: str
+    field: str = ""
+    difference: float = 0.0
+    sign_flip: bool = False
+    strategy: str = "unknown"
+    near_zero: int | None = None
+    closer: str = "n/a"
+    t: float | None = None
+    pid: int | None = None
+    sha1: str = ""
+
+    @classmethod
+    def parse(cls, record: Mapping[str, Any]) -> Divergence | None:
+        """The divergence a record describes, or None when it lacks ``sig`` or ``kind``."""
+        sig, kind = record.get("sig"), record.get("kind")
+        if not isinstance(sig, str) or not isinstance(kind, str):
+            return None
+        difference = _number(record.get("difference"))
+        if kind == "representation" and "raw" in record:
+            # Fig. 8 shows the paper's difference information: the gap as numbers (the
+            # headline "difference" of a representation divergence is modulo equivalence)
+            difference = _number(record.get("raw"))
+        near_zero = record.get("near_zero")
+        strategy, closer, field_ = record.get("strategy"), record.get("closer"), record.get("field")
+        pid, sha1 = record.get("pid"), record.get("sha1")
+        return cls(
+            sig=sig,
+            kind=kind,
+            field=field_ if isinstance(field_, str) else "",
+            difference=0.0 if difference is None else difference,
+            sign_flip=record.get("sign_flip") is True,
+            strategy=strategy if isinstance(strategy, str) else "unknown",
+            near_zero=near_zero if isinstance(near_zero, int) and not isinstance(near_zero, bool) else None,
+            closer=closer if closer in ("a", "b", "tie", "n/a") else "n/a",
+            t=_number(record.get("t")),
+            pid=pid if isinstance(pid, int) and not isinstance(pid, bool) else None,
+            sha1=sha1 if isinstance(sha1, str) else "",
+        )
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One line of ``stats.jsonl``: a process's cumulative counters at time ``t``."""
+
+    t: float
+    pid: int
+    elapsed: float
+    execs: int
+    filtered: int = 0
+    malformed: int = 0
+    divergent: Mapping[str, int] = field(default_factory=dict)
+    by_strategy: Mapping[str, int] = field(default_factory=dict)
+    executed_by_strategy: Mapping[str, int] = field(default_factory=dict)
+    near_zero: Mapping[str, int] = field(default_factory=dict)
+
+    @property
+    def start(self) -> float:
+        """Wall-clock time at which this process's counters were zero."""
+        return self.t - self.elapsed
+
+    @property
+    def divergences(self) -> int:
+        return sum(self.divergent.values())
+
+    @classmethod
+    def parse(cls, record: Mapping[str, Any]) -> Snapshot | None:
+        """The snapshot a record describes, or None without numeric ``t``, ``pid``, ``execs``."""
+        t, pid, execs = _number(record.get("t")), record.get("pid"), record.get("execs")
+        if t is None or not isinstance(pid, int) or not isinstance(execs, int) or isinstance(execs, bool):
+            return None
+        elapsed = _number(record.get("elapsed"))
+        return cls(
+            t=t,
+            pid=pid,
+            elapsed=max(0.0, elapsed or 0.0),
+            execs=execs,
+            filtered=_int(record.get("filtered")),
+            malformed=_int(record.get("malformed")),
+            divergent=_counter(record.get("divergent")),
+            by_strategy=_counter(record.get("by_strategy")),
+            executed_by_strategy=_counter(record.get("executed_by_strategy")),
+            near_zero=_counter(record.get("near_zero")),
+        )
+
+
+@dataclass(frozen=True)
+class Process:
+    """The snapshots of one campaign process, oldest first."""
+
+    pid: int
+    snapshots: tuple[Snapshot, ...]
+
+    @property
+    def start(self) -> float:
+        return self.snapshots[0].start
+
+    @property
+    def end(self) -> float:
+        return self.snapshots[-1].t
+
+    @property
+    def last(self) -> Snapshot:
+        return self.snapshots[-1]
+
+
+def processes(snapshots: Iterable[Snapshot]) -> list[Process]:
+    """Group snapshots into processes (a pid may be recycled), ordered by start time.
+
+    A pid's sequence is cut wherever its executions go backwards or its start time
+    moves by more than a second: that is a new process with the same pid.
+    """
+    by_pid: dict[int, list[Snapshot]] = {}
+    for snap in snapshots:
+        by_pid.setdefault(snap.pid, []).append(snap)
+    out: list[Process] = []
+    for pid, snaps in by_pid.items():
+        current: list[Snapshot] = []
+        for snap in sorted(snaps, key=lambda s: s.t):
+            if current and (snap.execs < current[-1].execs or abs(snap.start - current[-1].start) > 1.0):
+                out.append(Process(pid, tuple(current)))
+                current = []
+            current.append(snap)
+        out.append(Process(pid, tuple(current)))
+    return sorted(out, key=lambda p: (p.start, p.pid))
