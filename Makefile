@@ -33,14 +33,14 @@ test: setup
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
 ## then every deep bug x 6 engines x 10 trials x 60 s (about 6 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (34 minutes).
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes).
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md
 	$(PY) -m benchmarks.bench_deep --mode full --write-md
 	$(PY) -m benchmarks.bench_deep --mode zoo --write-md
 
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
-## (32 minutes on 2 cores).
+## (28-32 minutes on 2 cores).
 bench-deep: setup
 	$(PY) -m benchmarks.bench_deep --mode short --write-md
 
