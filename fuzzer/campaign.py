@@ -25,7 +25,14 @@ from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
 from fuzzer.generation.boundary import OFFSETS
-from fuzzer.generation.corpus import bag_seeds, make_seeds, prescan, space_filling_seeds, write_seeds
+from fuzzer.generation.corpus import (
+    bag_seeds,
+    make_seeds,
+    prescan,
+    space_filling_count,
+    space_filling_seeds,
+    write_seeds,
+)
 from fuzzer.input.testcase import TestCase
 from fuzzer.processes import (
     CHILD_ENV,
@@ -161,8 +168,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if wanted and not child and folders:
         generated = make_seeds(session, wanted, options.seed)
         # the full engine's corpus also starts with as many points covering the joint space
+        # (one for IK, whose inputs are slow: corpus.SLOW_OP_SPACEFILL_SEEDS)
         filling = (
-            space_filling_seeds(session, wanted, options.seed, len(generated))
+            space_filling_seeds(session, space_filling_count(config.op, wanted), options.seed, len(generated))
             if options.mutator == "rrosfuzz"
             else []
         )

@@ -14,6 +14,7 @@ from fuzzer.input.testcase import decode
 from fuzzer.mutation import mutators
 from fuzzer.selection.bandit import Bandit
 from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
+from tests.support import fuzz
 from tests.test_harness import make_harness
 
 
@@ -153,6 +154,25 @@ def test_the_corpus_starts_with_space_filling_seeds_beside_the_hypothesis_ones()
     assert space_filling_seeds(Session.open(RunConfig(op="scenario")), 8, 1) == []
     ik = space_filling_seeds(Session.open(RunConfig(op="ik")), 4, 1)
     assert len(ik) == 4 and all(set(s.message["pose"]) == {"position", "orientation"} for s in ik)
+
+
+def test_slow_ops_write_fewer_space_filling_seed_files() -> None:
+    """IK inputs each run a solver: one space-filling seed file (the first boundary probe), the
+    others come from the space-filling source during the campaign; fast ops as many as Hypothesis'."""
+    from fuzzer.generation.corpus import space_filling_count
+
+    assert space_filling_count("ik", 32) == 1
+    assert [space_filling_count(op, 32) for op in ("fk", "move")] == [32, 32]
+    assert space_filling_count("ik", 0) == 0 and space_filling_count("fk", 5) == 5
+
+
+def test_an_ik_campaign_writes_one_space_filling_seed(tmp_path: Path) -> None:
+    corpus = tmp_path / "corpus"
+    art = f"--artifacts={tmp_path / 'art'}"
+    done = fuzz(str(corpus), "-runs=0", "--op=ik", "--seeds=4", art, "--no-progress")
+    assert done.returncode == 0, done.stderr[-2000:]
+    origins = sorted(decode(p.read_bytes()).origin for p in corpus.iterdir() if p.name.startswith("seed-"))
+    assert origins == ["hypothesis"] * 4 + ["spacefill"]
 
 
 

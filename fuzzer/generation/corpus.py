@@ -38,6 +38,19 @@ def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
 SPACEFILL_SEED = 0xC0DE5
 """Added to ``-seed`` for the space-filling seeds' Sobol stream (not the harness's own)."""
 
+SLOW_OP_SPACEFILL_SEEDS = {"ik": 1}
+"""Space-filling seed files of the ops whose evaluation is slow (``ik``: a solver run per input,
+about 100 a second; the others as many as the Hypothesis seeds). libFuzzer runs every seed file
+before its first mutation, and 32 reachable poses cost an IK campaign about 0.25 s of that
+(BENCHMARKS.md, "Fewer space-filling seed files for IK"); the space-filling source brings the
+rest during the campaign, where the bandit weighs them against mutations."""
+
+
+def space_filling_count(op: str, wanted: int) -> int:
+    """How many space-filling seed files a campaign of ``op`` writes beside ``wanted``
+    Hypothesis seeds."""
+    return min(wanted, SLOW_OP_SPACEFILL_SEEDS.get(op, wanted))
+
 
 def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
     """``n`` seeds covering the joint space (issue 11, "beside the Hypothesis seeds"): the first
