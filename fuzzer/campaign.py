@@ -389,6 +389,9 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
 SWEEP_SEED = 0x5EED
 """Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
 
+ALIGNED_SEED = 0xA1
+"""Added to ``-seed`` for the aligned configurations' choices."""
+
 
 def _search(session: Session, options: CampaignOptions, features: Any, seeded: int = 0) -> dict[str, Any]:
     """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
@@ -401,10 +404,10 @@ def _search(session: Session, options: CampaignOptions, features: Any, seeded: i
     if options.mutator != "rrosfuzz":  # no float features; still the guard of Atheris' leak
         return {"float_tracer": FloatCompareTracer(features, budget=0)}
     from fuzzer.generation.boundary import Boundary, probes
-    from fuzzer.generation.spacefill import SpaceFill, fresh_inputs
+    from fuzzer.generation.spacefill import Aligned, SpaceFill, fresh_inputs
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
-    from fuzzer.selection.state import MUTATE, SPACEFILL, Sources
+    from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
 
     config = session.config
     weights: dict[str, float] = dict(mutators.WEIGHTS)
@@ -427,7 +430,16 @@ def _search(session: Session, options: CampaignOptions, features: Any, seeded: i
         config.max_steps,
         Boundary(facts.lower, facts.upper, start=min(seeded, first_round)),
     )
-    sources = Sources(Bandit((MUTATE, SPACEFILL)), Bandit(tuple(weights), weights), fresh)
+    aligned = fresh_inputs(
+        config.op,
+        config.message_type,
+        Aligned(facts.lower, facts.upper, seed=options.seed + ALIGNED_SEED),
+        facts.joint_names,
+        facts.reachable,
+        config.max_steps,
+        name=ALIGNED,
+    )
+    sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
     search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
     if config.op == "fk" and config.transport == "inprocess":
         from fuzzer.generation.sweep import Sweep

@@ -39,7 +39,7 @@ from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.mutation import mutators
 from fuzzer.selection.floatcmp import FloatCompareTracer
 from fuzzer.selection.guidance import Features, input_features, step_bigrams
-from fuzzer.selection.state import SPACEFILL, Pool, Sources, Stats
+from fuzzer.selection.state import Pool, Sources, Stats
 
 SNAPSHOT_SECONDS = 5.0
 POOL_PARENT_CHANCE = 0.2
@@ -357,11 +357,11 @@ class Harness:
         return case
 
     def _fresh(self, parent: TestCase, rng: random.Random) -> tuple[dict[str, Any], str] | None:
-        """A space-filling input made from ``parent`` and its lineage name, when the source
-        bandit picks one."""
-        if self.sources is None or self.sources.source.choose(rng) != SPACEFILL:
+        """A fresh input (space-filling or aligned) made from ``parent`` and its lineage name,
+        when the source bandit picks one."""
+        if self.sources is None:
             return None
-        return self.sources.fresh(parent.message, rng)
+        return self.sources.make(self.sources.source.choose(rng), parent.message, rng)
 
     def _other_parent(self, rng: random.Random) -> TestCase:
         """A second parent for a mutator that uses one (``uses_other``, the scenario mutator's

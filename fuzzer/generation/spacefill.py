@@ -89,6 +89,53 @@ class SpaceFill:
         return self._block.pop()
 
 
+@dataclass
+class Aligned:
+    """An endless stream of aligned joint configurations: each joint independently at a
+    multiple of pi/2 inside its limits or at one of its limits.
+
+    Space-filling points almost never land where joint axes line up, yet that is where
+    kinematics code branches: gimbal lock of a roll-pitch-yaw conversion, wrist and elbow
+    singularities, ``atan2(0, 0)``, a zero in a denominator. For a 6-joint arm such
+    configurations are a finite set (a few hundred thousand), of which a sizeable share is
+    singular; one joint at pi/2 with the others anywhere is not (that is what mutating an
+    interesting value into a space-filling input gives).
+
+    Parameters
+    ----------
+    lower, upper : sequence of float, length dof
+        Joint limits (rad, m); an infinite bound (continuous joint) becomes -pi / pi, as in
+        ``SpaceFill``. A prismatic joint's multiples of pi/2 are in metres: usually only 0.
+    seed : int
+        Seeds the choices: equal seeds give equal streams.
+    """
+
+    lower: Sequence[float]
+    upper: Sequence[float]
+    seed: int = 0
+    drawn: int = 0
+    """Configurations handed out so far."""
+    choices: list[tuple[float, ...]] = field(init=False, repr=False)
+    """Per joint, the values it takes (sorted)."""
+
+    def __post_init__(self) -> None:
+        if len(self.lower) != len(self.upper) or not self.lower:
+            raise ValueError("Aligned needs lower and upper limits of the same non-zero length")
+        self.choices = []
+        for low, high in zip(self.lower, self.upper, strict=True):
+            lo = float(low) if math.isfinite(low) else -math.pi
+            hi = float(high) if math.isfinite(high) else math.pi
+            quarter = math.pi / 2
+            multiples = [k * quarter for k in range(math.ceil(lo / quarter), math.floor(hi / quarter) + 1)]
+            self.choices.append(tuple(sorted({lo, hi, *multiples})))
+        self._rng = random.Random(self.seed)
+
+    def next(self) -> tuple[float, ...]:
+        """The next configuration (a tuple of dof floats inside the limits)."""
+        self.drawn += 1
+        return tuple(self._rng.choice(values) for values in self.choices)
+
+
 def configuration_message(
     msg_type: str,
     base: dict[str, Any],
@@ -197,14 +244,16 @@ def scenario_with_configuration(
 def fresh_inputs(
     op: str,
     msg_type: str,
-    stream: SpaceFill,
+    stream: SpaceFill | Aligned,
     joint_names: Sequence[str],
     reachable: Reachable | None = None,
     max_steps: int = 16,
     boundary: Boundary | None = None,
+    name: str = SPACEFILL,
 ) -> Callable[[dict[str, Any], random.Random], tuple[dict[str, Any], str] | None]:
-    """The harness's ``Sources.fresh``: the parent message carrying the stream's next point, and
-    its lineage name ``spacefill``. While ``boundary`` has probes left, every other call instead
+    """The harness's ``Sources.fresh`` (and, with an ``Aligned`` stream and ``name`` ``aligned``,
+    ``Sources.aligned``): the parent message carrying the stream's next point, and its lineage
+    name ``name``. While ``boundary`` has probes left, every other call instead
     carries the last point with one joint on an edge, named ``spacefill:boundary``
     (``fuzzer.generation.boundary``), and the stream does not advance."""
     last: list[tuple[float, ...]] = []
@@ -234,6 +283,6 @@ def fresh_inputs(
             out = configuration_message(msg_type, message, values, joint_names, reachable)
         if out is None:
             return None
-        return out, (BOUNDARY if probed else SPACEFILL)
+        return out, (BOUNDARY if probed else name)
 
     return fresh

@@ -24,7 +24,15 @@ BOUNDARY = f"{SPACEFILL}:boundary"
 the ``spacefill`` arm made it."""
 
 
+ALIGNED = "aligned"
+"""The arm (and lineage name) of a fresh aligned configuration: every joint at a multiple of
+pi/2 or at a limit (``fuzzer.generation.spacefill.Aligned``), where joint axes line up."""
+
 MUTATE = "mutate"
+
+Made = tuple[dict[str, Any], str] | None
+"""A fresh input's message and lineage name, or None (the source does not apply)."""
+Maker = Callable[[dict[str, Any], random.Random], Made]
 """The arm of a mutated (or crossed-over) corpus input."""
 
 
@@ -33,29 +41,43 @@ class Sources:
     """Where the next input comes from (issue 11), chosen by two bandits rewarded by new
     coverage features or new divergence signatures (``fuzzer.selection.bandit``): ``source``
     between a fresh space-filling input (``spacefill``: the next configuration of the Sobol
-    stream put into the parent by ``fresh``) and a mutated corpus input (``mutate``); then,
-    for a mutation, ``mutators`` over the registered mutators by name.
+    stream put into the parent by ``fresh``), a fresh aligned configuration (``aligned``, by
+    ``aligned``) and a mutated corpus input (``mutate``); then, for a mutation, ``mutators``
+    over the registered mutators by name.
 
     Attributes
     ----------
     source : Bandit
-        Arms ``spacefill`` and ``mutate``; it also decides libFuzzer's crossovers.
+        Arms ``spacefill``, ``mutate`` and (with ``aligned``) ``aligned``; it also decides
+        libFuzzer's crossovers.
     mutators : Bandit
         One arm per registered mutator.
     fresh : callable (message, rng) -> (message, lineage name) or None
         A copy of the parent carrying the next space-filling configuration, named ``spacefill``
         or ``spacefill:boundary`` (None: not applicable to this message; the harness then
         mutates).
+    aligned : callable like ``fresh``, optional
+        A copy of the parent carrying the next aligned configuration, named ``aligned``.
     """
 
     source: Bandit
     mutators: Bandit
-    fresh: Callable[[dict[str, Any], random.Random], tuple[dict[str, Any], str] | None]
+    fresh: Maker
+    aligned: Maker | None = None
+
+    def make(self, arm: str, message: dict[str, Any], rng: random.Random) -> Made:
+        """A fresh input from the source ``arm`` (None for ``mutate``, or when not applicable)."""
+        if arm == SPACEFILL:
+            return self.fresh(message, rng)
+        if arm == ALIGNED and self.aligned is not None:
+            return self.aligned(message, rng)
+        return None
 
     def reward(self, strategy: str, paid: bool) -> None:
         """Credit the arms that made an input whose last step was ``strategy``."""
-        if strategy.partition(":")[0] == SPACEFILL:
-            self.source.reward(SPACEFILL, paid)
+        source = strategy.partition(":")[0]
+        if source in (SPACEFILL, ALIGNED):
+            self.source.reward(source, paid)
             return
         self.source.reward(MUTATE, paid)
         self.mutators.reward(strategy.partition(":")[0], paid)
