@@ -49,6 +49,7 @@ from fuzzer.processes import (
 )
 from fuzzer.processes import deadline as child_deadline
 from fuzzer.selection.instrument import instrument
+from fuzzer.selection.search import search_parts
 
 DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
 
@@ -216,7 +217,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     features = Features()
     harness = Harness(
         **_scenario_mutators(session),
-        **_search(session, options, features, seeded=len(filling)),
+        **search_parts(session, options.mutator, options.seed, features, seeded=len(filling)),
         evaluator=session.evaluator(),
         store=store,
         features=features,
@@ -384,73 +385,6 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
 
     mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps)
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
-
-
-SWEEP_SEED = 0x5EED
-"""Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
-
-ALIGNED_SEED = 0xA1
-"""Added to ``-seed`` for the aligned configurations' choices."""
-
-
-def _search(session: Session, options: CampaignOptions, features: Any, seeded: int = 0) -> dict[str, Any]:
-    """The Harness's input sources and float-comparison tracer (issue 11; docs/engine.md,
-    "Guidance"). ``--mutator weights`` (the engine before them) and ``libfuzzer`` get neither,
-    only the tracer's guard against Atheris' leak of comparison results (budget 0).
-    The fresh inputs carry the boundary probes the space-filling seeds did not (the first round
-    went into the first ``seeded`` space-filling seeds, if this campaign wrote them)."""
-    from fuzzer.selection.floatcmp import FloatCompareTracer
-
-    if options.mutator != "rrosfuzz":  # no float features; still the guard of Atheris' leak
-        return {"float_tracer": FloatCompareTracer(features, budget=0)}
-    from fuzzer.generation.boundary import Boundary, probes
-    from fuzzer.generation.spacefill import Aligned, SpaceFill, fresh_inputs
-    from fuzzer.mutation import mutators
-    from fuzzer.selection.bandit import Bandit
-    from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
-
-    config = session.config
-    weights: dict[str, float] = dict(mutators.WEIGHTS)
-    if config.op == "scenario":
-        from fuzzer.scenario.mutate import SEQ_WEIGHTS
-
-        weights = dict(SEQ_WEIGHTS)
-    limits = session.reference.joint_limits
-    if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
-        return {"float_tracer": FloatCompareTracer(features)}
-    facts = session.facts()
-    stream = SpaceFill(facts.lower, facts.upper, seed=options.seed)
-    first_round = len(probes(facts.lower, facts.upper, rounds=1))
-    fresh = fresh_inputs(
-        config.op,
-        config.message_type,
-        stream,
-        facts.joint_names,
-        facts.reachable,
-        config.max_steps,
-        Boundary(facts.lower, facts.upper, start=min(seeded, first_round)),
-    )
-    aligned = fresh_inputs(
-        config.op,
-        config.message_type,
-        Aligned(facts.lower, facts.upper, seed=options.seed + ALIGNED_SEED),
-        facts.joint_names,
-        facts.reachable,
-        config.max_steps,
-        name=ALIGNED,
-    )
-    sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
-    search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
-    if config.op == "fk" and config.transport == "inprocess":
-        from fuzzer.generation.sweep import Sweep
-
-        search["sweep"] = Sweep(
-            [lim.lower for lim in limits],
-            [lim.upper for lim in limits],
-            config.tolerance,
-            seed=options.seed + SWEEP_SEED,
-        )
-    return search
 
 
 def _transport_note(config: RunConfig) -> str:

@@ -1,0 +1,78 @@
+"""What the full engine's search is made of, beside libFuzzer (issue 11): the bandits over input
+sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sources``), the
+float-comparison tracer (``fuzzer.selection.floatcmp``) and, for ``fk`` in process, the batched
+sweeps (``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harness."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fuzzer.execution.session import Session
+
+SWEEP_SEED = 0x5EED
+"""Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
+
+ALIGNED_SEED = 0xA1
+"""Added to ``-seed`` for the aligned configurations' choices."""
+
+
+def search_parts(session: Session, mutator: str, seed: int, features: Any, seeded: int = 0) -> dict[str, Any]:
+    """The Harness's input sources, float-comparison tracer and (``fk`` in process) sweeps, as
+    keyword arguments (issue 11; docs/engine.md, "Guidance"), for a campaign with ``--mutator
+    mutator`` and ``-seed`` ``seed``. ``--mutator weights`` (the engine before them) and
+    ``libfuzzer`` get none of them, only the tracer's guard against Atheris' leak of comparison
+    results (budget 0). The fresh inputs carry the boundary probes the space-filling seeds did
+    not (the first round went into the first ``seeded`` space-filling seeds, if this campaign
+    wrote them)."""
+    from fuzzer.selection.floatcmp import FloatCompareTracer
+
+    if mutator != "rrosfuzz":  # no float features; still the guard of Atheris' leak
+        return {"float_tracer": FloatCompareTracer(features, budget=0)}
+    from fuzzer.generation.boundary import Boundary, probes
+    from fuzzer.generation.spacefill import Aligned, SpaceFill, fresh_inputs
+    from fuzzer.mutation import mutators
+    from fuzzer.selection.bandit import Bandit
+    from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
+
+    config = session.config
+    weights: dict[str, float] = dict(mutators.WEIGHTS)
+    if config.op == "scenario":
+        from fuzzer.scenario.mutate import SEQ_WEIGHTS
+
+        weights = dict(SEQ_WEIGHTS)
+    limits = session.reference.joint_limits
+    if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
+        return {"float_tracer": FloatCompareTracer(features)}
+    facts = session.facts()
+    stream = SpaceFill(facts.lower, facts.upper, seed=seed)
+    first_round = len(probes(facts.lower, facts.upper, rounds=1))
+    fresh = fresh_inputs(
+        config.op,
+        config.message_type,
+        stream,
+        facts.joint_names,
+        facts.reachable,
+        config.max_steps,
+        Boundary(facts.lower, facts.upper, start=min(seeded, first_round)),
+    )
+    aligned = fresh_inputs(
+        config.op,
+        config.message_type,
+        Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED),
+        facts.joint_names,
+        facts.reachable,
+        config.max_steps,
+        name=ALIGNED,
+    )
+    sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
+    search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
+    if config.op == "fk" and config.transport == "inprocess":
+        from fuzzer.generation.sweep import Sweep
+
+        search["sweep"] = Sweep(
+            [lim.lower for lim in limits],
+            [lim.upper for lim in limits],
+            config.tolerance,
+            seed=seed + SWEEP_SEED,
+        )
+    return search
