@@ -1,8 +1,8 @@
 """A bandit over input sources and mutators, rewarded by new behaviour.
 
 Each *arm* is a way to make the next input: mutating a corpus input (libFuzzer's parent or a
-high-difference one), or a fresh space-filling sample (``fuzzer.generation.spacefill``), or
-a fresh Hypothesis seed. After the input runs, the harness tells the arm that made it whether
+high-difference one), or a fresh space-filling sample or aligned configuration
+(``fuzzer.generation.spacefill``). After the input runs, the harness tells the arm that made it whether
 it paid off: a new coverage feature name or a new divergence signature in this process.
 :class:`Bandit` is discounted Thompson sampling on Bernoulli rewards (a Beta posterior per
 arm whose counts decay by ``DISCOUNT`` per update, so an arm that stops paying off is tried
