@@ -28,9 +28,7 @@ def replay_main(argv: Sequence[str]) -> int:
         try:
             result = replay_file(path, base, given, sessions, trust=args.trust_sidecar)
         except ConfigError as exc:
-            if len(files) == 1:
-                raise
-            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+            _skip_file(exc, files)
             errors += 1
             continue
         if not result.has_sidecar and source_of(path) == "command line":
@@ -44,6 +42,14 @@ def replay_main(argv: Sequence[str]) -> int:
         for line in result.steps[1:]:
             reporting.out("    " + line)
     return 2 if errors else (1 if diverging else 0)
+
+
+def _skip_file(exc: ConfigError, files: list[Path]) -> None:
+    """A file of several that cannot be read under this configuration: say so and go on (the
+    caller counts it); with a single file, the error is the command's (re-raised)."""
+    if len(files) == 1:
+        raise exc
+    sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
 
 
 def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
@@ -118,9 +124,7 @@ def minimize_main(argv: Sequence[str]) -> int:
         try:
             loaded = crashfiles.load(path, given, args.trust_sidecar, sessions)
         except ConfigError as exc:
-            if len(files) == 1:
-                raise
-            sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+            _skip_file(exc, files)
             errors += 1
             continue
         try:

@@ -39,7 +39,7 @@ from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.mutation import mutators
 from fuzzer.selection.floatcmp import FloatCompareTracer
 from fuzzer.selection.guidance import Features, input_features, step_bigrams
-from fuzzer.selection.state import Pool, Sources, Stats
+from fuzzer.selection.state import Made, Pool, Sources, Stats
 
 SNAPSHOT_SECONDS = 5.0
 POOL_PARENT_CHANCE = 0.2
@@ -356,7 +356,7 @@ class Harness:
             return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
         return case
 
-    def _fresh(self, parent: TestCase, rng: random.Random) -> tuple[dict[str, Any], str] | None:
+    def _fresh(self, parent: TestCase, rng: random.Random) -> Made:
         """A fresh input (space-filling or aligned) made from ``parent`` and its lineage name,
         when the source bandit picks one."""
         if self.sources is None:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from fuzzer.generation.boundary import Boundary
-from fuzzer.selection.state import BOUNDARY, SPACEFILL
+from fuzzer.selection.state import BOUNDARY, SPACEFILL, Made, Maker
 
 BLOCK = 256
 """Points drawn at a time (a power of two keeps Sobol's balance properties per block)."""
@@ -250,7 +250,7 @@ def fresh_inputs(
     max_steps: int = 16,
     boundary: Boundary | None = None,
     name: str = SPACEFILL,
-) -> Callable[[dict[str, Any], random.Random], tuple[dict[str, Any], str] | None]:
+) -> Maker:
     """The harness's ``Sources.fresh`` (and, with an ``Aligned`` stream and ``name`` ``aligned``,
     ``Sources.aligned``): the parent message carrying the stream's next point, and its lineage
     name ``name``. While ``boundary`` has probes left, every other call instead
@@ -267,7 +267,7 @@ def fresh_inputs(
         assert pose is not None
         return pose
 
-    def fresh(message: dict[str, Any], rng: random.Random) -> tuple[dict[str, Any], str] | None:
+    def fresh(message: dict[str, Any], rng: random.Random) -> Made:
         probed = boundary is not None and boundary.left > 0 and len(last) == 1
         if probed:
             assert boundary is not None

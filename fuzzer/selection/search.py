@@ -5,6 +5,7 @@ sweeps (``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harn
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 from fuzzer.execution.session import Session
@@ -46,24 +47,16 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=seed)
     first_round = len(probes(facts.lower, facts.upper, rounds=1))
-    fresh = fresh_inputs(
+    maker = partial(
+        fresh_inputs,
         config.op,
         config.message_type,
-        stream,
-        facts.joint_names,
-        facts.reachable,
-        config.max_steps,
-        Boundary(facts.lower, facts.upper, start=min(seeded, first_round)),
+        joint_names=facts.joint_names,
+        reachable=facts.reachable,
+        max_steps=config.max_steps,
     )
-    aligned = fresh_inputs(
-        config.op,
-        config.message_type,
-        Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED),
-        facts.joint_names,
-        facts.reachable,
-        config.max_steps,
-        name=ALIGNED,
-    )
+    fresh = maker(stream, boundary=Boundary(facts.lower, facts.upper, start=min(seeded, first_round)))
+    aligned = maker(Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED), name=ALIGNED)
     sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
     search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
     if config.op == "fk" and config.transport == "inprocess":

@@ -29,11 +29,12 @@ ALIGNED = "aligned"
 pi/2 or at a limit (``fuzzer.generation.spacefill.Aligned``), where joint axes line up."""
 
 MUTATE = "mutate"
+"""The arm of a mutated (or crossed-over) corpus input."""
 
 Made = tuple[dict[str, Any], str] | None
 """A fresh input's message and lineage name, or None (the source does not apply)."""
 Maker = Callable[[dict[str, Any], random.Random], Made]
-"""The arm of a mutated (or crossed-over) corpus input."""
+"""What makes a fresh input from a parent message (``Sources.fresh``, ``Sources.aligned``)."""
 
 
 @dataclass
