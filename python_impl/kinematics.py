@@ -9,6 +9,7 @@ enforced by clamping after every step (docs/api.md, "Inverse kinematics").
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from functools import reduce
 
 import numpy as np
@@ -36,13 +37,20 @@ def _coefficients(chain: Chain, values: Array) -> tuple[Array, Array]:
     return u1, u2
 
 
+def segment_transforms(chain: Chain, q: Array, link: int) -> Array:
+    """Transforms (link, 4, 4) of the first ``link`` segments, each relative to its parent link."""
+    u1, u2 = _coefficients(chain, segment_values(chain, q))
+    m: Array = (
+        chain.a0[:link] + u1[:link, None, None] * chain.a1[:link] + u2[:link, None, None] * chain.a2[:link]
+    )
+    return m
+
+
 def fk(chain: Chain, q: Array, link: int) -> Array:
     """Transform (4, 4) of link ``link`` (index into ``chain.link_names``) for q of shape (dof,)."""
     if link == 0:
         return np.eye(4)
-    u1, u2 = _coefficients(chain, segment_values(chain, q))
-    m = chain.a0[:link] + u1[:link, None, None] * chain.a1[:link] + u2[:link, None, None] * chain.a2[:link]
-    return reduce(np.matmul, m)
+    return reduce(np.matmul, segment_transforms(chain, q, link))
 
 
 def fk_batch(chain: Chain, q: Array, link: int) -> Array:
@@ -68,38 +76,78 @@ def fk_batch(chain: Chain, q: Array, link: int) -> Array:
     return out
 
 
+@dataclass(frozen=True)
+class Movable:
+    """The movable segments among a chain's first ``link`` segments (``movable_segments``)."""
+
+    mask: tuple[bool, ...]
+    """Per segment: it moves."""
+    columns: NDArray[np.int64]
+    """(k,) the variable (Jacobian column) of each movable segment, in chain order."""
+    axes: Array
+    """(k, 3, 1) its unit axis in its joint frame."""
+    revolute: NDArray[np.bool_]
+    """(k,) bool: it is revolute (else prismatic)."""
+
+
+def movable_segments(chain: Chain, link: int) -> Movable:
+    """The movable segments before link ``link`` (once per IK call, not per iteration)."""
+    variable = chain.variable[:link]
+    index = np.flatnonzero(variable >= 0)
+    return Movable(
+        tuple(v >= 0 for v in variable.tolist()),
+        variable[index],
+        chain.axis[index][:, :, None],
+        chain.kind[index] == REVOLUTE,
+    )
+
+
 def jacobian(chain: Chain, q: Array, link: int, nvars: int) -> Array:
     """Geometric Jacobian (6, nvars) of link ``link`` at its origin, in the root frame.
 
     Rows are (linear velocity, angular velocity); columns the first ``nvars``
     variables, which drive the first ``nvars`` movable segments (no mimics).
     """
-    u1, u2 = _coefficients(chain, segment_values(chain, q))
-    # every segment's transform at once (the same elementwise arithmetic as fk)
-    m = chain.a0[:link] + u1[:link, None, None] * chain.a1[:link] + u2[:link, None, None] * chain.a2[:link]
-    frames: dict[int, Array] = {}
-    t = np.eye(4)
-    for s in range(link):
-        if chain.variable[s] >= 0:
-            frames[s] = t @ chain.origin[s]
-        t = t @ m[s]
-    tip = t[:3, 3]
+    return fk_and_jacobian(chain, q, link, nvars)[1]
+
+
+def fk_and_jacobian(
+    chain: Chain, q: Array, link: int, nvars: int, movable: Movable | None = None
+) -> tuple[Array, Array]:
+    """``(fk(chain, q, link), jacobian(chain, q, link, nvars))`` from one pass over the segments.
+
+    The running product of the segment transforms is ``fk``'s (the same products in the same
+    order), so the transform equals ``fk``'s exactly. Each movable segment's joint frame is that
+    product times the segment's origin; the Jacobian's columns are computed for all of them at
+    once: ``(z x (p_tip - p_joint), z)`` for a revolute joint with world axis ``z``, ``(z, 0)``
+    for a prismatic one. ``movable``: ``movable_segments(chain, link)``, if the caller has it.
+    """
     jac = np.zeros((6, nvars))
-    for s in range(link):
-        v = chain.variable[s]
-        if v < 0:
-            continue
-        z = frames[s][:3, :3] @ chain.axis[s]
-        if chain.kind[s] == REVOLUTE:
-            # z x r written out: np.cross's own arithmetic (a1*b2 - a2*b1, ...), without its
-            # per-call overhead (it took more than half of the twin's IK time)
-            z0, z1, z2 = z.tolist()
-            r0, r1, r2 = (tip - frames[s][:3, 3]).tolist()
-            jac[:3, v] = (z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0)
-            jac[3:, v] = z
-        else:
-            jac[:3, v] = z
-    return jac
+    if link == 0:
+        return np.eye(4), jac
+    m = segment_transforms(chain, q, link)
+    if movable is None:
+        movable = movable_segments(chain, link)
+    frames = []
+    t = m[0]
+    if movable.mask[0]:  # segment 0 moves: its joint frame is its origin in the root frame
+        frames.append(chain.origin[0])
+    for s in range(1, link):
+        if movable.mask[s]:
+            frames.append(t @ chain.origin[s])
+        t = t @ m[s]
+    if not frames:
+        return t, jac
+    f = np.array(frames)  # (k, 4, 4)
+    z = np.matmul(f[:, :3, :3], movable.axes)[:, :, 0]  # (k, 3): world axis of each movable joint
+    r = t[:3, 3] - f[:, :3, 3]
+    z0, z1, z2 = z[:, 0], z[:, 1], z[:, 2]
+    r0, r1, r2 = r[:, 0], r[:, 1], r[:, 2]
+    # z x r written out: np.cross's own arithmetic (a1*b2 - a2*b1, ...), without its per-call overhead
+    cross = np.array([z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0])  # (3, k)
+    jac[:3, movable.columns] = np.where(movable.revolute, cross, z.T)
+    jac[3:, movable.columns] = np.where(movable.revolute, z.T, 0.0)
+    return t, jac
 
 
 def error_twist(current: Array, target: Array) -> Array:
@@ -145,12 +193,13 @@ def _ik(
         converged = is_small(error_twist(fk(chain, q, link), target))
     else:
         start = q.copy()
+        movable = movable_segments(chain, link)
         for _ in range(IK_MAX_ITERATIONS):
-            twist = error_twist(fk(chain, q, link), target)
+            current, jac = fk_and_jacobian(chain, q, link, nvars, movable)
+            twist = error_twist(current, target)
             if is_small(twist):
                 converged = True
                 break
-            jac = jacobian(chain, q, link, nvars)
             if not (np.isfinite(twist).all() and np.isfinite(jac).all()):
                 q = start  # a non-finite iterate (absurd target): keep the clamped seed
                 break

@@ -12,7 +12,7 @@ import python_impl
 from robot_api import ErrorCode, IKStatus, InvalidInputError
 from robot_api.constants import IK_EPS
 from robot_api.records import JointType, Pose
-from tests.support import IMPLEMENTATIONS, robot_id, robot_path, sample_configurations
+from tests.support import IMPLEMENTATIONS, ROOT, robot_id, robot_path, sample_configurations
 
 IK_ROBOTS = [("probot_anno", None), ("ur5", None), ("panda", None), ("kinova", None), ("xarm7", None)]
 N = 300
@@ -182,3 +182,31 @@ def test_continuous_joints_come_back_normalized() -> None:
         result = model.inverse_kinematics(model.forward_kinematics(q), q)
         assert result.status == IKStatus.SUCCESS
         assert within_limits(model, result.joint_values)
+
+
+@pytest.mark.parametrize("robot", ["zoo_arm", "ur5", "kinova"])
+def test_twin_jacobian_is_the_derivative_of_its_fk(robot: str) -> None:
+    """``fk_and_jacobian`` (one pass for the twin's IK iteration): its transform is ``fk``'s,
+    bit for bit, and its Jacobian matches central differences of ``fk`` for every link of the
+    chain (``zoo_arm`` has revolute, continuous, prismatic and fixed joints)."""
+    from python_impl import kinematics
+
+    path = ROOT / "benchmarks" / "robots" / "zoo_arm.urdf" if robot == "zoo_arm" else robot_path(robot)
+    model = python_impl.RobotModel(path)
+    chain = model.chain
+    h = 1e-6
+    for q in sample_configurations(model, 5, seed=3):
+        for link in range(len(chain.link_names)):
+            nvars = int(np.count_nonzero(chain.variable[:link] >= 0))
+            transform, jac = kinematics.fk_and_jacobian(chain, q, link, nvars)
+            assert np.array_equal(transform, kinematics.fk(chain, q, link))
+            assert jac.shape == (6, nvars)
+            for v in range(nvars):
+                dq = np.zeros_like(q)
+                dq[v] = h
+                ahead, behind = kinematics.fk(chain, q + dq, link), kinematics.fk(chain, q - dq, link)
+                linear = (ahead[:3, 3] - behind[:3, 3]) / (2 * h)
+                spin = (ahead[:3, :3] - behind[:3, :3]) / (2 * h) @ transform[:3, :3].T  # [w]x
+                angular = np.array([spin[2, 1], spin[0, 2], spin[1, 0]])
+                np.testing.assert_allclose(jac[:3, v], linear, atol=1e-7)
+                np.testing.assert_allclose(jac[3:, v], angular, atol=1e-7)
