@@ -55,10 +55,8 @@ from fuzzer.mutation.base import (
     INTERESTING_FLOATS,
     INTERESTING_INTS,
     INTERESTING_STRINGS,
-    MAX_ARRAY_LEN,
     NOOP,
     PAPER_STRATEGIES,
-    SPLICE_ATTEMPTS,
     Message,
     MutationContext,
     Mutator,
@@ -66,17 +64,12 @@ from fuzzer.mutation.base import (
 )
 from fuzzer.mutation.fields import (
     _TIME_SECS,
-    NSECS_SPEC,
     ArrayRef,
-    FieldType,
     _choose,
     _coerce,
     _get,
     _inventory,
-    _parse_type,
     _scalar_spec,
-    _valid,
-    _valid_time,
     clone,
 )
 from fuzzer.mutation.leaves import (
@@ -85,8 +78,8 @@ from fuzzer.mutation.leaves import (
     _apply_leaf_ops,
     _dictionary_pool,
     _eligible_leaves,
-    _interesting_value,
 )
+from fuzzer.mutation.structure import choose_array, growable, new_element, splice_both
 
 __all__ = [
     "ARITH_MAX",
@@ -291,65 +284,6 @@ def havoc(message: Message, ctx: MutationContext) -> Message:
     return message
 
 
-def _valid_element(item: Any, base: str, ctx: MutationContext) -> bool:
-    """Whether ``item`` may be an element of an array of ``base`` (message elements: any dict)."""
-    if base in _TIME_SECS:
-        return _valid_time(item, base, ctx)
-    spec = _scalar_spec(base)
-    return _valid(item, spec, ctx) if spec is not None else isinstance(item, dict)
-
-
-def _splice_array(a: list[Any], b: Any, ftype: FieldType, ctx: MutationContext) -> list[Any]:
-    """Prefix of one parent + suffix of the other, cut at one aligned index (fixed lengths kept)."""
-    if not isinstance(b, list) or (ftype.fixed is not None and len(b) != len(a)):
-        return clone(a)
-    if len(b) > max(len(a), ftype.bound or MAX_ARRAY_LEN):
-        return clone(a)
-    if not all(_valid_element(item, ftype.base, ctx) for item in b):
-        return clone(a)
-    first, second = (a, b) if ctx.rng.random() < 0.5 else (b, a)
-    cut = ctx.rng.randint(0, len(first))  # cut <= len(first): element i always comes from a[i] or b[i]
-    return clone(first[:cut] + second[cut:])
-
-
-def _splice_scalar(a: Any, b: Any, base: str, ctx: MutationContext) -> Any:
-    """``a`` or ``b`` (coin flip) when ``b`` is a valid value of the same type, else ``a``."""
-    spec = _scalar_spec(base)
-    valid = _valid(b, spec, ctx) if spec is not None else base in _TIME_SECS and _valid_time(b, base, ctx)
-    return clone(b if valid and ctx.rng.random() < 0.5 else a)
-
-
-def _splice_dict(a: Message, b: Any, prefix: str, ctx: MutationContext) -> Message:
-    """Field-by-field splice of ``a`` with ``b`` (shape and order of ``a``)."""
-    out: Message = {}
-    for key, value in a.items():
-        name = f"{prefix}.{key}" if prefix else str(key)
-        other = b.get(key) if isinstance(b, dict) else None
-        text = ctx.field_types.get(name)
-        ftype = _parse_type(text) if text is not None else None
-        if other is None:
-            out[key] = clone(value)
-        elif ftype is not None and ftype.is_array and isinstance(value, list):
-            out[key] = _splice_array(value, other, ftype, ctx)
-        elif isinstance(value, dict) and (ftype is None or ftype.base not in _TIME_SECS):
-            out[key] = _splice_dict(value, other, name, ctx)
-        elif ftype is not None:
-            out[key] = _splice_scalar(value, other, ftype.base, ctx)
-        else:
-            out[key] = clone(value)
-    return out
-
-
-def _splice_both(a: Message, b: Message, ctx: MutationContext) -> Message:
-    """Splice ``a`` and ``b``, retrying (up to :data:`SPLICE_ATTEMPTS`) while one parent is reproduced."""
-    child = _splice_dict(a, b, "", ctx)
-    for _ in range(SPLICE_ATTEMPTS - 1):
-        if a == b or (child != a and child != b):
-            break
-        child = _splice_dict(a, b, "", ctx)
-    return child
-
-
 @register("splice", weight=0.5)
 def splice(message: Message, ctx: MutationContext) -> Message:
     """Join the message with ``ctx.other`` (AFL splice): arrays prefix + suffix, scalars from either.
@@ -358,7 +292,7 @@ def splice(message: Message, ctx: MutationContext) -> Message:
     """
     if ctx.other is None:
         raise NotApplicable("splice needs ctx.other")
-    return _splice_both(message, ctx.other, ctx)
+    return splice_both(message, ctx.other, ctx)
 
 
 # --- libFuzzer ---------------------------------------------------------------------------------------------
@@ -402,51 +336,24 @@ def string_swap(message: Message, ctx: MutationContext) -> Message:
     return _apply_leaf_ops(message, ctx, ("string_swap",))
 
 
-def _choose_array(
-    message: Message, ctx: MutationContext, keep: Callable[[ArrayRef, list[Any]], bool]
-) -> ArrayRef:
-    """An array of ``message`` that ``keep`` accepts (focus honoured), or :class:`NotApplicable`."""
-    refs = [ref for ref in _inventory(message, ctx).arrays if keep(ref, _get(message, ref.loc))]
-    return _choose(refs, lambda ref: ref.name, ctx)
-
-
-def _new_element(ref: ArrayRef, array: list[Any], ctx: MutationContext) -> Any:
-    """A fresh element: an interesting scalar or time, or a copy of an element of a message array."""
-    base = ref.ftype.base
-    if base in _TIME_SECS:
-        return {
-            "secs": _interesting_value(_TIME_SECS[base], ctx),
-            "nsecs": _interesting_value(NSECS_SPEC, ctx),
-        }
-    spec = _scalar_spec(base)
-    if spec is not None:
-        return _coerce(_interesting_value(spec, ctx), spec, ctx)
-    return clone(ctx.rng.choice(array))
-
-
-def _growable(ref: ArrayRef, array: list[Any]) -> bool:
-    """Whether ``array`` is variable-length and below its capacity."""
-    return ref.ftype.fixed is None and len(array) < ref.capacity
-
-
 @register("array_insert", weight=0.5)
 def array_insert(message: Message, ctx: MutationContext) -> Message:
     """Insert an element (interesting value) into a variable-length array; parallel arrays may mismatch."""
 
     def keep(ref: ArrayRef, array: list[Any]) -> bool:
         is_message = ref.ftype.base not in _TIME_SECS and _scalar_spec(ref.ftype.base) is None
-        return _growable(ref, array) and not (is_message and not array)
+        return growable(ref, array) and not (is_message and not array)
 
-    ref = _choose_array(message, ctx, keep)
+    ref = choose_array(message, ctx, keep)
     array = _get(message, ref.loc)
-    array.insert(ctx.rng.randint(0, len(array)), _new_element(ref, array, ctx))
+    array.insert(ctx.rng.randint(0, len(array)), new_element(ref, array, ctx))
     return message
 
 
 @register("array_delete", weight=0.5)
 def array_delete(message: Message, ctx: MutationContext) -> Message:
     """Delete one element of a non-empty variable-length array; parallel arrays may mismatch."""
-    ref = _choose_array(message, ctx, lambda ref, array: ref.ftype.fixed is None and bool(array))
+    ref = choose_array(message, ctx, lambda ref, array: ref.ftype.fixed is None and bool(array))
     array = _get(message, ref.loc)
     del array[ctx.rng.randrange(len(array))]
     return message
@@ -458,10 +365,10 @@ def array_duplicate(message: Message, ctx: MutationContext) -> Message:
 
     def keep(ref: ArrayRef, array: list[Any]) -> bool:
         if ref.ftype.fixed is None:
-            return bool(array) and _growable(ref, array)
+            return bool(array) and growable(ref, array)
         return len(array) >= 2
 
-    ref = _choose_array(message, ctx, keep)
+    ref = choose_array(message, ctx, keep)
     array = _get(message, ref.loc)
     source = ctx.rng.randrange(len(array))
     if ref.ftype.fixed is None:
@@ -525,4 +432,4 @@ def crossover(a: dict[str, Any], b: dict[str, Any], ctx: MutationContext) -> dic
     dict
         The child; equal to ``a`` when ``a == b``.
     """
-    return _splice_both(a, b, ctx)
+    return splice_both(a, b, ctx)
