@@ -185,6 +185,26 @@ def test_fresh_steps_are_made_from_the_scenario() -> None:
     assert {"/go", "/plan", "/execute", "recombined"} <= topics
 
 
+def test_fresh_named_targets_mostly_name_a_target_that_exists_there() -> None:
+    """A fresh ``/named_target`` names "home" or a name remembered before it three times in four
+    (syzkaller's resources), and sometimes anything else (the unknown-target error path)."""
+    parent = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), GO, step("/remember", data="spot"), GO]}
+    known = unknown = 0
+    for seed in range(3000):
+        child, _ = MUTATE(parent, context(seed), "seq_insert")
+        [i] = removed_one(child["steps"], parent["steps"])[:1]
+        new = child["steps"][i]
+        if new["topic"] != "/named_target" or new in parent["steps"]:
+            continue
+        remembered = {s["msg"]["data"] for s in child["steps"][:i] if s["topic"] == "/remember"}
+        if new["msg"]["data"] in {"home", *remembered}:
+            known += 1
+        else:
+            unknown += 1
+    assert known + unknown >= 50
+    assert known / (known + unknown) >= 0.7 and unknown > 0
+
+
 def test_field_types_cover_arrays_of_messages() -> None:
     types = field_types(REGISTRY, "geometry_msgs/PoseArray")
     assert types["poses"] == "geometry_msgs/Pose[]" and types["poses.orientation.w"] == "float64"

@@ -11,7 +11,8 @@ Mutators
 --------
 * ``seq_insert``: insert a step, a copy of a step of this scenario or of ``ctx.other`` (the
   other parent), or a fresh one (``/go``, ``/plan``, ``/execute``..., a joint target
-  recombined column by column from the scenario's joint targets, a scaling factor...).
+  recombined column by column from the scenario's joint targets, a scaling factor, a named
+  target that mostly names one that exists at that point...).
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -54,6 +55,11 @@ FRESH_FLOATS: Final = (0.0, 0.01, 0.1, 0.5, 1.0)
 """Values a fresh ``std_msgs/Float64`` step may take, besides the scenario's and the engine's."""
 FRESH_NAMES: Final = ("home",)
 """Named targets a fresh ``std_msgs/String`` step may take, besides the scenario's strings."""
+KNOWN_NAME_PROBABILITY: Final = 0.75
+"""Fresh ``/named_target`` step: chance that it names a target that exists where it is inserted
+("home", or a name a ``/remember`` step before it stored), as syzkaller gives a call a resource an
+earlier call made; otherwise any string of the scenario, "home" or a joint or link name (an
+unknown target: the error path)."""
 INTERESTING_PROBABILITY: Final = 0.5
 """Fresh joint target: chance that one joint takes an engine interesting value."""
 SPLICE_ATTEMPTS: Final = 8
@@ -185,8 +191,19 @@ def _msg_type_of(step: Any, ctx: SequenceContext) -> str | None:
     return ctx.tables.types.get(topic) if isinstance(topic, str) else None
 
 
-def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, Any]:
-    """A new message for ``topic`` made from the scenario's values (or registry defaults)."""
+def _known_names(before: Steps) -> list[str]:
+    """Named targets that exist after ``before`` has run: "home" and every remembered name."""
+    remembered = [
+        s["msg"]["data"]
+        for s in before
+        if isinstance(s, dict) and s.get("topic") == "/remember" and isinstance(s.get("msg"), dict)
+    ]
+    return [*FRESH_NAMES, *(name for name in remembered if isinstance(name, str))]
+
+
+def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext, at: int | None = None) -> dict[str, Any]:
+    """A new message for ``topic`` made from the scenario's values (or registry defaults), for a
+    step inserted before ``steps[at]`` (at the end when ``at`` is None)."""
     msg_type = ctx.tables.types[topic]
     same = [s["msg"] for s in steps if _msg_type_of(s, ctx) == msg_type]
     msg = ctx.tables.default(topic)
@@ -204,6 +221,8 @@ def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, 
     elif msg_type == "std_msgs/Float64":
         pool = [float(m["data"]) for m in same if isinstance(m.get("data"), float)]
         msg["data"] = ctx.rng.choice([*pool, *FRESH_FLOATS])
+    elif topic == "/named_target" and ctx.rng.random() < KNOWN_NAME_PROBABILITY:
+        msg["data"] = ctx.rng.choice(_known_names(steps[:at]))
     elif msg_type == "std_msgs/String":
         pool = [m["data"] for m in same if isinstance(m.get("data"), str)]
         names = [t for t in ctx.value.dictionary if isinstance(t, str)]
@@ -217,8 +236,9 @@ def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext) -> dict[str, 
     return msg
 
 
-def _new_step(steps: Steps, ctx: SequenceContext) -> StepDict:
-    """A copy of a step of this scenario or the other parent, or a fresh step."""
+def _new_step(steps: Steps, ctx: SequenceContext, at: int | None = None) -> StepDict:
+    """A copy of a step of this scenario or the other parent, or a fresh step, to go before
+    ``steps[at]`` (at the end when ``at`` is None)."""
     copies = [s for s in (*steps, *(ctx.other or ())) if _msg_type_of(s, ctx) is not None]
     if copies and ctx.rng.random() < COPY_PROBABILITY:
         return clone(ctx.rng.choice(copies))
@@ -226,7 +246,7 @@ def _new_step(steps: Steps, ctx: SequenceContext) -> StepDict:
     while pool:
         topic = ctx.rng.choices(list(pool), weights=list(pool.values()))[0]
         try:
-            return {"topic": topic, "msg": _fresh_message(topic, steps, ctx)}
+            return {"topic": topic, "msg": _fresh_message(topic, steps, ctx, at)}
         except NotApplicable:
             del pool[topic]
     raise NotApplicable("no step can be made")  # pragma: no cover - Empty topics always can
@@ -237,7 +257,8 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a new step (a copy, or a fresh ``/go``, ``/plan``, joint target...) anywhere."""
     if len(steps) >= ctx.max_steps:
         raise NotApplicable("the scenario has max_steps steps")
-    steps.insert(ctx.rng.randint(0, len(steps)), _new_step(steps, ctx))
+    at = ctx.rng.randint(0, len(steps))
+    steps.insert(at, _new_step(steps, ctx, at))
     return steps, "seq_insert"
 
 
