@@ -346,43 +346,6 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
     assert judge(off, run(three), run(four), facts).kind is Kind.VALUE
 
 
-def test_the_comparison_goes_past_a_known_limitation_while_the_targets_enter_steps_alike() -> None:
-    """A path on the knife edge (a known limitation) moves nothing: a later divergence is
-    reported, not hidden behind it. Once the targets enter a step apart (the plan an /execute
-    runs, or the state after IK answers that differ), the known limitation stays the verdict:
-    what follows may be its consequence."""
-
-    def origin(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
-
-    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, origin)
-    three = trajectory([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)])
-    four = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)])
-    path = Step("cartesian_path", MESSAGES["cartesian_path"])
-    call = ScenarioCall((path, Step("joint_target", {})))
-    target = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
-    other = ok(joint_target=(0.7, 0.5), joint_values=(0.0, 0.0))
-    c = judge(call, run(three, target), run(four, other), facts)
-    assert (c.kind, c.field, c.step) == (Kind.VALUE, "joint_target.joint_target", 1)
-    c = judge(call, run(three, target), run(four, target), facts)
-    assert (c.kind, c.field, c.step) == (Kind.KNOWN_LIMITATION, "cartesian_path.trajectory.points", 0)
-
-    elsewhere = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.2)])
-    execute = ScenarioCall((path, Step("execute", {})))
-    c = judge(
-        execute, run(three, ok(joint_values=(0.3, 0.0))), run(elsewhere, ok(joint_values=(0.3, 0.2))), facts
-    )
-    assert (c.kind, c.step) == (Kind.KNOWN_LIMITATION, 0)  # the plans to execute end apart
-
-    apart = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)
-    call = scenario("pose_target", "go", "joint_target")
-    set_ = ok(joint_values=(0.0, 0.0))
-    went = ok(joint_values=(0.4, 0.1), success=(1.0,))
-    moved = with_value(went, "joint_values", (0.4, 0.1 + 1e-5))
-    c = judge(call, run(set_, went, target), run(set_, moved, other), apart)
-    assert (c.kind, c.step) == (Kind.KNOWN_LIMITATION, 1)  # the arms stand apart after it
-
-
 def test_timing_of_ik_answers_that_differ_within_tolerance_is_a_known_limitation() -> None:
     call = scenario("pose_target", "plan")
     set_ = ok(joint_values=(0.0, 0.0))

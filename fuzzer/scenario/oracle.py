@@ -26,11 +26,7 @@ orientation                2pi, q ~ -q, canonical boundary)
 Values named ``in_effect.*`` are what the executor knew (the script's settings), not outputs
 of a target, and are not compared. Divergences that documented limitations explain (IK's
 answer is a pose, not a unique joint vector; knife edges of step counts) are classified, not
-counted (``known_limitation``; ``fuzzer.scenario.oracle_ik``). When such a step leaves what the
-targets enter the next steps alike (:func:`entered_alike`: settings, goals and state as numbers,
-and the plan an ``/execute`` runs), the comparison goes on, and a later divergence that no
-limitation explains is reported instead: a path's IK answers would otherwise hide every step
-after them.
+counted (``known_limitation``; ``fuzzer.scenario.oracle_ik``).
 
 Property checks (``fuzzer.scenario.oracle_properties``) run on each target alone; a differential
 divergence takes precedence at the same step, else the earliest step wins; a
@@ -48,10 +44,9 @@ from fuzzer.execution import oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario import oracle_switch
-from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
+from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import (
     FRACTION_TOLERANCE,
-    IK_EXACT,
     absolute,
     classify,
     ik_answer_changed,
@@ -235,65 +230,21 @@ def first_differential(
     """The first divergent step (classified), or ``agree`` with the largest raw difference."""
     largest = 0.0
     before = list(zip(contexts(call, a, facts), contexts(call, b, facts), strict=False))
-    explained: Comparison | None = None  # the first known limitation the comparison went past
     for i in range(max(len(a.steps), len(b.steps))):
         kind = call.steps[i].kind if i < len(call.steps) else "step"
-        if explained is not None and (i >= len(before) or not entered_alike(kind, before[i])):
-            return explained  # the targets moved apart after it: what follows may be its consequence
         if i >= len(a.steps) or i >= len(b.steps):
             c = _status_of_shorter(kind, a if i >= len(a.steps) else b)
             return replace(c, step=i, step_kind=kind)
         c = compare_step(kind, a.steps[i], b.steps[i], tol, facts)
         largest = max(largest, c.largest)
         if c.divergent:
-            c = replace(
-                classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol), step=i, step_kind=kind
-            )
-            if c.kind is not Kind.KNOWN_LIMITATION:
-                return c
-            explained = explained or c
-    if explained is not None:
-        return explained
+            c = classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol)
+            return replace(c, step=i, step_kind=kind)
     # every step agreed: the group's constructor, or reading the final state, may still differ
     c = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
     if c.divergent:
         return replace(c, field="scenario.status")
     return Comparison(Kind.AGREE, largest=largest)
-
-
-def entered_alike(kind: str, before: tuple[Context, Context]) -> bool:
-    """Whether the two targets enter a step of kind ``kind`` alike: the same settings and pose
-    goal, and the same joint goal and state as numbers (within ``IK_EXACT``), and for
-    ``/execute`` the same last plan (what it executes).
-
-    After a known limitation, the comparison goes on while every step is entered alike: the
-    limitation then stayed in its step's own outputs (a path's intermediate IK answers, its time
-    stamps), and a later divergence that no rule explains is reported. Once the arms, goals or
-    the plan to execute moved apart, even within tolerance (IK from a singular state is chaotic
-    in its seed), the known limitation is the verdict.
-    """
-    x, y = before
-    if (x.velocity_scaling, x.acceleration_scaling, x.goal_tolerance, x.eef_step, x.pose_goal) != (
-        y.velocity_scaling,
-        y.acceleration_scaling,
-        y.goal_tolerance,
-        y.eef_step,
-        y.pose_goal,
-    ):
-        return False
-    vectors = [(x.joint_goal, y.joint_goal), (x.state, y.state)]
-    if kind == "execute":
-        vectors.append((x.last_plan, y.last_plan))
-    for u, v in vectors:
-        if (u is None) != (v is None):
-            return False
-        if (
-            u is not None
-            and v is not None
-            and (len(u) != len(v) or not all(abs(p - q) <= IK_EXACT for p, q in zip(u, v, strict=True)))
-        ):
-            return False
-    return True
 
 
 def compare_scenario(
@@ -338,7 +289,6 @@ def prefer(differential: Comparison, violation: Comparison | None) -> Comparison
 __all__ = [
     "compare_scenario",
     "compare_step",
-    "entered_alike",
     "first_differential",
     "ik_answer_changed",
     "prefer",
