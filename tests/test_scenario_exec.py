@@ -21,7 +21,7 @@ from fuzzer.execution.session import ConfigError, RunConfig, Session
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import CallError, call_from_json, call_to_json, mapping_for
 from fuzzer.input.msgdef import MessageRegistry
-from fuzzer.scenario.execute import run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, Moved, Nudge, run_scenario
 from fuzzer.scenario.steps import MAX_STEPS, MSG_TYPE, TOPICS, ScenarioCall, to_call, validate
 from robot_api import robots
 
@@ -260,7 +260,7 @@ def test_nudge_shifts_the_state_before_its_step(runners: tuple[Runner, Runner]) 
     message = {"steps": [joint_target(Q1), text("/remember", "n"), empty("/go")]}
     for runner in runners:
         plain = run_scenario(runner, to_call(message))
-        nudged = run_scenario(runner, to_call(message), nudge=(1, 1e-3))
+        nudged = run_scenario(runner, to_call(message), nudge=Nudge(1, 1e-3))
         before = plain.steps[1].values["named.n"]
         after = nudged.steps[1].values["named.n"]
         limits = runner.model.joint_limits
@@ -268,6 +268,59 @@ def test_nudge_shifts_the_state_before_its_step(runners: tuple[Runner, Runner]) 
             expected = min(max(x + (1e-3 if j % 2 == 0 else -1e-3), limits[j].lower), limits[j].upper)
             assert math.isclose(y, expected, abs_tol=1e-12), j
         assert nudged.steps[0].values == plain.steps[0].values  # steps before the nudge unchanged
+
+
+def reached(runner: Runner, q: list[float]) -> tuple[float, ...]:
+    return tuple(runner.model.forward_kinematics(q).position)
+
+
+@pytest.mark.parametrize("kind", ["pose_target", "position_target"])
+def test_a_goal_nudge_moves_the_target_in_effect(runners: tuple[Runner, Runner], kind: str) -> None:
+    shift = 1e-3
+    for runner in runners:
+        fk = runner.model.forward_kinematics(Q1)
+        if kind == "pose_target":
+            msg = {"header": HEADER, "pose": pose_msg(fk.position, fk.orientation)}
+        else:
+            msg = {"header": HEADER, "point": dict(zip("xyz", fk.position, strict=True))}
+        goal = {"topic": f"/{kind}", "msg": msg}
+        # the goal is set, then other steps, then the IK step the nudge comes before
+        call = to_call({"steps": [goal, text("/remember", "r"), empty("/go")]})
+        plain = run_scenario(runner, call)
+        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.GOAL))
+        assert NUDGE_FAILED not in nudged.values
+        assert plain.steps[2].status is nudged.steps[2].status is Status.OK
+        before = plain.steps[2].values["position"]
+        after = nudged.steps[2].values["position"]
+        expected = (before[0] + shift, before[1] - shift, before[2] + shift)
+        assert max(abs(x - y) for x, y in zip(after, expected, strict=True)) < 1e-5
+        assert nudged.steps[1].values == plain.steps[1].values  # steps before the nudge unchanged
+
+
+def test_a_goal_nudge_moves_a_paths_waypoints(runners: tuple[Runner, Runner]) -> None:
+    shift = 1e-3
+    for runner in runners:
+        fk = runner.model.forward_kinematics(Q1)
+        poses = [pose_msg(fk.position, fk.orientation)]
+        path = {"topic": "/cartesian_path", "msg": {"header": HEADER, "poses": poses}}
+        call = to_call({"steps": [joint_target(Q1), empty("/go"), path]})
+        plain = run_scenario(runner, call)
+        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.GOAL))
+        dof = len(Q1)
+        last = [list(o.steps[2].values["trajectory.positions"][-dof:]) for o in (plain, nudged)]
+        assert plain.steps[2].values["fraction"] == nudged.steps[2].values["fraction"] == (1.0,)
+        assert reached(runner, last[0]) == pytest.approx(fk.position, abs=1e-5)
+        moved = (fk.position[0] + shift, fk.position[1] - shift, fk.position[2] + shift)
+        assert reached(runner, last[1]) == pytest.approx(moved, abs=1e-5)
+        assert call.steps[2].message["poses"][0]["position"]["x"] == fk.position[0]  # the call is unchanged
+
+
+def test_a_goal_nudge_without_a_pose_goal_gives_no_evidence(runners: tuple[Runner, Runner]) -> None:
+    for runner in runners:
+        call = to_call({"steps": [joint_target(Q1), empty("/go")]})
+        nudged = run_scenario(runner, call, nudge=Nudge(1, 1e-9, Moved.GOAL))
+        assert NUDGE_FAILED in nudged.values
+        assert nudged.steps == run_scenario(runner, call).steps
 
 
 def test_seeds_are_valid_meaningful_scripts() -> None:

@@ -151,7 +151,8 @@ def test_every_stateful_bug_is_registered_for_the_scenario_op() -> None:
         assert bug.target == f"benchmarks.zoo.stateful:{bug.name}" and not bug.is_control
     assert BY_NAME["silent_clamp"].target == "benchmarks.zoo.bugs:silent_clamp"  # unchanged
     scenario_controls = {(c.robot, c.target) for c in CONTROLS if c.op == "scenario"}
-    assert scenario_controls == {(b.robot, "benchmarks.zoo.bugs:control") for b in STATEFUL}
+    expected = {b.robot for b in STATEFUL} | {"ur5"}  # UR5: SCENARIO_UR5, beside the zoo's arms
+    assert scenario_controls == {(r, "benchmarks.zoo.bugs:control") for r in expected}
 
 
 @pytest.mark.parametrize("name", sorted(SHOW))
@@ -223,7 +224,7 @@ def test_sweeps_run_stateful_bugs_with_the_scenario_op_and_ops_mode_runs_both() 
     }  # the baselines have no scenario op
     mode = bench_zoo.MODES["ops"]
     controls = tuple(c.name for c in CONTROLS if c.op == "scenario")  # the false positives beside
-    assert mode.bugs == (*names, *controls) and len(controls) == 2
+    assert mode.bugs == (*names, *controls) and len(controls) == 3
     jobs = bench_zoo.plan_jobs(mode.bugs, mode.engines, 2, mode.ops)
     assert len(jobs) == len(mode.bugs) * 2 * 2
     assert {(bug.name, bug.op) for bug, _, _ in jobs} == {

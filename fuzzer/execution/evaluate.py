@@ -25,10 +25,14 @@ targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
 step's outcomes (the field names the step kind, the step index is not in the key). A status
 or value divergence at a step that solves IK (``go``/``plan`` with a pose or position
 target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1e-9 (both
-ways) and 1e-7 just before that step (``run_scenario``'s ``nudge``): a target whose own
+ways) and 1e-7 just before that step, then with the goal moved so (m: the pose or position
+target in effect, or the path's waypoints; ``run_scenario``'s ``nudge``): a target whose own
 answer at that step changes (status, fraction, point count, or the IK answer - the state
 after ``go``, the last point of a plan, any point of a path - beyond the campaign tolerance)
-makes it ``ill_conditioned``.
+makes it ``ill_conditioned``. The goal nudge is needed where Newton-Raphson's first step
+clamps joints at their limits: that erases a move of the state, while the iterates that
+follow still depend on every rounding, so two correct solvers can end differently from one
+seed (docs/engine.md, "Ill-conditioned IK").
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, Moved, Nudge, run_scenario
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_properties import first_property
@@ -152,7 +156,7 @@ class Evaluator:
         call: AnyCall,
         seeds: Seeds = (None, None),
         runners: Sequence[Runner] | None = None,
-        nudge: tuple[int, float] | None = None,
+        nudge: Nudge | None = None,
     ) -> tuple[Outcome, ...]:
         """Run ``call`` on both targets (the campaign's unless ``runners`` is given); ``nudge``
         is passed to ``run_scenario`` for a scenario."""
@@ -309,13 +313,14 @@ class Evaluator:
         comparison: Comparison,
         runners: Sequence[Runner],
     ) -> Comparison:
-        """A divergence at a step that solves IK, re-run with the state nudged before it."""
+        """A divergence at a step that solves IK, re-run with the state, then the goal, nudged
+        before it."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
         kind = call.steps[step].kind
-        for shift in IK_PERTURBATIONS:
-            nudged = self.run_both(call, runners=runners, nudge=(step, shift))
+        for moved, shift in ((m, s) for m in (Moved.STATE, Moved.GOAL) for s in IK_PERTURBATIONS):
+            nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved))
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way
             for first, second in zip(outcomes, nudged, strict=True):
@@ -328,7 +333,7 @@ class Evaluator:
         return comparison
 
 
-def scenario_outcome(runner: Runner, call: ScenarioCall, nudge: tuple[int, float] | None = None) -> Outcome:
+def scenario_outcome(runner: Runner, call: ScenarioCall, nudge: Nudge | None = None) -> Outcome:
     """``run_scenario``, never raising: a group that cannot be constructed is the outcome."""
     try:
         return run_scenario(runner, call, nudge)

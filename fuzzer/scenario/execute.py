@@ -28,7 +28,9 @@ a plan ``in_effect.plan_last`` (the executed plan's last point).
 
 from __future__ import annotations
 
+import enum
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -73,6 +75,54 @@ def _pose_tuple(pose: dict[str, Any]) -> tuple[tuple[float, ...], tuple[float, .
     return (p["x"], p["y"], p["z"]), (q["x"], q["y"], q["z"], q["w"])
 
 
+class Moved(enum.Enum):
+    """What a :class:`Nudge` moves."""
+
+    STATE = "state"
+    """The current state: every joint by the shift (rad, m), minus on odd indices."""
+    GOAL = "goal"
+    """The pose goal the step solves IK for (m): a ``/cartesian_path`` step's waypoints, or
+    else the pose or position target in effect, set again moved."""
+
+
+@dataclass(frozen=True)
+class Nudge:
+    """A small move just before one step, for the oracle's ill-conditioning checks.
+
+    Attributes
+    ----------
+    index : int
+        The step it comes before.
+    shift : float
+        How far (rad or m): joints alternate in sign (``+shift`` on even indices), positions
+        move by ``(+shift, -shift, +shift)``.
+    moved : Moved
+        The state or the goal.
+    """
+
+    index: int
+    shift: float
+    moved: Moved = Moved.STATE
+
+
+def shifted_goal(step: Step, shift: float) -> Step:
+    """``step`` (a ``/pose_target``, ``/position_target`` or ``/cartesian_path``) with every
+    position it names moved by ``(+shift, -shift, +shift)`` (m); other steps unchanged."""
+
+    def moved(point: dict[str, Any]) -> dict[str, Any]:
+        return {**point, "x": point["x"] + shift, "y": point["y"] - shift, "z": point["z"] + shift}
+
+    msg = step.message
+    if step.kind == "pose_target":
+        return Step(step.kind, {**msg, "pose": {**msg["pose"], "position": moved(msg["pose"]["position"])}})
+    if step.kind == "position_target":
+        return Step(step.kind, {**msg, "point": moved(msg["point"])})
+    if step.kind == "cartesian_path":
+        poses = [{**pose, "position": moved(pose["position"])} for pose in msg["poses"]]
+        return Step(step.kind, {**msg, "poses": poses})
+    return step
+
+
 def _shifted(state: list[float], shift: float, limits: Any) -> list[float]:
     """``state`` moved by ``shift`` on every joint (minus on odd indices), clamped into the
     limits, continuous joints normalized into (-pi, pi] (the contract's rule)."""
@@ -103,6 +153,7 @@ class _Run:
         self.acceleration_scaling = 1.0
         self.goal_tolerance = GOAL_JOINT_TOLERANCE
         self.pose_goal = False
+        self.goal_step: Step | None = None
         self.last_plan: Any = None
         self._joint_names: tuple[str, ...] | None = None
 
@@ -120,6 +171,14 @@ class _Run:
         times, positions = np.array([0.0]), np.array([point])
         trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
         self.group.execute(trajectory)
+
+    def nudge_goal(self, shift: float) -> None:
+        """Set the pose or position target in effect again with its position moved by
+        ``shift`` (m; x + shift, y - shift, z + shift); raises ``LookupError`` when no pose
+        goal is in effect."""
+        if not self.pose_goal or self.goal_step is None:
+            raise LookupError("no pose goal in effect")
+        self.step(Step(self.goal_step.kind, shifted_goal(self.goal_step, shift).message))
 
     def step(self, step: Step) -> tuple[Status, Values]:
         """Run one step; raises what the target raises."""
@@ -143,11 +202,11 @@ class _Run:
             values["joint_target"] = _floats(group.get_joint_value_target())
         elif kind == "pose_target":
             group.set_pose_target(_pose_tuple(msg["pose"]), msg["header"]["frame_id"] or None)
-            self.pose_goal = True
+            self.pose_goal, self.goal_step = True, step
         elif kind == "position_target":
             p = msg["point"]
             group.set_position_target([p["x"], p["y"], p["z"]], msg["header"]["frame_id"] or None)
-            self.pose_goal = True
+            self.pose_goal, self.goal_step = True, step
         elif kind == "clear_pose_targets":
             group.clear_pose_targets()
             self.pose_goal = False
@@ -229,11 +288,12 @@ def _failure(status: Status, exc: BaseException) -> Outcome:
 
 
 NUDGE_FAILED = "nudge_failed"
-"""In a scenario outcome's values when ``nudge`` could not move the state (the target refused
-the one-point trajectory): the run then says nothing about ill-conditioning."""
+"""In a scenario outcome's values when ``nudge`` could not be made (the target refused the
+one-point trajectory or the moved goal, or no pose goal was in effect): the run then says
+nothing about ill-conditioning."""
 
 
-def run_scenario(runner: Any, call: ScenarioCall, nudge: tuple[int, float] | None = None) -> Outcome:
+def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) -> Outcome:
     """Run a scenario on one target.
 
     Parameters
@@ -242,12 +302,15 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: tuple[int, float] | Non
         The target (its ``impl`` and loaded ``model``).
     call : ScenarioCall
         The steps.
-    nudge : (int, float), optional
-        ``(index, shift)``: just before step ``index``, move the current state by ``shift``
-        (rad, m) on every joint, minus on odd joint indices, clamped into the limits
-        (continuous joints normalized into (-pi, pi]), by executing a one-point trajectory
-        (time 0). An error of that execution is the step's outcome. For ill-conditioning
-        checks of the oracle.
+    nudge : Nudge, optional
+        For ill-conditioning checks of the oracle. Just before step ``nudge.index``:
+        ``Moved.STATE`` moves the current state by ``shift`` (rad, m) on every joint, minus
+        on odd joint indices, clamped into the limits (continuous joints normalized into
+        (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.GOAL`` moves a
+        ``/cartesian_path`` step's waypoints by ``(+shift, -shift, +shift)`` (m), or sets the
+        pose or position target in effect again moved so. A nudge that cannot be made (the
+        target refuses it, or there is no pose goal to move) is not an error of the step:
+        the outcome's values then hold ``NUDGE_FAILED``.
 
     Returns
     -------
@@ -266,9 +329,14 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: tuple[int, float] | Non
     crash: BaseException | None = None
     nudge_failed = False
     for index, step in enumerate(call.steps):
-        if nudge is not None and nudge[0] == index:
+        if nudge is not None and nudge.index == index:
             try:
-                run.nudge(nudge[1])
+                if nudge.moved is Moved.STATE:
+                    run.nudge(nudge.shift)
+                elif step.kind == "cartesian_path":
+                    step = shifted_goal(step, nudge.shift)
+                else:
+                    run.nudge_goal(nudge.shift)
             except Exception:  # noqa: BLE001 - reported as NUDGE_FAILED, never as the step's answer
                 nudge_failed = True
         try:

@@ -24,6 +24,11 @@ joint vectors agree within the campaign tolerance but not as numbers (``IK_EXACT
 reported poses are no farther apart than the reference FK of the two vectors plus the
 tolerance: FK amplifies a joint gap within tolerance (rad) into a pose gap beyond it (m).
 
+At a ``plan`` step, a divergence of the trajectory's positions is ``known_limitation`` when
+every joint it names is continuous and on each target that joint's last point is a half turn
+from its first within the campaign tolerance: the short way round is then either way, and
+a start a rounding error either side of the boundary picks it (``_either_way_round``).
+
 A status divergence (ok vs failed) of ``go``/``plan`` with a pose target is
 ``known_limitation`` when the requested orientation is within ``DEAD_ZONE`` of a half turn
 from the orientation the state before the step gives the link (``fuzzer.execution.evaluate``'s rule
@@ -165,8 +170,31 @@ def classify(
             same = all(_same_pose(x, y, link, facts) for x, y in apart)
             return replace(c, kind=Kind.KNOWN_LIMITATION) if same else c
         gap = max(gap, _gap(pairs))
+    positions = kind == "plan" and c.field.endswith(".trajectory.positions")
+    if positions and _either_way_round(a, b, c, facts, tol):
+        return replace(c, kind=Kind.KNOWN_LIMITATION)
     derived = any(c.field.endswith("." + name) for name in DERIVED)
     return replace(c, kind=Kind.KNOWN_LIMITATION) if derived and gap > IK_EXACT else c
+
+
+def _either_way_round(a: Outcome, b: Outcome, c: Comparison, facts: ScenarioFacts, tol: Tolerance) -> bool:
+    """Whether every joint of a plan's position divergence is continuous and, on each target,
+    its plan's last point is a half turn from its first within the tolerance: the short way
+    round (MoveIt's interpolation of a continuous joint) is then either way, and which one a
+    target takes depends on where within the tolerance its start lies."""
+    dof = len(facts.joints)
+    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    if not c.joints or not dof or any(r.size == 0 or r.size % dof for r in rows):
+        return False
+    for j in c.joints:
+        if j >= dof or not facts.continuous[j]:
+            return False
+        for r in rows:
+            first, last = r[j], r[r.size - dof + j]
+            turn = abs(math.remainder(last - first, 2.0 * math.pi))  # in [0, pi]
+            if not math.pi - turn <= tol.radians:
+                return False
+    return True
 
 
 def _pose_follows_joints(a: Outcome, b: Outcome, c: Comparison, facts: ScenarioFacts, tol: Tolerance) -> bool:
