@@ -118,6 +118,8 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
         elif name == "seq_step":
             changed = [i for i in range(len(old)) if old[i] != new[i]]
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
+        elif name == "seq_motion":
+            assert motion_at(old, new) is not None
         elif name == SPLICE:
             assert any(new == old[:i] + other["steps"][j:] for i in range(8) for j in range(5))
     if name == "seq_step":
@@ -203,6 +205,47 @@ def test_fresh_named_targets_mostly_name_a_target_that_exists_there() -> None:
             unknown += 1
     assert known + unknown >= 50
     assert known / (known + unknown) >= 0.7 and unknown > 0
+
+
+def motion_at(old: list[Any], new: list[Any]) -> tuple[int, list[Any]] | None:
+    """Where ``new`` is ``old`` with a move (a joint target and ``/go``, optionally followed by
+    ``/named_target`` and ``/go``) inserted, and the inserted steps; else None."""
+    for size in (2, 4):
+        for i in range(len(old) + 1):
+            inserted = new[i : i + size]
+            if len(new) == len(old) + size and new[:i] + new[i + size :] == old:
+                topics = [s["topic"] for s in inserted]
+                if topics == ["/joint_target", "/go", "/named_target", "/go"][:size]:
+                    return i, inserted
+    return None
+
+
+def test_a_move_often_follows_a_remember_and_then_often_comes_back() -> None:
+    parent = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), GO, step("/remember", data="spot"), PLAN]}
+    after, back, moved = 0, 0, 0
+    for seed in range(400):
+        child, name = MUTATE(parent, context(seed), "seq_motion")
+        assert name == "seq_motion"
+        found = motion_at(parent["steps"], child["steps"])
+        assert found is not None
+        at, inserted = found
+        target = inserted[0]["msg"]["position"]
+        assert len(target) == 6 and all(v in {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, *INTERESTING} for v in target)
+        moved += target != [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+        if at == 3:  # right after the /remember
+            after += 1
+            back += len(inserted) == 4
+        if len(inserted) == 4:
+            assert at == 3 and inserted[2]["msg"]["data"] == "spot"  # back to the remembered state
+    assert 0.5 <= after / 400 <= 0.7  # 1/2 by choice, plus 1/4 x 1/2 of the random places
+    assert 0.35 <= back / after <= 0.65 and moved > 100
+
+
+def test_a_move_needs_a_joint_target_to_start_from_and_room() -> None:
+    _, name = MUTATE({"steps": [GO, step("/remember", data="x")]}, context(0), "seq_motion")
+    assert name != "seq_motion"
+    full = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6)] * (MAX - 1)}
+    assert MUTATE(full, context(0), "seq_motion")[1] != "seq_motion"
 
 
 def test_field_types_cover_arrays_of_messages() -> None:
@@ -301,7 +344,8 @@ def test_harness_lineage_names_the_sequence_mutators(tmp_path: Path, twin: Sessi
     # the harness hands a second parent (here: the seed) to the sequence mutator: its steps get copied
     h.seeds = [TestCase(MSG_TYPE, other_scenario())]
     pose_target = other_scenario()["steps"][0]
-    copied = [decode(h.mutate(parent.encode(), 1 << 16, seed)).message for seed in range(60)]
+    # about 2% of children carry that copy (a seq_insert copy or a splice): 300 seeds, 5 of them
+    copied = [decode(h.mutate(parent.encode(), 1 << 16, seed)).message for seed in range(300)]
     assert any(pose_target in child["steps"] for child in copied)
     spliced = decode(h.crossover(parent.encode(), TestCase(MSG_TYPE, other_scenario()).encode(), 1 << 16, 1))
     assert spliced.lineage[-1] == SPLICE

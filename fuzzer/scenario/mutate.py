@@ -13,6 +13,8 @@ Mutators
   other parent), or a fresh one (``/go``, ``/plan``, ``/execute``..., a joint target
   recombined column by column from the scenario's joint targets, a scaling factor, a named
   target that mostly names one that exists at that point...).
+* ``seq_motion``: insert a move (a fresh joint target and ``/go``), often right after a
+  ``/remember X`` and then often followed by ``/named_target X`` and ``/go``.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -60,6 +62,10 @@ KNOWN_NAME_PROBABILITY: Final = 0.75
 ("home", or a name a ``/remember`` step before it stored), as syzkaller gives a call a resource an
 earlier call made; otherwise any string of the scenario, "home" or a joint or link name (an
 unknown target: the error path)."""
+AFTER_REMEMBER_PROBABILITY: Final = 0.5
+"""``seq_motion``: chance that the move goes right after a ``/remember`` (when there is one)."""
+RETURN_PROBABILITY: Final = 0.5
+"""``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and ``/go`` follow the move."""
 INTERESTING_PROBABILITY: Final = 0.5
 """Fresh joint target: chance that one joint takes an engine interesting value."""
 SPLICE_ATTEMPTS: Final = 8
@@ -236,6 +242,9 @@ def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext, at: int | Non
     return msg
 
 
+_GO: Final[StepDict] = {"topic": "/go", "msg": {}}
+
+
 def _new_step(steps: Steps, ctx: SequenceContext, at: int | None = None) -> StepDict:
     """A copy of a step of this scenario or the other parent, or a fresh step, to go before
     ``steps[at]`` (at the end when ``at`` is None)."""
@@ -260,6 +269,30 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     at = ctx.rng.randint(0, len(steps))
     steps.insert(at, _new_step(steps, ctx, at))
     return steps, "seq_insert"
+
+
+@register("seq_motion", weight=1.0)
+def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Insert a move, a call template as syzkaller's: a fresh joint target and ``/go``. Half the
+    time it goes right after a ``/remember X`` (when there is one), and then half the time
+    ``/named_target X`` and ``/go`` come back to the remembered state (pick and place)."""
+    remembered = [
+        (i + 1, s["msg"]["data"])
+        for i, s in enumerate(steps)
+        if _msg_type_of(s, ctx) == "std_msgs/String" and s["topic"] == "/remember"
+    ]
+    if remembered and ctx.rng.random() < AFTER_REMEMBER_PROBABILITY:
+        at, name = ctx.rng.choice(remembered)
+    else:
+        at, name = ctx.rng.randint(0, len(steps)), None
+    template = [{"topic": "/joint_target", "msg": _fresh_message("/joint_target", steps, ctx, at)}, _GO]
+    if name is not None and ctx.rng.random() < RETURN_PROBABILITY:
+        named = {**ctx.tables.default("/named_target"), "data": name}
+        template += [{"topic": "/named_target", "msg": named}, _GO]
+    if len(steps) + len(template) > ctx.max_steps:
+        raise NotApplicable("no room for a move")
+    steps[at:at] = clone(template)
+    return steps, "seq_motion"
 
 
 @register("seq_delete", weight=1.0)
