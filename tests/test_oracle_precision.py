@@ -217,6 +217,30 @@ def test_kdl_rotation_dead_zone_is_a_known_limitation() -> None:
     assert result.comparison.kind is Kind.KNOWN_LIMITATION
 
 
+# Reachable UR5 targets (FK of random joint vectors) on which IK from home (all zeros, singular)
+# splits native and the twin. Newton-Raphson's first step from home clamps most joints at their
+# limits, so a 1e-9 move of the seed changes neither answer; a 1e-9 m move of the target does.
+UR5_CLAMPED_POSES = (
+    (
+        (-0.011415478125947485, 0.25515797629826104, -0.5071837507834365),
+        (-0.7127701955068181, 0.5126616643561172, 0.33949321407230104, 0.3374626259241863),
+    ),
+    (
+        (-0.25060921321852114, -0.14157702576289524, -0.2585842756225812),
+        (-0.489579913557609, -0.6432193202664225, -0.5526389967928211, 0.20290528209179254),
+    ),
+)
+
+
+@pytest.mark.parametrize("pose", UR5_CLAMPED_POSES)
+def test_an_ik_status_flip_that_only_a_target_nudge_shows_is_ill_conditioned(
+    pose: tuple[tuple[float, ...], tuple[float, ...]],
+) -> None:
+    result = evaluator(session(("native", "python"), "ik", robot="ur5")).evaluate(ik_case(*pose))
+    assert {o.status for o in result.outcomes} == {Status.OK, Status.FAILED}
+    assert result.comparison.kind is Kind.ILL_CONDITIONED
+
+
 def test_a_different_default_seed_is_not_masked_as_ill_conditioned() -> None:
     s = session(("python", f"{PLUGINS}:ik_other_default_seed"), "ik")
     ev = evaluator(s)

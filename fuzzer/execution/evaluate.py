@@ -14,10 +14,11 @@ it counts:
 * an IK status divergence is re-run with each target's documented default seed
   (its ``home_values``) passed explicitly: a target whose answer changes has
   another default seed, and the divergence stands. Otherwise the seeds are moved
-  by 1e-9 (both ways) and 1e-7, and a target that changes its own answer makes
-  it ``ill_conditioned``. A divergence inside KDL's rotation dead zone (the
-  requested orientation within ``DEAD_ZONE`` of a half turn from where the seed
-  puts the link) is a ``known_limitation`` (docs/api.md).
+  by 1e-9 (both ways) and 1e-7, then the target position by the same amounts in
+  metres, and a target that changes its own answer makes it ``ill_conditioned``.
+  A divergence inside KDL's rotation dead zone (the requested orientation within
+  ``DEAD_ZONE`` of a half turn from where the seed puts the link) is a
+  ``known_limitation`` (docs/api.md).
 
 A scenario (``--op scenario``) is one call: the whole scenario is run again on fresh
 targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
@@ -294,6 +295,14 @@ class Evaluator:
                 for home in homes
             )
             for first, second in zip(outcomes, self.run_both(call, moved, runners), strict=True):
+                if first.status is not second.status:
+                    return replace(comparison, kind=Kind.ILL_CONDITIONED)
+        if len(call.position) != 3:
+            return comparison
+        x, y, z = call.position
+        for shift in IK_PERTURBATIONS:  # the goal (m): a clamped first step erases a seed's move
+            goal = replace(call, position=(x + shift, y - shift, z + shift))
+            for first, second in zip(outcomes, self.run_both(goal, homes, runners), strict=True):
                 if first.status is not second.status:
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         return comparison
