@@ -241,6 +241,20 @@ def test_an_ik_status_flip_that_only_a_target_nudge_shows_is_ill_conditioned(
     assert result.comparison.kind is Kind.ILL_CONDITIONED
 
 
+def test_a_success_claimed_without_reaching_the_pose_is_not_masked_as_ill_conditioned() -> None:
+    """Native's status flips under a target nudge here, so the status split is no finding; the
+    faulty twin's success, without reaching the pose, still is (its own property)."""
+    pose = (
+        (-0.08812751212201637, 0.11269857479629511, 0.13261871684559495),
+        (-0.9282298575400337, 0.3017013886489345, -0.03236728050005287, 0.2152160839982558),
+    )
+    misread = "benchmarks.zoo.bugs:ik_status_misread"
+    result = evaluator(session(("native", misread), "ik", robot="ur5")).evaluate(ik_case(*pose))
+    assert [o.status for o in result.outcomes] == [Status.FAILED, Status.OK]
+    c = result.comparison
+    assert (c.kind, c.field, c.target) == (Kind.PROPERTY, "residual", misread)
+
+
 def test_a_different_default_seed_is_not_masked_as_ill_conditioned() -> None:
     s = session(("python", f"{PLUGINS}:ik_other_default_seed"), "ik")
     ev = evaluator(s)

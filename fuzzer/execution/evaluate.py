@@ -18,7 +18,10 @@ it counts:
   metres, and a target that changes its own answer makes it ``ill_conditioned``.
   A divergence inside KDL's rotation dead zone (the requested orientation within
   ``DEAD_ZONE`` of a half turn from where the seed puts the link) is a
-  ``known_limitation`` (docs/api.md).
+  ``known_limitation`` (docs/api.md). Either way a target that claims success
+  without reaching the pose still breaks its own property (``oracle.ik_property``),
+  which is then the verdict, as a scenario's property violation wins over a
+  ``known_limitation``.
 
 A scenario (``--op scenario``) is one call: the whole scenario is run again on fresh
 targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
@@ -176,13 +179,17 @@ class Evaluator:
         )
         if comparison.divergent or not isinstance(call, IkCall):
             return comparison
+        return self._ik_violation(call, outcomes) or comparison
+
+    def _ik_violation(self, call: IkCall, outcomes: tuple[Outcome, ...]) -> Comparison | None:
+        """The first target's IK property violation (``oracle.ik_property``), or None."""
         for runner, outcome in zip(self.runners, outcomes, strict=True):
             violation = oracle.ik_property(
                 outcome, runner.name, (call.position, call.orientation), self.joint_facts
             )
             if violation is not None:
                 return violation
-        return comparison
+        return None
 
     def fresh(self) -> tuple[Runner, Runner]:
         """Newly constructed targets (no state from earlier calls). A target whose constructor
@@ -276,7 +283,11 @@ class Evaluator:
             and comparison.kind is Kind.STATUS
             and {o.status for o in outcomes} <= {Status.OK, Status.FAILED}
         ):
-            return self._ik_status(call, outcomes, comparison, fresh or self.fresh()), outcomes
+            judged = self._ik_status(call, outcomes, comparison, fresh or self.fresh())
+            if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
+                # a status split that is no finding leaves each target's own claim to check
+                judged = self._ik_violation(call, outcomes) or judged
+            return judged, outcomes
         return comparison, outcomes
 
     def _ik_status(
