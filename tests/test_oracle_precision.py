@@ -241,6 +241,31 @@ def test_an_ik_status_flip_that_only_a_target_nudge_shows_is_ill_conditioned(
     assert result.comparison.kind is Kind.ILL_CONDITIONED
 
 
+# UR5's home pose turned a half turn about the base (aligned inputs find it): clamped iterates
+# meet rotation errors of exactly pi, whose axis sign KDL and the twin pick differently; the
+# twin's answer is a coin flip under a 1e-9 rad turn of the target (22 of 50), none under a move
+# of its position. From home, native converges and the twin does not.
+UR5_HALF_TURN_POSES = (
+    (
+        (-0.817250000000927, -0.10915000000000011, -0.005490999995998461),
+        (-0.7071067811865475, -0.7071067811865476, 3.3161611206572236e-12, 3.6086531637446316e-12),
+    ),
+    (
+        (-0.8172500000008878, -0.10915000000000011, -0.005490999996336315),
+        (-0.7071067811865475, -0.7071068021865475, 3.1698285035078956e-12, 3.462320546595304e-12),
+    ),
+)
+
+
+@pytest.mark.parametrize("pose", UR5_HALF_TURN_POSES)
+def test_an_ik_status_flip_that_only_a_turn_of_the_target_shows_is_ill_conditioned(
+    pose: tuple[tuple[float, ...], tuple[float, ...]],
+) -> None:
+    result = evaluator(session(("native", "python"), "ik", robot="ur5")).evaluate(ik_case(*pose))
+    assert [o.status for o in result.outcomes] == [Status.OK, Status.FAILED]
+    assert result.comparison.kind is Kind.ILL_CONDITIONED
+
+
 def test_a_success_claimed_without_reaching_the_pose_is_not_masked_as_ill_conditioned() -> None:
     """Native's status flips under a target nudge here, so the status split is no finding; the
     faulty twin's success, without reaching the pose, still is (its own property)."""

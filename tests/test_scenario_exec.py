@@ -287,7 +287,7 @@ def test_a_goal_nudge_moves_the_target_in_effect(runners: tuple[Runner, Runner],
         # the goal is set, then other steps, then the IK step the nudge comes before
         call = to_call({"steps": [goal, text("/remember", "r"), empty("/go")]})
         plain = run_scenario(runner, call)
-        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.GOAL))
+        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.POSITION))
         assert NUDGE_FAILED not in nudged.values
         assert plain.steps[2].status is nudged.steps[2].status is Status.OK
         before = plain.steps[2].values["position"]
@@ -305,7 +305,7 @@ def test_a_goal_nudge_moves_a_paths_waypoints(runners: tuple[Runner, Runner]) ->
         path = {"topic": "/cartesian_path", "msg": {"header": HEADER, "poses": poses}}
         call = to_call({"steps": [joint_target(Q1), empty("/go"), path]})
         plain = run_scenario(runner, call)
-        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.GOAL))
+        nudged = run_scenario(runner, call, nudge=Nudge(2, shift, Moved.POSITION))
         dof = len(Q1)
         last = [list(o.steps[2].values["trajectory.positions"][-dof:]) for o in (plain, nudged)]
         assert plain.steps[2].values["fraction"] == nudged.steps[2].values["fraction"] == (1.0,)
@@ -315,10 +315,42 @@ def test_a_goal_nudge_moves_a_paths_waypoints(runners: tuple[Runner, Runner]) ->
         assert call.steps[2].message["poses"][0]["position"]["x"] == fk.position[0]  # the call is unchanged
 
 
+def test_an_orientation_nudge_turns_the_pose_target_in_effect(runners: tuple[Runner, Runner]) -> None:
+    shift = 1e-3
+    for runner in runners:
+        fk = runner.model.forward_kinematics(Q1)
+        goal = {
+            "topic": "/pose_target",
+            "msg": {"header": HEADER, "pose": pose_msg(fk.position, fk.orientation)},
+        }
+        call = to_call({"steps": [goal, empty("/go")]})
+        plain = run_scenario(runner, call)
+        nudged = run_scenario(runner, call, nudge=Nudge(1, shift, Moved.ORIENTATION))
+        assert NUDGE_FAILED not in nudged.values and nudged.steps[1].status is Status.OK
+        assert nudged.steps[1].values["position"] == pytest.approx(
+            plain.steps[1].values["position"], abs=1e-5
+        )
+        before = python_impl.transforms.quaternion_matrix(*plain.steps[1].values["orientation"])
+        after = python_impl.transforms.quaternion_matrix(*nudged.steps[1].values["orientation"])
+        turn = python_impl.transforms.rotation_vector(before.T @ after)
+        expected = [shift / math.sqrt(3.0), -shift / math.sqrt(3.0), shift / math.sqrt(3.0)]
+        assert turn.tolist() == pytest.approx(expected, abs=1e-5)  # about (1, -1, 1), in the tool frame
+        position_only = {
+            "topic": "/position_target",
+            "msg": {"header": HEADER, "point": dict(zip("xyz", fk.position, strict=True))},
+        }
+        nothing = run_scenario(
+            runner,
+            to_call({"steps": [position_only, empty("/go")]}),
+            nudge=Nudge(1, shift, Moved.ORIENTATION),
+        )
+        assert NUDGE_FAILED in nothing.values  # a position target has no orientation to turn
+
+
 def test_a_goal_nudge_without_a_pose_goal_gives_no_evidence(runners: tuple[Runner, Runner]) -> None:
     for runner in runners:
         call = to_call({"steps": [joint_target(Q1), empty("/go")]})
-        nudged = run_scenario(runner, call, nudge=Nudge(1, 1e-9, Moved.GOAL))
+        nudged = run_scenario(runner, call, nudge=Nudge(1, 1e-9, Moved.POSITION))
         assert NUDGE_FAILED in nudged.values
         assert nudged.steps == run_scenario(runner, call).steps
 

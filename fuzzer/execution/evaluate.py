@@ -14,8 +14,9 @@ it counts:
 * an IK status divergence is re-run with each target's documented default seed
   (its ``home_values``) passed explicitly: a target whose answer changes has
   another default seed, and the divergence stands. Otherwise the seeds are moved
-  by 1e-9 (both ways) and 1e-7, then the target position by the same amounts in
-  metres, and a target that changes its own answer makes it ``ill_conditioned``.
+  by 1e-9 (both ways) and 1e-7, then the target's position by the same amounts in
+  metres, then its orientation turned by them in radians (``execute.turned``), and
+  a target that changes its own answer makes it ``ill_conditioned``.
   A divergence inside KDL's rotation dead zone (the requested orientation within
   ``DEAD_ZONE`` of a half turn from where the seed puts the link) is a
   ``known_limitation`` (docs/api.md). Either way a target that claims success
@@ -29,8 +30,9 @@ targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
 step's outcomes (the field names the step kind, the step index is not in the key). A status
 or value divergence at a step that solves IK (``go``/``plan`` with a pose or position
 target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1e-9 (both
-ways) and 1e-7 just before that step, then with the goal moved so (m: the pose or position
-target in effect, or the path's waypoints; ``run_scenario``'s ``nudge``): a target whose own
+ways) and 1e-7 just before that step, then with the goal's positions moved so (m), then its
+orientations turned so (rad): the pose or position target in effect, or the path's waypoints
+(``run_scenario``'s ``nudge``). A target whose own
 answer at that step changes (status, fraction, point count, or the IK answer - the state
 after ``go``, the last point of a plan, any point of a path - beyond the campaign tolerance)
 makes it ``ill_conditioned``. The goal nudge is needed where Newton-Raphson's first step
@@ -53,7 +55,7 @@ from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.execute import NUDGE_FAILED, Moved, Nudge, run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, Moved, Nudge, run_scenario, turned
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_properties import first_property
@@ -308,11 +310,12 @@ class Evaluator:
             for first, second in zip(outcomes, self.run_both(call, moved, runners), strict=True):
                 if first.status is not second.status:
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
-        if len(call.position) != 3:
+        if len(call.position) != 3 or len(call.orientation) != 4:
             return comparison
         x, y, z = call.position
-        for shift in IK_PERTURBATIONS:  # the goal (m): a clamped first step erases a seed's move
-            goal = replace(call, position=(x + shift, y - shift, z + shift))
+        goals = [replace(call, position=(x + s, y - s, z + s)) for s in IK_PERTURBATIONS]
+        goals += [replace(call, orientation=turned(call.orientation, s)) for s in IK_PERTURBATIONS]
+        for goal in goals:  # the goal (m, then rad): clamped iterates erase a seed's move
             for first, second in zip(outcomes, self.run_both(goal, homes, runners), strict=True):
                 if first.status is not second.status:
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
@@ -339,7 +342,8 @@ class Evaluator:
         facts = self.scenario_facts
         assert step is not None
         kind = call.steps[step].kind
-        for moved, shift in ((m, s) for m in (Moved.STATE, Moved.GOAL) for s in IK_PERTURBATIONS):
+        moves = (Moved.STATE, Moved.POSITION, Moved.ORIENTATION)
+        for moved, shift in ((m, s) for m in moves for s in IK_PERTURBATIONS):
             nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved))
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way

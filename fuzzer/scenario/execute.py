@@ -80,9 +80,12 @@ class Moved(enum.Enum):
 
     STATE = "state"
     """The current state: every joint by the shift (rad, m), minus on odd indices."""
-    GOAL = "goal"
-    """The pose goal the step solves IK for (m): a ``/cartesian_path`` step's waypoints, or
-    else the pose or position target in effect, set again moved."""
+    POSITION = "position"
+    """The goal's positions (m, along ``(+1, -1, +1)``): a ``/cartesian_path`` step's waypoints,
+    or else the pose or position target in effect, set again moved."""
+    ORIENTATION = "orientation"
+    """The goal's orientations, turned by the shift (rad, :func:`turned`): a ``/cartesian_path``
+    step's waypoints, or else the pose target in effect, set again turned."""
 
 
 @dataclass(frozen=True)
@@ -97,7 +100,7 @@ class Nudge:
         How far (rad or m): joints alternate in sign (``+shift`` on even indices), positions
         move by ``(+shift, -shift, +shift)``.
     moved : Moved
-        The state or the goal.
+        The state, or the goal's positions or orientations.
     """
 
     index: int
@@ -105,21 +108,50 @@ class Nudge:
     moved: Moved = Moved.STATE
 
 
-def shifted_goal(step: Step, shift: float) -> Step:
-    """``step`` (a ``/pose_target``, ``/position_target`` or ``/cartesian_path``) with every
-    position it names moved by ``(+shift, -shift, +shift)`` (m); other steps unchanged."""
+def turned(q: tuple[float, ...], angle: float) -> tuple[float, ...]:
+    """Quaternion ``q`` (x, y, z, w, any norm) followed by a turn of ``angle`` (rad) about the
+    unit axis along ``(+1, -1, +1)`` in its own frame (``q * dq``); the norm is kept."""
+    x, y, z, w = q
+    k = math.sin(angle / 2.0) / math.sqrt(3.0)
+    a, b, c, d = k, -k, k, math.cos(angle / 2.0)
+    return (
+        w * a + x * d + y * c - z * b,
+        w * b - x * c + y * d + z * a,
+        w * c + x * b - y * a + z * d,
+        w * d - x * a - y * b - z * c,
+    )
 
-    def moved(point: dict[str, Any]) -> dict[str, Any]:
+
+def shifted_goal(step: Step, shift: float, moved: Moved = Moved.POSITION) -> Step:
+    """``step`` (a ``/pose_target``, ``/position_target`` or ``/cartesian_path``) with every
+    position it names moved by ``(+shift, -shift, +shift)`` (m), or with every orientation
+    turned by ``shift`` (rad, :func:`turned`); other steps unchanged.
+
+    Raises
+    ------
+    LookupError
+        ``Moved.ORIENTATION`` of a ``/position_target`` (it has no orientation).
+    """
+
+    def point_moved(point: dict[str, Any]) -> dict[str, Any]:
         return {**point, "x": point["x"] + shift, "y": point["y"] - shift, "z": point["z"] + shift}
+
+    def pose_moved(pose: dict[str, Any]) -> dict[str, Any]:
+        if moved is Moved.POSITION:
+            return {**pose, "position": point_moved(pose["position"])}
+        o = pose["orientation"]
+        q = turned((o["x"], o["y"], o["z"], o["w"]), shift)
+        return {**pose, "orientation": dict(zip("xyzw", q, strict=True))}
 
     msg = step.message
     if step.kind == "pose_target":
-        return Step(step.kind, {**msg, "pose": {**msg["pose"], "position": moved(msg["pose"]["position"])}})
+        return Step(step.kind, {**msg, "pose": pose_moved(msg["pose"])})
     if step.kind == "position_target":
-        return Step(step.kind, {**msg, "point": moved(msg["point"])})
+        if moved is Moved.ORIENTATION:
+            raise LookupError("a position target has no orientation to turn")
+        return Step(step.kind, {**msg, "point": point_moved(msg["point"])})
     if step.kind == "cartesian_path":
-        poses = [{**pose, "position": moved(pose["position"])} for pose in msg["poses"]]
-        return Step(step.kind, {**msg, "poses": poses})
+        return Step(step.kind, {**msg, "poses": [pose_moved(pose) for pose in msg["poses"]]})
     return step
 
 
@@ -172,13 +204,12 @@ class _Run:
         trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
         self.group.execute(trajectory)
 
-    def nudge_goal(self, shift: float) -> None:
-        """Set the pose or position target in effect again with its position moved by
-        ``shift`` (m; x + shift, y - shift, z + shift); raises ``LookupError`` when no pose
-        goal is in effect."""
+    def nudge_goal(self, shift: float, moved: Moved) -> None:
+        """Set the pose or position target in effect again, moved (:func:`shifted_goal`);
+        raises ``LookupError`` when no pose goal is in effect or it has nothing to move."""
         if not self.pose_goal or self.goal_step is None:
             raise LookupError("no pose goal in effect")
-        self.step(Step(self.goal_step.kind, shifted_goal(self.goal_step, shift).message))
+        self.step(shifted_goal(self.goal_step, shift, moved))
 
     def step(self, step: Step) -> tuple[Status, Values]:
         """Run one step; raises what the target raises."""
@@ -289,7 +320,7 @@ def _failure(status: Status, exc: BaseException) -> Outcome:
 
 NUDGE_FAILED = "nudge_failed"
 """In a scenario outcome's values when ``nudge`` could not be made (the target refused the
-one-point trajectory or the moved goal, or no pose goal was in effect): the run then says
+one-point trajectory or the moved goal, or no pose goal, or no orientation, was in effect): the run then says
 nothing about ill-conditioning."""
 
 
@@ -306,9 +337,10 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
         For ill-conditioning checks of the oracle. Just before step ``nudge.index``:
         ``Moved.STATE`` moves the current state by ``shift`` (rad, m) on every joint, minus
         on odd joint indices, clamped into the limits (continuous joints normalized into
-        (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.GOAL`` moves a
+        (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.POSITION`` moves a
         ``/cartesian_path`` step's waypoints by ``(+shift, -shift, +shift)`` (m), or sets the
-        pose or position target in effect again moved so. A nudge that cannot be made (the
+        pose or position target in effect again moved so; ``Moved.ORIENTATION`` turns their
+        orientations by ``shift`` (rad, :func:`turned`). A nudge that cannot be made (the
         target refuses it, or there is no pose goal to move) is not an error of the step:
         the outcome's values then hold ``NUDGE_FAILED``.
 
@@ -334,9 +366,9 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
                 if nudge.moved is Moved.STATE:
                     run.nudge(nudge.shift)
                 elif step.kind == "cartesian_path":
-                    step = shifted_goal(step, nudge.shift)
+                    step = shifted_goal(step, nudge.shift, nudge.moved)
                 else:
-                    run.nudge_goal(nudge.shift)
+                    run.nudge_goal(nudge.shift, nudge.moved)
             except Exception:  # noqa: BLE001 - reported as NUDGE_FAILED, never as the step's answer
                 nudge_failed = True
         try:
