@@ -75,13 +75,18 @@ def _pose_tuple(pose: dict[str, Any]) -> tuple[tuple[float, ...], tuple[float, .
     return (p["x"], p["y"], p["z"]), (q["x"], q["y"], q["z"], q["w"])
 
 
+Axis = tuple[float, float, float]
+AXIS: Axis = (1.0, -1.0, 1.0)
+"""Default direction of a goal nudge (positions move along it, orientations turn about it)."""
+
+
 class Moved(enum.Enum):
     """What a :class:`Nudge` moves."""
 
     STATE = "state"
     """The current state: every joint by the shift (rad, m), minus on odd indices."""
     POSITION = "position"
-    """The goal's positions (m, along ``(+1, -1, +1)``): a ``/cartesian_path`` step's waypoints,
+    """The goal's positions (m, along the nudge's axis): a ``/cartesian_path`` step's waypoints,
     or else the pose or position target in effect, set again moved."""
     ORIENTATION = "orientation"
     """The goal's orientations, turned by the shift (rad, :func:`turned`): a ``/cartesian_path``
@@ -106,14 +111,16 @@ class Nudge:
     index: int
     shift: float
     moved: Moved = Moved.STATE
+    axis: Axis = AXIS
+    """Direction of a goal nudge (``Moved.POSITION``, ``Moved.ORIENTATION``)."""
 
 
-def turned(q: tuple[float, ...], angle: float) -> tuple[float, ...]:
+def turned(q: tuple[float, ...], angle: float, axis: Axis = AXIS) -> tuple[float, ...]:
     """Quaternion ``q`` (x, y, z, w, any norm) followed by a turn of ``angle`` (rad) about the
-    unit axis along ``(+1, -1, +1)`` in its own frame (``q * dq``); the norm is kept."""
+    unit vector along ``axis`` in its own frame (``q * dq``); the norm is kept."""
     x, y, z, w = q
-    k = math.sin(angle / 2.0) / math.sqrt(3.0)
-    a, b, c, d = k, -k, k, math.cos(angle / 2.0)
+    k = math.sin(angle / 2.0) / math.sqrt(sum(v * v for v in axis))
+    a, b, c, d = k * axis[0], k * axis[1], k * axis[2], math.cos(angle / 2.0)
     return (
         w * a + x * d + y * c - z * b,
         w * b - x * c + y * d + z * a,
@@ -122,10 +129,10 @@ def turned(q: tuple[float, ...], angle: float) -> tuple[float, ...]:
     )
 
 
-def shifted_goal(step: Step, shift: float, moved: Moved = Moved.POSITION) -> Step:
+def shifted_goal(step: Step, shift: float, moved: Moved = Moved.POSITION, axis: Axis = AXIS) -> Step:
     """``step`` (a ``/pose_target``, ``/position_target`` or ``/cartesian_path``) with every
-    position it names moved by ``(+shift, -shift, +shift)`` (m), or with every orientation
-    turned by ``shift`` (rad, :func:`turned`); other steps unchanged.
+    position it names moved by ``shift * axis`` (m), or with every orientation turned by
+    ``shift`` (rad) about ``axis`` (:func:`turned`); other steps unchanged.
 
     Raises
     ------
@@ -134,13 +141,13 @@ def shifted_goal(step: Step, shift: float, moved: Moved = Moved.POSITION) -> Ste
     """
 
     def point_moved(point: dict[str, Any]) -> dict[str, Any]:
-        return {**point, "x": point["x"] + shift, "y": point["y"] - shift, "z": point["z"] + shift}
+        return {k: point[k] + shift * a for k, a in zip("xyz", axis, strict=True)}
 
     def pose_moved(pose: dict[str, Any]) -> dict[str, Any]:
         if moved is Moved.POSITION:
             return {**pose, "position": point_moved(pose["position"])}
         o = pose["orientation"]
-        q = turned((o["x"], o["y"], o["z"], o["w"]), shift)
+        q = turned((o["x"], o["y"], o["z"], o["w"]), shift, axis)
         return {**pose, "orientation": dict(zip("xyzw", q, strict=True))}
 
     msg = step.message
@@ -204,12 +211,12 @@ class _Run:
         trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
         self.group.execute(trajectory)
 
-    def nudge_goal(self, shift: float, moved: Moved) -> None:
+    def nudge_goal(self, shift: float, moved: Moved, axis: Axis) -> None:
         """Set the pose or position target in effect again, moved (:func:`shifted_goal`);
         raises ``LookupError`` when no pose goal is in effect or it has nothing to move."""
         if not self.pose_goal or self.goal_step is None:
             raise LookupError("no pose goal in effect")
-        self.step(shifted_goal(self.goal_step, shift, moved))
+        self.step(shifted_goal(self.goal_step, shift, moved, axis))
 
     def step(self, step: Step) -> tuple[Status, Values]:
         """Run one step; raises what the target raises."""
@@ -338,9 +345,9 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
         ``Moved.STATE`` moves the current state by ``shift`` (rad, m) on every joint, minus
         on odd joint indices, clamped into the limits (continuous joints normalized into
         (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.POSITION`` moves a
-        ``/cartesian_path`` step's waypoints by ``(+shift, -shift, +shift)`` (m), or sets the
-        pose or position target in effect again moved so; ``Moved.ORIENTATION`` turns their
-        orientations by ``shift`` (rad, :func:`turned`). A nudge that cannot be made (the
+        ``/cartesian_path`` step's waypoints by ``shift * axis`` (m), or sets the pose or
+        position target in effect again moved so; ``Moved.ORIENTATION`` turns their
+        orientations by ``shift`` (rad) about ``axis`` (:func:`turned`). A nudge that cannot be made (the
         target refuses it, or there is no pose goal to move) is not an error of the step:
         the outcome's values then hold ``NUDGE_FAILED``.
 
@@ -366,9 +373,9 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
                 if nudge.moved is Moved.STATE:
                     run.nudge(nudge.shift)
                 elif step.kind == "cartesian_path":
-                    step = shifted_goal(step, nudge.shift, nudge.moved)
+                    step = shifted_goal(step, nudge.shift, nudge.moved, nudge.axis)
                 else:
-                    run.nudge_goal(nudge.shift, nudge.moved)
+                    run.nudge_goal(nudge.shift, nudge.moved, nudge.axis)
             except Exception:  # noqa: BLE001 - reported as NUDGE_FAILED, never as the step's answer
                 nudge_failed = True
         try:
