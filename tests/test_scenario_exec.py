@@ -21,7 +21,8 @@ from fuzzer.execution.session import ConfigError, RunConfig, Session
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import CallError, call_from_json, call_to_json, mapping_for
 from fuzzer.input.msgdef import MessageRegistry
-from fuzzer.scenario.execute import NUDGE_FAILED, Moved, Nudge, run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.nudge import Moved, Nudge
 from fuzzer.scenario.steps import MAX_STEPS, MSG_TYPE, TOPICS, ScenarioCall, to_call, validate
 from robot_api import robots
 

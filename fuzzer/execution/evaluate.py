@@ -16,7 +16,7 @@ it counts:
   another default seed, and the divergence stands. Otherwise the seeds are moved
   by 1e-9 (both ways) and 1e-7, then the target's position and, separately, its
   orientation by ``GOAL_NUDGES`` (1e-9 and 1e-7 m or rad along six random directions;
-  ``execute.turned``), and a target that changes its own answer makes it
+  ``nudge.turned``), and a target that changes its own answer makes it
   ``ill_conditioned``.
   A divergence inside KDL's rotation dead zone (the requested orientation within
   ``DEAD_ZONE`` of a half turn from where the seed puts the link) is a
@@ -56,7 +56,8 @@ from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.execute import AXIS, NUDGE_FAILED, Axis, Moved, Nudge, run_scenario, turned
+from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.nudge import AXIS, Axis, Moved, Nudge, turned
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_properties import first_property

@@ -28,18 +28,17 @@ a plan ``in_effect.plan_last`` (the executed plan's last point).
 
 from __future__ import annotations
 
-import enum
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from fuzzer.execution.records import Outcome, Status
+from fuzzer.scenario.nudge import Axis, Moved, Nudge, shifted_goal, shifted_state
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
 from robot_api.errors import RobotAPIError
-from robot_api.records import JointType, RobotTrajectory
+from robot_api.records import RobotTrajectory
 
 DEFAULT_EEF_STEP = 0.01
 """eef_step (m) of ``/cartesian_path`` until an ``/eef_step`` step sets another."""
@@ -75,111 +74,6 @@ def _pose_tuple(pose: dict[str, Any]) -> tuple[tuple[float, ...], tuple[float, .
     return (p["x"], p["y"], p["z"]), (q["x"], q["y"], q["z"], q["w"])
 
 
-Axis = tuple[float, float, float]
-AXIS: Axis = (1.0, -1.0, 1.0)
-"""Default direction of a goal nudge (positions move along it, orientations turn about it)."""
-
-
-class Moved(enum.Enum):
-    """What a :class:`Nudge` moves."""
-
-    STATE = "state"
-    """The current state: every joint by the shift (rad, m), minus on odd indices."""
-    POSITION = "position"
-    """The goal's positions (m, along the nudge's axis): a ``/cartesian_path`` step's waypoints,
-    or else the pose or position target in effect, set again moved."""
-    ORIENTATION = "orientation"
-    """The goal's orientations, turned by the shift (rad, :func:`turned`): a ``/cartesian_path``
-    step's waypoints, or else the pose target in effect, set again turned."""
-
-
-@dataclass(frozen=True)
-class Nudge:
-    """A small move just before one step, for the oracle's ill-conditioning checks.
-
-    Attributes
-    ----------
-    index : int
-        The step it comes before.
-    shift : float
-        How far (rad or m): joints alternate in sign (``+shift`` on even indices), positions
-        move by ``(+shift, -shift, +shift)``.
-    moved : Moved
-        The state, or the goal's positions or orientations.
-    """
-
-    index: int
-    shift: float
-    moved: Moved = Moved.STATE
-    axis: Axis = AXIS
-    """Direction of a goal nudge (``Moved.POSITION``, ``Moved.ORIENTATION``)."""
-
-
-def turned(q: tuple[float, ...], angle: float, axis: Axis = AXIS) -> tuple[float, ...]:
-    """Quaternion ``q`` (x, y, z, w, any norm) followed by a turn of ``angle`` (rad) about the
-    unit vector along ``axis`` in its own frame (``q * dq``); the norm is kept."""
-    x, y, z, w = q
-    k = math.sin(angle / 2.0) / math.sqrt(sum(v * v for v in axis))
-    a, b, c, d = k * axis[0], k * axis[1], k * axis[2], math.cos(angle / 2.0)
-    return (
-        w * a + x * d + y * c - z * b,
-        w * b - x * c + y * d + z * a,
-        w * c + x * b - y * a + z * d,
-        w * d - x * a - y * b - z * c,
-    )
-
-
-def shifted_goal(step: Step, shift: float, moved: Moved = Moved.POSITION, axis: Axis = AXIS) -> Step:
-    """``step`` (a ``/pose_target``, ``/position_target`` or ``/cartesian_path``) with every
-    position it names moved by ``shift * axis`` (m), or with every orientation turned by
-    ``shift`` (rad) about ``axis`` (:func:`turned`); other steps unchanged.
-
-    Raises
-    ------
-    LookupError
-        ``Moved.ORIENTATION`` of a ``/position_target`` (it has no orientation).
-    """
-
-    def point_moved(point: dict[str, Any]) -> dict[str, Any]:
-        return {k: point[k] + shift * a for k, a in zip("xyz", axis, strict=True)}
-
-    def pose_moved(pose: dict[str, Any]) -> dict[str, Any]:
-        if moved is Moved.POSITION:
-            return {**pose, "position": point_moved(pose["position"])}
-        o = pose["orientation"]
-        q = turned((o["x"], o["y"], o["z"], o["w"]), shift, axis)
-        return {**pose, "orientation": dict(zip("xyzw", q, strict=True))}
-
-    msg = step.message
-    if step.kind == "pose_target":
-        return Step(step.kind, {**msg, "pose": pose_moved(msg["pose"])})
-    if step.kind == "position_target":
-        if moved is Moved.ORIENTATION:
-            raise LookupError("a position target has no orientation to turn")
-        return Step(step.kind, {**msg, "point": point_moved(msg["point"])})
-    if step.kind == "cartesian_path":
-        return Step(step.kind, {**msg, "poses": [pose_moved(pose) for pose in msg["poses"]]})
-    return step
-
-
-def _shifted(state: list[float], shift: float, limits: Any) -> list[float]:
-    """``state`` moved by ``shift`` on every joint (minus on odd indices), clamped into the
-    limits, continuous joints normalized into (-pi, pi] (the contract's rule)."""
-    out = []
-    for j, (value, lim) in enumerate(zip(state, limits, strict=True)):
-        moved = value + (shift if j % 2 == 0 else -shift)
-        if lim.type == JointType.CONTINUOUS:
-            moved = math.fmod(moved, 2 * math.pi)
-            if moved <= -math.pi:
-                moved += 2 * math.pi
-            elif moved > math.pi:
-                moved -= 2 * math.pi
-        else:
-            moved = min(max(moved, lim.lower), lim.upper)
-        out.append(moved)
-    return out
-
-
 class _Run:
     """The state of one scenario run on one target: its group and the script's settings."""
 
@@ -205,14 +99,14 @@ class _Run:
     def nudge(self, shift: float) -> None:
         """Move the current state by ``shift`` on every joint with a one-point trajectory."""
         limits = tuple(self.runner.model.joint_limits)
-        point = _shifted(list(self.group.get_current_joint_values()), shift, limits)
+        point = shifted_state(list(self.group.get_current_joint_values()), shift, limits)
         zeros = np.zeros((1, len(point)))
         times, positions = np.array([0.0]), np.array([point])
         trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
         self.group.execute(trajectory)
 
     def nudge_goal(self, shift: float, moved: Moved, axis: Axis) -> None:
-        """Set the pose or position target in effect again, moved (:func:`shifted_goal`);
+        """Set the pose or position target in effect again, moved (``nudge.shifted_goal``);
         raises ``LookupError`` when no pose goal is in effect or it has nothing to move."""
         if not self.pose_goal or self.goal_step is None:
             raise LookupError("no pose goal in effect")
@@ -347,9 +241,9 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
         (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.POSITION`` moves a
         ``/cartesian_path`` step's waypoints by ``shift * axis`` (m), or sets the pose or
         position target in effect again moved so; ``Moved.ORIENTATION`` turns their
-        orientations by ``shift`` (rad) about ``axis`` (:func:`turned`). A nudge that cannot be made (the
-        target refuses it, or there is no pose goal to move) is not an error of the step:
-        the outcome's values then hold ``NUDGE_FAILED``.
+        orientations by ``shift`` (rad) about ``axis`` (``nudge.turned``). A nudge that
+        cannot be made (the target refuses it, or there is no pose goal to move) is not an
+        error of the step: the outcome's values then hold ``NUDGE_FAILED``.
 
     Returns
     -------
