@@ -417,7 +417,7 @@ def test_bench_controls_cover_every_zoo_configuration_and_report_false_positives
     configs = {(c.op, c.robot, c.tip_link) for c in CONTROLS}
     assert {(b.op, b.robot, b.tip_link) for b in ZOO} <= configs
     assert {("fk", r, None) for r in known_robots()} <= configs and ("ik", DEFAULT_ROBOT, None) in configs
-    assert ("scenario", "ur5", None) in configs
+    assert {("scenario", "ur5", None), ("ik", "ur5", None)} <= configs
     assert all(c.target == "benchmarks.zoo.bugs:control" and c.is_control for c in CONTROLS)
 
     def run(bug: str, divergences: int, signatures: int = 0) -> dict[str, Any]:

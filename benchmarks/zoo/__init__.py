@@ -282,6 +282,8 @@ SCENARIO_UR5 = ("scenario", "ur5", None)
 """A scenario control on UR5 besides the zoo's arms: joint limits of +-2 pi and a singular home
 make its IK steps the hardest to judge (where a false positive was found, docs/engine.md
 "Ill-conditioning")."""
+IK_UR5 = ("ik", "ur5", None)
+"""An ``ik`` control on UR5 for the same reason (single IK calls from its singular home)."""
 
 
 def _controls() -> tuple[Bug, ...]:
@@ -290,7 +292,7 @@ def _controls() -> tuple[Bug, ...]:
     configs = {(b.op, b.robot, b.tip_link) for b in ZOO}
     configs |= {("fk", robot, None) for robot in known_robots()}
     configs.add(("ik", DEFAULT_ROBOT, None))
-    configs.add(SCENARIO_UR5)
+    configs |= {SCENARIO_UR5, IK_UR5}
     out = []
     for op, robot, tip in sorted(configs, key=lambda c: (c[0], c[1], c[2] or "")):
         where = Path(robot).stem if robot.endswith(".urdf") else robot
@@ -301,6 +303,7 @@ def _controls() -> tuple[Bug, ...]:
 
 CONTROLS: tuple[Bug, ...] = _controls()
 """The control on every op and robot configuration a zoo bug uses, ``fk`` on every known
-robot (example-robot-data's included), ``ik`` on the default arm and ``scenario`` on UR5."""
+robot (example-robot-data's included), ``ik`` on the default arm and on UR5, and ``scenario``
+on UR5."""
 
 BY_NAME = {bug.name: bug for bug in (*ZOO, CONTROL, *CONTROLS)}
