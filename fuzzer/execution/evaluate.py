@@ -39,7 +39,7 @@ after ``go``, the last point of a plan, any point of a path - beyond the campaig
 makes it ``ill_conditioned``. The goal nudge is needed where Newton-Raphson's first step
 clamps joints at their limits: that erases a move of the state, while the iterates that
 follow still depend on every rounding, so two correct solvers can end differently from one
-seed (docs/engine.md, "Ill-conditioned IK").
+seed (docs/engine.md, "Ill-conditioning").
 """
 
 from __future__ import annotations
@@ -69,6 +69,8 @@ ABSURD = 1e6
 """Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
 
 IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
+"""Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
+moves by the shift, alternating in sign for the last one)."""
 GOAL_NUDGES: tuple[tuple[float, Axis], ...] = (
     (1e-9, (0.189, -0.198, 0.962)),
     (-1e-9, (0.16, -0.818, 0.552)),
@@ -83,8 +85,6 @@ chaotic, one try flips a target's answer with some probability (0.3-0.5 on UR5's
 the check needs several independent ones. The axes are random unit vectors
 (``numpy.random.default_rng(0).normal(size=(6, 3))`` normalized, to 3 decimals): axes along
 the coordinate planes turned out to keep the tie of a half-turn rotation error unbroken."""
-"""Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
-moves by the shift, alternating in sign for the last one)."""
 
 HISTORY = 32
 """Calls on the campaign's targets kept for a ``state_dependent`` divergence's sidecar."""

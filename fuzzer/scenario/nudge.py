@@ -39,7 +39,7 @@ class Nudge:
         The step it comes before.
     shift : float
         How far (rad or m): joints alternate in sign (``+shift`` on even indices), positions
-        move by ``(+shift, -shift, +shift)``.
+        move by ``shift * axis``, orientations turn by ``shift`` about ``axis``.
     moved : Moved
         The state, or the goal's positions or orientations.
     """
