@@ -171,19 +171,25 @@ def pinv_step(jac: Array, twist: Array) -> Array:
 
 
 def ik(
-    chain: Chain, target: Array, seed: list[float], link: int, nvars: int
+    chain: Chain,
+    target: Array,
+    seed: list[float],
+    link: int,
+    nvars: int,
+    trace: list[float] | None = None,
 ) -> tuple[bool, list[float], float, float]:
     """Newton-Raphson IK of link ``link``; returns (converged, q, position error, orientation error).
 
     ``seed`` is already clamped into the limits; variables from ``nvars`` on keep their seed values.
     A non-finite iterate (an absurd target) ends as not converged, with the seed's values.
+    ``trace``, when given, receives the rotation error (rad, in [0, pi]) of every iterate, in order.
     """
     with np.errstate(all="ignore"):  # absurd targets overflow; handled below, not warned about
-        return _ik(chain, target, seed, link, nvars)
+        return _ik(chain, target, seed, link, nvars, trace)
 
 
 def _ik(
-    chain: Chain, target: Array, seed: list[float], link: int, nvars: int
+    chain: Chain, target: Array, seed: list[float], link: int, nvars: int, trace: list[float] | None
 ) -> tuple[bool, list[float], float, float]:
     lower = np.array([lim.lower for lim in chain.limits[:nvars]])
     upper = np.array([lim.upper for lim in chain.limits[:nvars]])
@@ -197,6 +203,8 @@ def _ik(
         for _ in range(IK_MAX_ITERATIONS):
             current, jac = fk_and_jacobian(chain, q, link, nvars, movable)
             twist = error_twist(current, target)
+            if trace is not None:
+                trace.append(float(np.linalg.norm(twist[3:])))
             if is_small(twist):
                 converged = True
                 break

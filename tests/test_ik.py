@@ -210,3 +210,23 @@ def test_twin_jacobian_is_the_derivative_of_its_fk(robot: str) -> None:
                 angular = np.array([spin[2, 1], spin[0, 2], spin[1, 0]])
                 np.testing.assert_allclose(jac[:3, v], linear, atol=1e-7)
                 np.testing.assert_allclose(jac[3:, v], angular, atol=1e-7)
+
+
+def test_the_twins_iterate_replay_follows_inverse_kinematics() -> None:
+    """``ik_rotation_errors`` (the oracle's replay of Newton-Raphson, not part of the protocol)
+    starts at the seed's rotation error, ends where IK stops, and has one entry per iterate."""
+    m = python_impl.RobotModel(robot_path("ur5"))
+    for q in sample_configurations(m, 20, seed=3):
+        target = m.forward_kinematics(q)
+        seed = [0.9 * v for v in q]
+        errors = m.ik_rotation_errors(target, seed)
+        result = m.inverse_kinematics(target, seed)
+        assert 1 <= len(errors) <= 100
+        assert errors[0] == pytest.approx(rotation_distance(m.forward_kinematics(seed), target), abs=1e-9)
+        assert all(0.0 <= e <= math.pi for e in errors)
+        if result.status is IKStatus.SUCCESS:
+            assert errors[-1] <= math.sqrt(3) * IK_EPS  # the loop stopped on the tolerance
+        else:
+            assert len(errors) == 100
+    with pytest.raises(InvalidInputError):
+        m.ik_rotation_errors(((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 0.0)))

@@ -11,19 +11,13 @@ it counts:
   makes it ``state_dependent`` (the answer depends on earlier calls; the last
   ``HISTORY`` calls go with it, and ``evaluate(case, history=...)`` replays them
   on fresh targets first), a different one ``flaky``;
-* an IK status divergence is re-run with each target's documented default seed
-  (its ``home_values``) passed explicitly: a target whose answer changes has
-  another default seed, and the divergence stands. Otherwise the seeds are moved
-  by 1e-9 (both ways) and 1e-7, then the target's position and, separately, its
-  orientation by ``GOAL_NUDGES`` (1e-9 and 1e-7 m or rad along six random directions;
-  ``nudge.turned``), and a target that changes its own answer makes it
-  ``ill_conditioned``.
-  A divergence inside KDL's rotation dead zone (the requested orientation within
-  ``DEAD_ZONE`` of a half turn from where the seed puts the link) is a
-  ``known_limitation`` (docs/api.md). Either way a target that claims success
-  without reaching the pose still breaks its own property (``oracle.ik_property``),
-  which is then the verdict, as a scenario's property violation wins over a
-  ``known_limitation``.
+* an IK status divergence is judged by ``ik_check.judge_status``: a different default
+  seed makes it stand; the seed's or any Newton-Raphson iterate's rotation error within
+  ``DEAD_ZONE`` of a half turn (KDL's dead zone) makes it ``known_limitation``; a target
+  whose own status changes under a 1e-9..1e-7 move of the seed or of the goal makes it
+  ``ill_conditioned``. Either way a target that claims success without reaching the pose
+  still breaks its own property (``oracle.ik_property``), which is then the verdict, as a
+  scenario's property violation wins over a ``known_limitation``.
 
 A scenario (``--op scenario``) is one call: the whole scenario is run again on fresh
 targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
@@ -32,7 +26,7 @@ step's outcomes (the field names the step kind, the step index is not in the key
 or value divergence at a step that solves IK (``go``/``plan`` with a pose or position
 target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1e-9 (both
 ways) and 1e-7 just before that step, then with the goal's positions moved, then its
-orientations turned, by ``GOAL_NUDGES`` (m, rad): the pose or position target in effect, or the
+orientations turned, by ``ik_check.GOAL_NUDGES`` (m, rad): the pose or position target in effect, or the
 path's waypoints (``run_scenario``'s ``nudge``). A target whose own
 answer at that step changes (status, fraction, point count, or the IK answer - the state
 after ``go``, the last point of a plan, any point of a path - beyond the campaign tolerance)
@@ -50,14 +44,14 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from fuzzer.execution import oracle
+from fuzzer.execution import ik_check, oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
-from fuzzer.scenario.nudge import AXIS, Axis, Moved, Nudge, turned
+from fuzzer.scenario.nudge import AXIS, Moved, Nudge
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_properties import first_property
@@ -68,31 +62,8 @@ from robot_api.records import JointType
 ABSURD = 1e6
 """Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
 
-IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
-"""Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
-moves by the shift, alternating in sign for the last one)."""
-GOAL_NUDGES: tuple[tuple[float, Axis], ...] = (
-    (1e-9, (0.189, -0.198, 0.962)),
-    (-1e-9, (0.16, -0.818, 0.552)),
-    (1e-7, (0.742, 0.539, -0.4)),
-    (-1e-7, (-0.897, -0.442, 0.029)),
-    (1e-9, (-0.878, -0.083, -0.471)),
-    (-1e-9, (-0.758, -0.564, -0.328)),
-)
-"""Goal nudges (shift in m or rad, direction): the goal's position moves by ``shift * axis``, or
-its orientation turns by ``shift`` about ``axis``. Each try goes another way: where iterates are
-chaotic, one try flips a target's answer with some probability (0.3-0.5 on UR5's cases), so
-the check needs several independent ones. The axes are random unit vectors
-(``numpy.random.default_rng(0).normal(size=(6, 3))`` normalized, to 3 decimals): axes along
-the coordinate planes turned out to keep the tie of a half-turn rotation error unbroken."""
-
 HISTORY = 32
 """Calls on the campaign's targets kept for a ``state_dependent`` divergence's sidecar."""
-
-DEAD_ZONE = 1e-6
-"""KDL's rotation dead zone (rad): ``diff(R_seed, R_target)`` goes through the rotation axis,
-undefined at a half turn, so a target within this of pi from the seed's orientation is
-reached by one solver and not by the other (docs/api.md, "Known limitations")."""
 
 Seeds = tuple[tuple[float, ...] | None, ...]
 AnyCall = Call | ScenarioCall
@@ -156,6 +127,7 @@ class Evaluator:
     _stateless: set[str] = field(default_factory=set)
     """Live signatures already confirmed on fresh targets (later ones skip the construction)."""
     _facts: ScenarioFacts | None = None
+    _replay: Any = None
 
     def __post_init__(self) -> None:
         limits = list(getattr(self.runners[0].model, "joint_limits", []))
@@ -301,41 +273,27 @@ class Evaluator:
             and comparison.kind is Kind.STATUS
             and {o.status for o in outcomes} <= {Status.OK, Status.FAILED}
         ):
-            judged = self._ik_status(call, outcomes, comparison, fresh or self.fresh())
+            runners = fresh or self.fresh()
+            judged = ik_check.judge_status(call, outcomes, comparison, runners, self.run_both, self.replay)
             if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
                 # a status split that is no finding leaves each target's own claim to check
                 judged = self._ik_violation(call, outcomes) or judged
             return judged, outcomes
         return comparison, outcomes
 
-    def _ik_status(
-        self, call: IkCall, outcomes: tuple[Outcome, ...], comparison: Comparison, runners: Sequence[Runner]
-    ) -> Comparison:
-        """An IK status divergence judged for what it is (see the module docstring)."""
-        homes = tuple(r.home for r in runners)
-        explicit = self.run_both(call, homes, runners)
-        if any(x.status is not y.status for x, y in zip(outcomes, explicit, strict=True)):
-            return comparison  # a target's default seed is not its home_values: a real divergence
-        if in_dead_zone(runners[0].model, call, homes[0]):
-            return replace(comparison, kind=Kind.KNOWN_LIMITATION)
-        for i, shift in enumerate(IK_PERTURBATIONS):
-            moved = tuple(
-                tuple(v + (shift if i < 2 or j % 2 == 0 else -shift) for j, v in enumerate(home))
-                for home in homes
-            )
-            for first, second in zip(outcomes, self.run_both(call, moved, runners), strict=True):
-                if first.status is not second.status:
-                    return replace(comparison, kind=Kind.ILL_CONDITIONED)
-        if len(call.position) != 3 or len(call.orientation) != 4:
-            return comparison
-        x, y, z = call.position
-        goals = [replace(call, position=(x + s * u, y + s * v, z + s * w)) for s, (u, v, w) in GOAL_NUDGES]
-        goals += [replace(call, orientation=turned(call.orientation, s, axis)) for s, axis in GOAL_NUDGES]
-        for goal in goals:  # the goal (m, then rad): clamped iterates erase a seed's move
-            for first, second in zip(outcomes, self.run_both(goal, homes, runners), strict=True):
-                if first.status is not second.status:
-                    return replace(comparison, kind=Kind.ILL_CONDITIONED)
-        return comparison
+    @property
+    def replay(self) -> Any | None:
+        """A fresh twin model of the robot that replays Newton-Raphson iterates for the IK
+        status check (``ik_check.meets_half_turn``); None when the twin cannot load it."""
+        if self._replay is None:
+            first = self.runners[0]
+            try:
+                from python_impl import RobotModel
+
+                self._replay = RobotModel(first.urdf, first.tip_link) if first.urdf is not None else False
+            except Exception:  # noqa: BLE001 - no replay is no evidence: the divergence stands
+                self._replay = False
+        return self._replay or None
 
     def _at_ik_step(self, call: ScenarioCall, outcomes: tuple[Outcome, ...], comparison: Comparison) -> bool:
         """A status or value divergence at a step that solves IK (what the nudge check is for)."""
@@ -358,9 +316,9 @@ class Evaluator:
         facts = self.scenario_facts
         assert step is not None
         kind = call.steps[step].kind
-        tries = [(Moved.STATE, shift, AXIS) for shift in IK_PERTURBATIONS]
+        tries = [(Moved.STATE, shift, AXIS) for shift in ik_check.IK_PERTURBATIONS]
         goal = (Moved.POSITION, Moved.ORIENTATION)
-        tries += [(moved, shift, axis) for moved in goal for shift, axis in GOAL_NUDGES]
+        tries += [(moved, shift, axis) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
         for moved, shift, axis in tries:
             nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved, axis))
             if any(NUDGE_FAILED in o.values for o in nudged):
@@ -392,20 +350,6 @@ def stored_call(call: AnyCall, seed: tuple[float, ...] | None = None) -> dict[st
     if isinstance(call, ScenarioCall):
         return {"kind": "ScenarioCall", "message": to_message(call)}
     return call_to_json(call, seed)
-
-
-def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
-    """Whether the requested orientation is within ``DEAD_ZONE`` of a half turn from the
-    orientation the seed gives the link (where KDL's rotation error is undefined)."""
-    norm = math.sqrt(sum(x * x for x in call.orientation))
-    if not (norm > 0.0 and math.isfinite(norm)):
-        return False
-    try:
-        start = tuple(float(x) for x in model.forward_kinematics(list(seed), call.link).orientation)
-    except Exception:  # noqa: BLE001 - a target that cannot answer is not in the dead zone
-        return False
-    target = tuple(x / norm for x in call.orientation)
-    return oracle.rotation_distance(start, target) >= math.pi - DEAD_ZONE
 
 
 def history_of(sidecar: dict[str, Any] | None) -> list[tuple[AnyCall, tuple[float, ...] | None]]:

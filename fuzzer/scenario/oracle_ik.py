@@ -59,7 +59,7 @@ IK_EXACT = 1e-12
 KNIFE_EDGE = 1e-9
 """Relative distance of ``d / eef_step`` to an integer within which its floor is rounding."""
 DEAD_ZONE = 1e-6
-"""KDL's rotation dead zone at a half turn (rad; ``fuzzer.execution.evaluate.DEAD_ZONE``)."""
+"""KDL's rotation dead zone at a half turn (rad; ``fuzzer.execution.ik_check.DEAD_ZONE``)."""
 DERIVED = (
     "trajectory.points",
     "trajectory.time_from_start",

@@ -1,0 +1,135 @@
+"""An IK status divergence judged for what it is: a finding, ill-conditioning or KDL's dead zone.
+
+``judge_status`` takes a single IK call whose two targets split on the status (one
+converged, one did not) and decides, in this order:
+
+1. each target is re-run with its documented default seed (its ``home_values``) passed
+   explicitly: a target whose answer changes has another default seed, and the divergence
+   stands;
+2. the requested orientation within ``DEAD_ZONE`` of a half turn from where the seed puts
+   the link (``in_dead_zone``): ``known_limitation``;
+3. the seeds moved by ``IK_PERTURBATIONS``, then the goal's position moved and, separately,
+   its orientation turned by ``GOAL_NUDGES``: a target that changes its own status makes it
+   ``ill_conditioned``;
+4. a Newton-Raphson iterate that meets a rotation error within ``DEAD_ZONE`` of a half turn
+   (``meets_half_turn``): ``known_limitation``. KDL's ``diff`` and the twin's logarithm pick
+   opposite axes for an exact half turn, so from there the two iterate differently; step 2
+   is this rule at the seed. The iterates are replayed by the twin's own Newton-Raphson
+   (``python_impl.RobotModel.ik_rotation_errors``) on a fresh model of the robot, not on a
+   campaign target; they are KDL's iterates up to the first tie, as both implement one
+   documented algorithm (docs/api.md, "Inverse kinematics").
+
+Otherwise the divergence stands. The caller still checks each target's own claim
+(``oracle.ik_property``) when the verdict is no finding.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import Any
+
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Kind, Outcome
+from fuzzer.execution.targets import Runner
+from fuzzer.input.mapping import IkCall
+from fuzzer.scenario.nudge import Axis, turned
+
+IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
+"""Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
+moves by the shift, alternating in sign for the last one)."""
+
+GOAL_NUDGES: tuple[tuple[float, Axis], ...] = (
+    (1e-9, (0.189, -0.198, 0.962)),
+    (-1e-9, (0.16, -0.818, 0.552)),
+    (1e-7, (0.742, 0.539, -0.4)),
+    (-1e-7, (-0.897, -0.442, 0.029)),
+    (1e-9, (-0.878, -0.083, -0.471)),
+    (-1e-9, (-0.758, -0.564, -0.328)),
+)
+"""Goal nudges (shift in m or rad, direction): the goal's position moves by ``shift * axis``, or
+its orientation turns by ``shift`` about ``axis``. Each try goes another way: where iterates are
+chaotic, one try flips a target's answer with some probability (0.3-0.5 on UR5's cases), so
+the check needs several independent ones. The axes are random unit vectors
+(``numpy.random.default_rng(0).normal(size=(6, 3))`` normalized, to 3 decimals): axes along
+the coordinate planes turned out to keep the tie of a half-turn rotation error unbroken."""
+
+DEAD_ZONE = 1e-6
+"""KDL's rotation dead zone (rad): ``diff(R_seed, R_target)`` goes through the rotation axis,
+undefined at a half turn, so a target within this of pi from the seed's orientation is
+reached by one solver and not by the other (docs/api.md, "Known limitations")."""
+
+Seeds = tuple[tuple[float, ...] | None, ...]
+Homes = tuple[tuple[float, ...], ...]
+RunBoth = Callable[[IkCall, Seeds, Sequence[Runner]], tuple[Outcome, ...]]
+"""Runs one IK call on both targets with the given seeds (``Evaluator.run_both``)."""
+
+
+def judge_status(
+    call: IkCall,
+    outcomes: tuple[Outcome, ...],
+    comparison: Comparison,
+    runners: Sequence[Runner],
+    run_both: RunBoth,
+    replay: Any | None,
+) -> Comparison:
+    """The status divergence ``comparison`` of ``call``, judged (see the module docstring).
+
+    ``runners`` are fresh targets; ``replay`` is a ``python_impl.RobotModel`` of the robot (or
+    None, which skips step 4).
+    """
+    homes = tuple(r.home for r in runners)
+    explicit = run_both(call, homes, runners)
+    if any(x.status is not y.status for x, y in zip(outcomes, explicit, strict=True)):
+        return comparison  # a target's default seed is not its home_values: a real divergence
+    if in_dead_zone(runners[0].model, call, homes[0]):
+        return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+    for goal, seeds in _tries(call, homes):
+        for first, second in zip(outcomes, run_both(goal, seeds, runners), strict=True):
+            if first.status is not second.status:
+                return replace(comparison, kind=Kind.ILL_CONDITIONED)
+    if replay is not None and meets_half_turn(replay, call, homes[0]):
+        return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+    return comparison
+
+
+def _tries(call: IkCall, homes: Homes) -> list[tuple[IkCall, Seeds]]:
+    """The seed moves, then (for a full pose) the goal's position moves and orientation turns."""
+    out: list[tuple[IkCall, Seeds]] = []
+    for i, shift in enumerate(IK_PERTURBATIONS):
+        step = [shift if i < 2 or j % 2 == 0 else -shift for j in range(max(map(len, homes), default=0))]
+        out.append((call, tuple(tuple(v + d for v, d in zip(home, step, strict=False)) for home in homes)))
+    if len(call.position) != 3 or len(call.orientation) != 4:
+        return out
+    x, y, z = call.position
+    moves = [replace(call, position=(x + s * u, y + s * v, z + s * w)) for s, (u, v, w) in GOAL_NUDGES]
+    turns = [replace(call, orientation=turned(call.orientation, s, axis)) for s, axis in GOAL_NUDGES]
+    out += [(goal, homes) for goal in moves + turns]
+    return out
+
+
+def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
+    """Whether the requested orientation is within ``DEAD_ZONE`` of a half turn from the
+    orientation the seed gives the link (where KDL's rotation error is undefined)."""
+    norm = math.sqrt(sum(x * x for x in call.orientation))
+    if not (norm > 0.0 and math.isfinite(norm)):
+        return False
+    try:
+        start = tuple(float(x) for x in model.forward_kinematics(list(seed), call.link).orientation)
+    except Exception:  # noqa: BLE001 - a target that cannot answer is not in the dead zone
+        return False
+    target = tuple(x / norm for x in call.orientation)
+    return oracle.rotation_distance(start, target) >= math.pi - DEAD_ZONE
+
+
+def meets_half_turn(replay: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
+    """Whether a Newton-Raphson iterate of ``call`` from ``seed`` meets a rotation error within
+    ``DEAD_ZONE`` of pi (``replay``: a ``python_impl.RobotModel``; False when it cannot replay)."""
+    if len(call.position) != 3 or len(call.orientation) != 4:
+        return False
+    try:
+        errors = replay.ik_rotation_errors((call.position, call.orientation), seed, call.link)
+    except Exception:  # noqa: BLE001 - a pose or seed the replay rejects is no evidence either way
+        return False
+    return any(e >= math.pi - DEAD_ZONE for e in errors)
