@@ -346,6 +346,44 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
     assert judge(off, run(three), run(four), facts).kind is Kind.VALUE
 
 
+def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
+    """A path's known limitation changes only each target's last plan: a later divergence is
+    still found, up to an /execute of that plan (a plan that succeeds on both replaces it)."""
+
+    def origin(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+
+    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, origin)
+    three = trajectory([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)])
+    four = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)])
+    still, moved = ok(joint_values=(0.0, 0.0)), ok(joint_values=(0.1, 0.0))
+    later = judge(
+        scenario("cartesian_path", "remember", "remember"),
+        run(three, still, still),
+        run(four, still, moved),
+        facts,
+    )
+    assert (later.kind, later.step, later.field) == (Kind.VALUE, 2, "remember.joint_values")
+    # nothing else differs: the path's known limitation is the verdict
+    alone = judge(scenario("cartesian_path", "remember"), run(three, still), run(four, still), facts)
+    assert (alone.kind, alone.step) == (Kind.KNOWN_LIMITATION, 0)
+    # an /execute of the plans that differ ends the comparison
+    executed = ok(success=(1.0,), joint_values=(0.3, 0.0))  # each path's last point
+    stop = judge(
+        scenario("cartesian_path", "execute", "remember"),
+        run(three, executed, still),
+        run(four, executed, moved),
+        facts,
+    )
+    assert (stop.kind, stop.step) == (Kind.KNOWN_LIMITATION, 0)
+    # unless a plan that succeeds on both came in between
+    calls = scenario("cartesian_path", "joint_target", "plan", "execute", "remember")
+    at_plan = ok(success=(1.0,), joint_values=(0.5, 0.5))
+    a, b = run(three, still, PLAN, at_plan, still), run(four, still, PLAN, at_plan, moved)
+    replanned = judge(calls, a, b, facts)
+    assert (replanned.kind, replanned.step) == (Kind.VALUE, 4)
+
+
 def test_timing_of_ik_answers_that_differ_within_tolerance_is_a_known_limitation() -> None:
     call = scenario("pose_target", "plan")
     set_ = ok(joint_values=(0.0, 0.0))

@@ -227,11 +227,22 @@ def _status_of_shorter(kind: str, shorter: Outcome) -> Comparison:
 def first_differential(
     call: ScenarioCall, a: Outcome, b: Outcome, tol: Tolerance, facts: ScenarioFacts
 ) -> Comparison:
-    """The first divergent step (classified), or ``agree`` with the largest raw difference."""
+    """The first divergent step (classified), or ``agree`` with the largest raw difference.
+
+    A ``known_limitation`` at a ``cartesian_path`` step does not end the comparison: that step
+    changes nothing on the group but each target's last plan, so the steps after it are
+    compared as well, up to an ``/execute`` of a plan it left (a later ``/plan`` that succeeds
+    on both, or a later path that agrees, replaces it). A counted divergence found later is
+    the verdict; otherwise the first ``known_limitation`` is.
+    """
     largest = 0.0
+    pending: Comparison | None = None
+    tainted = False
     before = list(zip(contexts(call, a, facts), contexts(call, b, facts), strict=False))
     for i in range(max(len(a.steps), len(b.steps))):
         kind = call.steps[i].kind if i < len(call.steps) else "step"
+        if tainted and kind == "execute":
+            return pending or Comparison(Kind.AGREE)  # it would execute the plans that differ
         if i >= len(a.steps) or i >= len(b.steps):
             c = _status_of_shorter(kind, a if i >= len(a.steps) else b)
             return replace(c, step=i, step_kind=kind)
@@ -239,12 +250,23 @@ def first_differential(
         largest = max(largest, c.largest)
         if c.divergent:
             c = classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol)
-            return replace(c, step=i, step_kind=kind)
+            c = replace(c, step=i, step_kind=kind)
+            if not (c.kind is Kind.KNOWN_LIMITATION and kind == "cartesian_path"):
+                return c
+            pending, tainted = pending or c, True
+        elif kind == "cartesian_path" or (kind == "plan" and _succeeded(a.steps[i], b.steps[i])):
+            tainted = False
+    if pending is not None:
+        return pending
     # every step agreed: the group's constructor, or reading the final state, may still differ
     c = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
     if c.divergent:
         return replace(c, field="scenario.status")
     return Comparison(Kind.AGREE, largest=largest)
+
+
+def _succeeded(*steps: Outcome) -> bool:
+    return all(tuple(step.values.get("success", ())) == (1.0,) for step in steps)
 
 
 def compare_scenario(
