@@ -13,6 +13,7 @@ Mutators
   other parent), or a fresh one (``/go``, ``/plan``, ``/execute``..., a joint target
   recombined column by column from the scenario's joint targets, a scaling factor, a named
   target that mostly names one that exists at that point...).
+  The context and the fresh steps are ``fuzzer.scenario.fresh``.
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``), often right after a
   ``/remember X`` and then often followed by ``/named_target X`` and ``/go``.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
@@ -28,137 +29,38 @@ registry defaults, and values change through the type-safe value mutators.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from random import Random
 from typing import Any, Final
 
-from fuzzer.input.mapping import FOCUS
 from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.mutation import mutators
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
+from fuzzer.scenario.fresh import (
+    GO,
+    SequenceContext,
+    Steps,
+    Tables,
+    field_types,
+    fresh_message,
+    msg_type_of,
+    new_step,
+)
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
 
-StepDict = dict[str, Any]
-Steps = list[StepDict]
 SeqMutator = Callable[[Steps, "SequenceContext"], tuple[Steps, str]]
 
 SPLICE: Final = "seq_splice"
 """Lineage name of the crossover."""
 SEQ_STEP: Final = "seq_step"
-COPY_PROBABILITY: Final = 0.5
-"""``seq_insert``: chance of copying an existing step (when there is one) rather than a fresh one."""
-FRESH_WEIGHTS: Final[Mapping[str, float]] = {"/go": 3.0, "/plan": 2.0, "/execute": 2.0, "/joint_target": 2.0}
-"""Weights of the topics of a fresh step (other topics: 1)."""
-FRESH_FLOATS: Final = (0.0, 0.01, 0.1, 0.5, 1.0)
-"""Values a fresh ``std_msgs/Float64`` step may take, besides the scenario's and the engine's."""
-FRESH_NAMES: Final = ("home",)
-"""Named targets a fresh ``std_msgs/String`` step may take, besides the scenario's strings."""
-KNOWN_NAME_PROBABILITY: Final = 0.75
-"""Fresh ``/named_target`` step: chance that it names a target that exists where it is inserted
-("home", or a name a ``/remember`` step before it stored), as syzkaller gives a call a resource an
-earlier call made; otherwise any string of the scenario, "home" or a joint or link name (an
-unknown target: the error path)."""
 AFTER_REMEMBER_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move goes right after a ``/remember`` (when there is one)."""
 RETURN_PROBABILITY: Final = 0.5
 """``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and ``/go`` follow the move."""
-INTERESTING_PROBABILITY: Final = 0.5
-"""Fresh joint target: chance that one joint takes an engine interesting value."""
 SPLICE_ATTEMPTS: Final = 8
-
-
-@dataclass
-class _Tables:
-    """Per-topic tables derived from the message registry (types, defaults, value contexts)."""
-
-    registry: MessageRegistry
-    types: dict[str, str]
-    """Topic -> ROS message type."""
-    fields: dict[str, dict[str, str]]
-    """ROS message type -> dotted field path -> builtin type (``MutationContext.field_types``)."""
-    contexts: dict[str, tuple[MutationContext, MutationContext]] = dataclasses.field(default_factory=dict)
-
-    def default(self, topic: str) -> dict[str, Any]:
-        """The zero message of ``topic``'s type, unit quaternions instead of zero ones."""
-        message: dict[str, Any] = _unit_quaternions(self.registry.default(self.types[topic]))
-        return message
-
-    def value_context(self, msg_type: str, outer: MutationContext) -> MutationContext:
-        """A context like ``outer`` for messages of ``msg_type`` (cached per outer context)."""
-        cached = self.contexts.get(msg_type)
-        if cached is None or cached[0] is not outer:
-            inner = dataclasses.replace(
-                outer, field_types=self.fields[msg_type], focus=FOCUS.get(msg_type, ()), other=None, memo={}
-            )
-            cached = (outer, inner)
-            self.contexts[msg_type] = cached
-        cached[1].rng = outer.rng
-        return cached[1]
-
-
-@dataclass
-class SequenceContext:
-    """What a sequence mutator may use besides the steps.
-
-    Attributes
-    ----------
-    rng : random.Random
-        The only source of randomness (the value context's).
-    value : MutationContext
-        The campaign's context (interesting floats, dictionary, options) for ``seq_step``.
-    max_steps : int
-        Largest number of steps of a child.
-    tables : _Tables
-        Registry-derived tables.
-    other : list of dict or None
-        The other parent's steps (from ``value.other``), for copies and ``seq_splice``.
-    inner : str or None
-        The value mutator ``seq_step`` tries first (from a name ``seq_step:<inner>``).
-    """
-
-    rng: Random
-    value: MutationContext
-    max_steps: int
-    tables: _Tables
-    other: Steps | None = None
-    inner: str | None = None
-
-
-def field_types(registry: MessageRegistry, msg_type: str, prefix: str = "") -> dict[str, str]:
-    """Dotted field path -> ROS type of every field of ``msg_type`` the value mutators may touch.
-
-    As ``fuzzer.campaign.field_types``, but arrays of messages are kept (``poses``:
-    ``geometry_msgs/Pose[]``, their elements' fields as ``poses.position.x``), so the
-    waypoints of a ``/cartesian_path`` step can be mutated, inserted and removed.
-    """
-    out: dict[str, str] = {}
-    for f in registry.get(msg_type).fields:
-        path = f"{prefix}{f.name}"
-        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
-        if f.is_builtin or f.is_array:
-            out[path] = f.type + suffix
-        if not f.is_builtin:
-            out.update(field_types(registry, f.type, path + "."))
-    return out
-
-
-def _unit_quaternions(node: Any) -> Any:
-    """``node`` with every all-zero ``orientation`` quaternion made the identity (w = 1)."""
-    if isinstance(node, dict):
-        out = {key: _unit_quaternions(value) for key, value in node.items()}
-        quaternion = out.get("orientation")
-        if not isinstance(quaternion, dict) or set(quaternion) != {"x", "y", "z", "w"}:
-            return out
-        if all(v == 0.0 for v in quaternion.values()):
-            out["orientation"] = {**quaternion, "w": 1.0}
-        return out
-    if isinstance(node, list):
-        return [_unit_quaternions(item) for item in node]
-    return node
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -189,85 +91,13 @@ def register(name: str, weight: float = 1.0) -> Callable[[SeqMutator], SeqMutato
     return decorator
 
 
-def _msg_type_of(step: Any, ctx: SequenceContext) -> str | None:
-    """The message type of a well-formed step, else None."""
-    if not isinstance(step, dict) or not isinstance(step.get("msg"), dict):
-        return None
-    topic = step.get("topic")
-    return ctx.tables.types.get(topic) if isinstance(topic, str) else None
-
-
-def _known_names(before: Steps) -> list[str]:
-    """Named targets that exist after ``before`` has run: "home" and every remembered name."""
-    remembered = [
-        s["msg"]["data"]
-        for s in before
-        if isinstance(s, dict) and s.get("topic") == "/remember" and isinstance(s.get("msg"), dict)
-    ]
-    return [*FRESH_NAMES, *(name for name in remembered if isinstance(name, str))]
-
-
-def _fresh_message(topic: str, steps: Steps, ctx: SequenceContext, at: int | None = None) -> dict[str, Any]:
-    """A new message for ``topic`` made from the scenario's values (or registry defaults), for a
-    step inserted before ``steps[at]`` (at the end when ``at`` is None)."""
-    msg_type = ctx.tables.types[topic]
-    same = [s["msg"] for s in steps if _msg_type_of(s, ctx) == msg_type]
-    msg = ctx.tables.default(topic)
-    if msg_type == "sensor_msgs/JointState":
-        vectors = [m for m in same if isinstance(m.get("position"), list) and m["position"]]
-        if not vectors:
-            raise NotApplicable("no joint target to make a new one from")
-        msg = clone(ctx.rng.choice(vectors))
-        width = range(len(msg["position"]))
-        columns = [[v["position"][i] for v in vectors if i < len(v["position"])] for i in width]
-        msg["position"] = [ctx.rng.choice(column) for column in columns]
-        engine = ctx.value.interesting_floats
-        if engine and ctx.rng.random() < INTERESTING_PROBABILITY:
-            msg["position"][ctx.rng.randrange(len(columns))] = float(ctx.rng.choice(engine))
-    elif msg_type == "std_msgs/Float64":
-        pool = [float(m["data"]) for m in same if isinstance(m.get("data"), float)]
-        msg["data"] = ctx.rng.choice([*pool, *FRESH_FLOATS])
-    elif topic == "/named_target" and ctx.rng.random() < KNOWN_NAME_PROBABILITY:
-        msg["data"] = ctx.rng.choice(_known_names(steps[:at]))
-    elif msg_type == "std_msgs/String":
-        pool = [m["data"] for m in same if isinstance(m.get("data"), str)]
-        names = [t for t in ctx.value.dictionary if isinstance(t, str)]
-        msg["data"] = ctx.rng.choice([*pool, *FRESH_NAMES, *names])
-    elif msg_type == "geometry_msgs/PoseArray":
-        poses = [s["msg"]["pose"] for s in steps if _msg_type_of(s, ctx) == "geometry_msgs/PoseStamped"]
-        pose = ctx.rng.choice(poses) if poses else ctx.tables.registry.default("geometry_msgs/Pose")
-        msg["poses"] = [_unit_quaternions(pose)]
-    elif same and msg:  # poses, points: a copy of one of the scenario's
-        msg = clone(ctx.rng.choice(same))
-    return msg
-
-
-_GO: Final[StepDict] = {"topic": "/go", "msg": {}}
-
-
-def _new_step(steps: Steps, ctx: SequenceContext, at: int | None = None) -> StepDict:
-    """A copy of a step of this scenario or the other parent, or a fresh step, to go before
-    ``steps[at]`` (at the end when ``at`` is None)."""
-    copies = [s for s in (*steps, *(ctx.other or ())) if _msg_type_of(s, ctx) is not None]
-    if copies and ctx.rng.random() < COPY_PROBABILITY:
-        return clone(ctx.rng.choice(copies))
-    pool = {topic: FRESH_WEIGHTS.get(topic, 1.0) for topic in ctx.tables.types}
-    while pool:
-        topic = ctx.rng.choices(list(pool), weights=list(pool.values()))[0]
-        try:
-            return {"topic": topic, "msg": _fresh_message(topic, steps, ctx, at)}
-        except NotApplicable:
-            del pool[topic]
-    raise NotApplicable("no step can be made")  # pragma: no cover - Empty topics always can
-
-
 @register("seq_insert", weight=2.0)
 def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a new step (a copy, or a fresh ``/go``, ``/plan``, joint target...) anywhere."""
     if len(steps) >= ctx.max_steps:
         raise NotApplicable("the scenario has max_steps steps")
     at = ctx.rng.randint(0, len(steps))
-    steps.insert(at, _new_step(steps, ctx, at))
+    steps.insert(at, new_step(steps, ctx, at))
     return steps, "seq_insert"
 
 
@@ -279,16 +109,16 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
-        if _msg_type_of(s, ctx) == "std_msgs/String" and s["topic"] == "/remember"
+        if msg_type_of(s, ctx) == "std_msgs/String" and s["topic"] == "/remember"
     ]
     if remembered and ctx.rng.random() < AFTER_REMEMBER_PROBABILITY:
         at, name = ctx.rng.choice(remembered)
     else:
         at, name = ctx.rng.randint(0, len(steps)), None
-    template = [{"topic": "/joint_target", "msg": _fresh_message("/joint_target", steps, ctx, at)}, _GO]
+    template = [{"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}, GO]
     if name is not None and ctx.rng.random() < RETURN_PROBABILITY:
         named = {**ctx.tables.default("/named_target"), "data": name}
-        template += [{"topic": "/named_target", "msg": named}, _GO]
+        template += [{"topic": "/named_target", "msg": named}, GO]
     if len(steps) + len(template) > ctx.max_steps:
         raise NotApplicable("no room for a move")
     steps[at:at] = clone(template)
@@ -344,7 +174,7 @@ def seq_move(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 @register(SEQ_STEP, weight=4.0)
 def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Mutate one step's message with the value mutators (that step type's field types)."""
-    candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(_msg_type_of(s, ctx) or "")]
+    candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(msg_type_of(s, ctx) or "")]
     while candidates:
         index = candidates.pop(ctx.rng.randrange(len(candidates)))
         step = steps[index]
@@ -353,7 +183,7 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         peers = [  # for the value splice: other messages of this type (this scenario, the other parent)
             s["msg"]
             for s in (*steps, *(ctx.other or ()))
-            if _msg_type_of(s, ctx) == msg_type and s["msg"] != step["msg"]
+            if msg_type_of(s, ctx) == msg_type and s["msg"] != step["msg"]
         ]
         inner.other = ctx.rng.choice(peers) if peers else None
         try:
@@ -418,7 +248,7 @@ class SequenceMutator:
     unchanged copy when none applies. ``ctx.other``, when a scenario, is the other parent.
     """
 
-    tables: _Tables
+    tables: Tables
     max_steps: int
     uses_other: bool = True
     """Tells the harness to pass a second parent as ``ctx.other`` (copies, value splices)."""
@@ -493,5 +323,5 @@ def for_registry(
         raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
     types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
     fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
-    tables = _Tables(registry, types, fields)
+    tables = Tables(registry, types, fields)
     return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)
