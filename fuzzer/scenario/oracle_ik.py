@@ -18,7 +18,9 @@ vector (``fuzzer.execution.oracle`` compares single IK calls by pose only). At s
 
 The timing rule holds at any ``plan`` or ``cartesian_path`` step whose start states differ as
 numbers by more than ``IK_EXACT`` (within the tolerance, or an earlier step would have been
-reported): an earlier IK answer left the two arms that far apart. And at any step, a
+reported): an earlier IK answer left the two arms that far apart. It holds as well at a ``plan``
+or ``go`` to joint goals that differ as numbers by more than ``IK_EXACT`` and by no more than the
+tolerance: a named target remembered after an IK answer (``_goal_gap``). And at any step, a
 divergence of the end effector's position or orientation is ``known_limitation`` when the two
 joint vectors agree within the campaign tolerance but not as numbers (``IK_EXACT``) and the
 reported poses are no farther apart than the reference FK of the two vectors plus the
@@ -157,7 +159,7 @@ def classify(
     kind = call.steps[i].kind
     if c.kind is Kind.STATUS:
         return _half_turn(a, b, c, before[0], facts) if ik else c
-    gap = _gap([(before[0].state or (), before[1].state or ())])
+    gap = max(_gap([(before[0].state or (), before[1].state or ())]), _goal_gap(kind, before, tol))
     if ik:
         if kind == "cartesian_path" and _knife_edge(call, i, before[0], facts):
             return replace(c, kind=Kind.KNOWN_LIMITATION)
@@ -175,6 +177,17 @@ def classify(
         return replace(c, kind=Kind.KNOWN_LIMITATION)
     derived = any(c.field.endswith("." + name) for name in DERIVED)
     return replace(c, kind=Kind.KNOWN_LIMITATION) if derived and gap > IK_EXACT else c
+
+
+def _goal_gap(kind: str, before: tuple[Context, Context], tol: Tolerance) -> float:
+    """For ``plan``/``go`` to a joint goal: how far apart as numbers the two targets' goals are,
+    when that is within the tolerance (0 otherwise). A goal remembered from an IK answer
+    (``/remember`` after an IK ``/go``, then ``/named_target``) differs by as much as the IK
+    answers did."""
+    if kind not in ("plan", "go") or before[0].pose_goal or before[1].pose_goal:
+        return 0.0
+    gap = _gap([(before[0].joint_goal or (), before[1].joint_goal or ())])
+    return gap if gap <= min(tol.radians, tol.metres) else 0.0
 
 
 def _either_way_round(a: Outcome, b: Outcome, c: Comparison, facts: ScenarioFacts, tol: Tolerance) -> bool:
