@@ -284,6 +284,9 @@ make its IK steps the hardest to judge (where a false positive was found, docs/e
 "Ill-conditioning")."""
 IK_UR5 = ("ik", "ur5", None)
 """An ``ik`` control on UR5 for the same reason (single IK calls from its singular home)."""
+IK_ARMS = (("ik", "panda", None), ("ik", "kinova", None), ("ik", "xarm7", None))
+"""``ik`` controls on the other seven- and six-axis arms: a redundant arm (Panda, xArm7) and
+continuous joints (Kinova) give Newton-Raphson other ways to part."""
 
 
 def _controls() -> tuple[Bug, ...]:
@@ -292,7 +295,7 @@ def _controls() -> tuple[Bug, ...]:
     configs = {(b.op, b.robot, b.tip_link) for b in ZOO}
     configs |= {("fk", robot, None) for robot in known_robots()}
     configs.add(("ik", DEFAULT_ROBOT, None))
-    configs |= {SCENARIO_UR5, IK_UR5}
+    configs |= {SCENARIO_UR5, IK_UR5, *IK_ARMS}
     out = []
     for op, robot, tip in sorted(configs, key=lambda c: (c[0], c[1], c[2] or "")):
         where = Path(robot).stem if robot.endswith(".urdf") else robot
@@ -303,7 +306,7 @@ def _controls() -> tuple[Bug, ...]:
 
 CONTROLS: tuple[Bug, ...] = _controls()
 """The control on every op and robot configuration a zoo bug uses, ``fk`` on every known
-robot (example-robot-data's included), ``ik`` on the default arm and on UR5, and ``scenario``
-on UR5."""
+robot (example-robot-data's included), ``ik`` on the default arm, UR5, Panda, Kinova and
+xArm7, and ``scenario`` on UR5."""
 
 BY_NAME = {bug.name: bug for bug in (*ZOO, CONTROL, *CONTROLS)}
