@@ -207,22 +207,28 @@ def test_fresh_named_targets_mostly_name_a_target_that_exists_there() -> None:
     assert known / (known + unknown) >= 0.7 and unknown > 0
 
 
+MOVES = (["/go"], ["/plan", "/execute"])
+
+
 def motion_at(old: list[Any], new: list[Any]) -> tuple[int, list[Any]] | None:
-    """Where ``new`` is ``old`` with a move (a joint target and ``/go``, optionally followed by
-    ``/named_target`` and ``/go``) inserted, and the inserted steps; else None."""
-    for size in (2, 4):
+    """Where ``new`` is ``old`` with a move (a joint target and a move: ``/go``, or ``/plan``
+    and ``/execute``; optionally followed by ``/named_target`` and a move) inserted, and the
+    inserted steps; else None."""
+    templates = [["/joint_target", *m] for m in MOVES]
+    templates += [[*t, "/named_target", *m] for t in templates for m in MOVES]
+    for template in templates:
+        size = len(template)
         for i in range(len(old) + 1):
             inserted = new[i : i + size]
-            if len(new) == len(old) + size and new[:i] + new[i + size :] == old:
-                topics = [s["topic"] for s in inserted]
-                if topics == ["/joint_target", "/go", "/named_target", "/go"][:size]:
-                    return i, inserted
+            same = len(new) == len(old) + size and new[:i] + new[i + size :] == old
+            if same and [s["topic"] for s in inserted] == template:
+                return i, inserted
     return None
 
 
 def test_a_move_often_follows_a_remember_and_then_often_comes_back() -> None:
     parent = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), GO, step("/remember", data="spot"), PLAN]}
-    after, back, moved = 0, 0, 0
+    after, back, moved, planned, moves = 0, 0, 0, 0, 0
     for seed in range(400):
         child, name = MUTATE(parent, context(seed), "seq_motion")
         assert name == "seq_motion"
@@ -232,13 +238,19 @@ def test_a_move_often_follows_a_remember_and_then_often_comes_back() -> None:
         target = inserted[0]["msg"]["position"]
         assert len(target) == 6 and all(v in {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, *INTERESTING} for v in target)
         moved += target != [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+        topics = [s["topic"] for s in inserted]
+        returns = "/named_target" in topics
+        planned += topics.count("/plan")
+        moves += 1 + returns
         if at == 3:  # right after the /remember
             after += 1
-            back += len(inserted) == 4
-        if len(inserted) == 4:
-            assert at == 3 and inserted[2]["msg"]["data"] == "spot"  # back to the remembered state
+            back += returns
+        if returns:
+            named = inserted[topics.index("/named_target")]
+            assert at == 3 and named["msg"]["data"] == "spot"  # back to the remembered state
     assert 0.5 <= after / 400 <= 0.7  # 1/2 by choice, plus 1/4 x 1/2 of the random places
     assert 0.35 <= back / after <= 0.65 and moved > 100
+    assert 0.4 <= planned / moves <= 0.6  # /plan + /execute half the time, else /go
 
 
 def test_a_move_needs_a_joint_target_to_start_from_and_room() -> None:

@@ -14,8 +14,9 @@ Mutators
   recombined column by column from the scenario's joint targets, a scaling factor, a named
   target that mostly names one that exists at that point...).
   The context and the fresh steps are ``fuzzer.scenario.fresh``.
-* ``seq_motion``: insert a move (a fresh joint target and ``/go``), often right after a
-  ``/remember X`` and then often followed by ``/named_target X`` and ``/go``.
+* ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
+  ``/execute``), often right after a ``/remember X`` and then often followed by
+  ``/named_target X`` and a move back.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -59,7 +60,9 @@ SEQ_STEP: Final = "seq_step"
 AFTER_REMEMBER_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move goes right after a ``/remember`` (when there is one)."""
 RETURN_PROBABILITY: Final = 0.5
-"""``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and ``/go`` follow the move."""
+"""``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and a move follow the move."""
+PLAN_EXECUTE_PROBABILITY: Final = 0.5
+"""``seq_motion``: chance that a move is ``/plan`` + ``/execute`` rather than ``/go``."""
 SPLICE_ATTEMPTS: Final = 8
 
 
@@ -103,9 +106,11 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 
 @register("seq_motion", weight=1.0)
 def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
-    """Insert a move, a call template as syzkaller's: a fresh joint target and ``/go``. Half the
-    time it goes right after a ``/remember X`` (when there is one), and then half the time
-    ``/named_target X`` and ``/go`` come back to the remembered state (pick and place)."""
+    """Insert a move, a call template as syzkaller's: a fresh joint target, then ``/go`` or,
+    half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move; the second shows the
+    oracle the trajectory). Half the time it goes right after a ``/remember X`` (when there is
+    one), and then half the time ``/named_target X`` and a move come back to the remembered
+    state (pick and place), when there is room."""
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
@@ -115,14 +120,24 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         at, name = ctx.rng.choice(remembered)
     else:
         at, name = ctx.rng.randint(0, len(steps)), None
-    template = [{"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}, GO]
-    if name is not None and ctx.rng.random() < RETURN_PROBABILITY:
-        named = {**ctx.tables.default("/named_target"), "data": name}
-        template += [{"topic": "/named_target", "msg": named}, GO]
+    target = {"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}
+    template = [target, *_move(ctx)]
     if len(steps) + len(template) > ctx.max_steps:
         raise NotApplicable("no room for a move")
+    if name is not None and ctx.rng.random() < RETURN_PROBABILITY:
+        named = {**ctx.tables.default("/named_target"), "data": name}
+        back = [{"topic": "/named_target", "msg": named}, *_move(ctx)]
+        if len(steps) + len(template) + len(back) <= ctx.max_steps:  # else the move alone
+            template += back
     steps[at:at] = clone(template)
     return steps, "seq_motion"
+
+
+def _move(ctx: SequenceContext) -> Steps:
+    """``/go``, or ``/plan`` and ``/execute`` with probability ``PLAN_EXECUTE_PROBABILITY``."""
+    if ctx.rng.random() < PLAN_EXECUTE_PROBABILITY:
+        return [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
+    return [GO]
 
 
 @register("seq_delete", weight=1.0)
