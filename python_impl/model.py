@@ -226,22 +226,6 @@ class RobotModel:
         ok, values, perr, oerr = kinematics.ik(self._chain, target, q, index, nvars)
         return IKResult(IKStatus.SUCCESS if ok else IKStatus.NO_SOLUTION, tuple(values), perr, oerr)
 
-    def ik_rotation_errors(
-        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
-    ) -> tuple[float, ...]:
-        """Rotation error (rad, in [0, pi]) of every Newton-Raphson iterate of
-        ``inverse_kinematics(pose, seed, link)``, in order.
-
-        Not part of ``robot_api.protocol``: a replay of the documented algorithm for the
-        fuzzer's oracle, which looks for iterates in KDL's half-turn dead zone (docs/api.md,
-        "Known limitations"). Same parameters and errors as ``inverse_kinematics``.
-        """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        errors: list[float] = []
-        kinematics.ik(self._chain, target, q, index, nvars, errors)
-        return tuple(errors)
-
     def _ik_start(
         self, pose: Pose, seed: JointValues | None, link: str | None
     ) -> tuple[list[float], list[float], list[float], int, int]:
@@ -287,3 +271,21 @@ class RobotModel:
                 )
             self._nvars_cache[link] = sum(int(self._chain.variable[s] >= 0) for s in segments)
         return self._nvars_cache[link]
+
+
+def ik_rotation_errors(
+    model: RobotModel, pose: Pose, seed: JointValues | None = None, link: str | None = None
+) -> tuple[float, ...]:
+    """Rotation error (rad, in [0, pi]) of every Newton-Raphson iterate of
+    ``model.inverse_kinematics(pose, seed, link)``, in order.
+
+    A replay of the documented algorithm for the fuzzer's oracle, which looks for iterates in
+    KDL's half-turn dead zone (docs/api.md, "Known limitations"); a function rather than a
+    method, so that it is no part of ``robot_api.protocol`` nor of the adapters built on this
+    model. Same parameters and errors as ``inverse_kinematics``.
+    """
+    position, orientation, q, index, nvars = model._ik_start(pose, seed, link)
+    target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
+    errors: list[float] = []
+    kinematics.ik(model.chain, target, q, index, nvars, errors)
+    return tuple(errors)

@@ -9,6 +9,7 @@ import pytest
 
 import native
 import python_impl
+from python_impl.model import ik_rotation_errors
 from robot_api import ErrorCode, IKStatus, InvalidInputError
 from robot_api.constants import IK_EPS
 from robot_api.records import JointType, Pose
@@ -219,7 +220,7 @@ def test_the_twins_iterate_replay_follows_inverse_kinematics() -> None:
     for q in sample_configurations(m, 20, seed=3):
         target = m.forward_kinematics(q)
         seed = [0.9 * v for v in q]
-        errors = m.ik_rotation_errors(target, seed)
+        errors = ik_rotation_errors(m, target, seed)
         result = m.inverse_kinematics(target, seed)
         assert 1 <= len(errors) <= 100
         assert errors[0] == pytest.approx(rotation_distance(m.forward_kinematics(seed), target), abs=1e-9)
@@ -229,4 +230,4 @@ def test_the_twins_iterate_replay_follows_inverse_kinematics() -> None:
         else:
             assert len(errors) == 100
     with pytest.raises(InvalidInputError):
-        m.ik_rotation_errors(((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 0.0)))
+        ik_rotation_errors(m, ((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 0.0)))

@@ -15,7 +15,7 @@ converged, one did not) and decides, in this order:
    (``meets_half_turn``): ``known_limitation``. KDL's ``diff`` and the twin's logarithm pick
    opposite axes for an exact half turn, so from there the two iterate differently; step 2
    is this rule at the seed. The iterates are replayed by the twin's own Newton-Raphson
-   (``python_impl.RobotModel.ik_rotation_errors``) on a fresh model of the robot, not on a
+   (``python_impl.model.ik_rotation_errors``) on a fresh model of the robot, not on a
    campaign target; they are KDL's iterates up to the first tie, as both implement one
    documented algorithm (docs/api.md, "Inverse kinematics").
 
@@ -35,6 +35,7 @@ from fuzzer.execution.records import Comparison, Kind, Outcome
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import IkCall
 from fuzzer.scenario.nudge import Axis, turned
+from robot_api.records import Pose
 
 IK_PERTURBATIONS = (1e-9, -1e-9, 1e-7)
 """Seed shifts tried when checking an IK status divergence for ill-conditioning (every joint
@@ -129,7 +130,9 @@ def meets_half_turn(replay: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
     if len(call.position) != 3 or len(call.orientation) != 4:
         return False
     try:
-        errors = replay.ik_rotation_errors((call.position, call.orientation), seed, call.link)
+        from python_impl.model import ik_rotation_errors
+
+        errors = ik_rotation_errors(replay, Pose(call.position, call.orientation), seed, call.link)
     except Exception:  # noqa: BLE001 - a pose or seed the replay rejects is no evidence either way
         return False
     return any(e >= math.pi - DEAD_ZONE for e in errors)
