@@ -28,8 +28,9 @@ target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1
 ways) and 1e-7 just before that step, then with the goal's positions moved, then its
 orientations turned, by ``ik_check.GOAL_NUDGES`` (m, rad): the pose or position target in effect, or the
 path's waypoints (``run_scenario``'s ``nudge``). A target whose own
-answer at that step changes (status, fraction, point count, or the IK answer - the state
-after ``go``, the last point of a plan, any point of a path - beyond the campaign tolerance)
+answer at that step changes (status, a failed step's error code, fraction, point count, or
+the IK answer - the state after ``go``, the last point of a plan, any point of a path - beyond
+the campaign tolerance)
 makes it ``ill_conditioned``. The goal nudge is needed where Newton-Raphson's first step
 clamps joints at their limits: that erases a move of the state, while the iterates that
 follow still depend on every rounding, so two correct solvers can end differently from one

@@ -287,11 +287,12 @@ def ik_answer_changed(
     """Whether one target's answer at a step that solves IK changed between two runs: its
     status, a path's point count or fraction (beyond ``FRACTION_TOLERANCE``), or the IK answer
     beyond the campaign tolerance (modulo 2pi): the state after ``go``, the last point of a
-    plan, any point of a path. Timing is not compared (it follows the answer)."""
+    plan, any point of a path; for a step that failed, its ``error_code`` (a plan that fails
+    in IK, ``NO_IK_SOLUTION``, or after it). Timing is not compared (it follows the answer)."""
     if first.label != second.label:
         return True
     if first.status is not Status.OK:
-        return False
+        return tuple(first.values.get("error_code", ())) != tuple(second.values.get("error_code", ()))
     if kind != "go":
         times = [len(o.values.get("trajectory.time_from_start", ())) for o in (first, second)]
         fa, fb = (np.asarray(o.values.get("fraction", (0.0,)), dtype=float) for o in (first, second))
