@@ -99,8 +99,10 @@ def _tries(call: IkCall, homes: Homes) -> list[tuple[IkCall, Seeds]]:
     """The seed moves, then (for a full pose) the goal's position moves and orientation turns."""
     out: list[tuple[IkCall, Seeds]] = []
     for i, shift in enumerate(IK_PERTURBATIONS):
-        step = [shift if i < 2 or j % 2 == 0 else -shift for j in range(max(map(len, homes), default=0))]
-        out.append((call, tuple(tuple(v + d for v, d in zip(home, step, strict=False)) for home in homes)))
+        moved = (
+            tuple(v + (shift if i < 2 or j % 2 == 0 else -shift) for j, v in enumerate(h)) for h in homes
+        )
+        out.append((call, tuple(moved)))
     if len(call.position) != 3 or len(call.orientation) != 4:
         return out
     x, y, z = call.position

@@ -53,7 +53,8 @@ def bucket(difference: float) -> int:
     return max(-16, min(3, math.floor(math.log10(difference))))
 
 
-def _wrap(delta: float) -> float:
+def wrap(delta: float) -> float:
+    """``delta`` (rad) moved by whole turns into (-pi, pi] (a continuous joint's range)."""
     r = math.fmod(delta, TWO_PI)
     if r <= -math.pi:
         r += TWO_PI
@@ -101,7 +102,7 @@ def _joint_diff(
         linear = i < len(prismatic) and prismatic[i]
         limit = tol.metres if linear else tol.radians
         gap = _finite_gap(x, y)
-        eq = gap if linear or not math.isfinite(gap) else abs(_wrap(x - y))
+        eq = gap if linear or not math.isfinite(gap) else abs(wrap(x - y))
         if (
             i < len(continuous)
             and continuous[i]

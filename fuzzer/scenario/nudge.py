@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from fuzzer.execution.oracle import wrap
 from fuzzer.scenario.steps import Step
 from robot_api.records import JointType
 
@@ -104,13 +105,5 @@ def shifted_state(state: list[float], shift: float, limits: Any) -> list[float]:
     out = []
     for j, (value, lim) in enumerate(zip(state, limits, strict=True)):
         moved = value + (shift if j % 2 == 0 else -shift)
-        if lim.type == JointType.CONTINUOUS:
-            moved = math.fmod(moved, 2 * math.pi)
-            if moved <= -math.pi:
-                moved += 2 * math.pi
-            elif moved > math.pi:
-                moved -= 2 * math.pi
-        else:
-            moved = min(max(moved, lim.lower), lim.upper)
-        out.append(moved)
+        out.append(wrap(moved) if lim.type == JointType.CONTINUOUS else min(max(moved, lim.lower), lim.upper))
     return out
