@@ -383,7 +383,12 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
         return {}
     from fuzzer.scenario import mutate
 
-    mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps)
+    limits = session.reference.joint_limits
+    box = (  # a continuous joint's fresh targets within (-pi, pi], as the space-filling source's
+        tuple(lim.lower if math.isfinite(lim.lower) else -math.pi for lim in limits),
+        tuple(lim.upper if math.isfinite(lim.upper) else math.pi for lim in limits),
+    )
+    mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps, box)
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 
 

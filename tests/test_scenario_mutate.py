@@ -19,6 +19,7 @@ from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.mutation import mutators
 from fuzzer.mutation.mutators import MutationContext
+from fuzzer.scenario.fresh import FRESH_FLOATS
 from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_registry
 from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
 from fuzzer.selection.guidance import START, Features, step_bigrams
@@ -208,13 +209,14 @@ def test_fresh_named_targets_mostly_name_a_target_that_exists_there() -> None:
 
 
 MOVES = (["/go"], ["/plan", "/execute"])
+SETTINGS = ([], ["/velocity_scaling"], ["/acceleration_scaling"])
 
 
 def motion_at(old: list[Any], new: list[Any]) -> tuple[int, list[Any]] | None:
-    """Where ``new`` is ``old`` with a move (a joint target and a move: ``/go``, or ``/plan``
-    and ``/execute``; optionally followed by ``/named_target`` and a move) inserted, and the
-    inserted steps; else None."""
-    templates = [["/joint_target", *m] for m in MOVES]
+    """Where ``new`` is ``old`` with a move (optionally a scaling factor, then a joint target
+    and a move: ``/go``, or ``/plan`` and ``/execute``; optionally followed by
+    ``/named_target`` and a move) inserted, and the inserted steps; else None."""
+    templates = [[*setting, "/joint_target", *m] for setting in SETTINGS for m in MOVES]
     templates += [[*t, "/named_target", *m] for t in templates for m in MOVES]
     for template in templates:
         size = len(template)
@@ -228,13 +230,18 @@ def motion_at(old: list[Any], new: list[Any]) -> tuple[int, list[Any]] | None:
 
 def test_a_move_often_follows_a_remember_and_then_often_comes_back() -> None:
     parent = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), GO, step("/remember", data="spot"), PLAN]}
-    after, back, moved, planned, moves = 0, 0, 0, 0, 0
+    after, back, moved, planned, moves, scaled = 0, 0, 0, 0, 0, 0
     for seed in range(400):
         child, name = MUTATE(parent, context(seed), "seq_motion")
         assert name == "seq_motion"
         found = motion_at(parent["steps"], child["steps"])
         assert found is not None
         at, inserted = found
+        topics = [s["topic"] for s in inserted]
+        if topics[0] != "/joint_target":  # a fresh scaling factor first
+            factor = inserted.pop(0)["msg"]["data"]
+            assert factor in {0.5, *FRESH_FLOATS}  # the scenario's Float64 values, or fresh ones
+            scaled += 1
         target = inserted[0]["msg"]["position"]
         assert len(target) == 6 and all(v in {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, *INTERESTING} for v in target)
         moved += target != [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
@@ -251,6 +258,7 @@ def test_a_move_often_follows_a_remember_and_then_often_comes_back() -> None:
     assert 0.5 <= after / 400 <= 0.7  # 1/2 by choice, plus 1/4 x 1/2 of the random places
     assert 0.35 <= back / after <= 0.65 and moved > 100
     assert 0.4 <= planned / moves <= 0.6  # /plan + /execute half the time, else /go
+    assert 0.4 <= scaled / 400 <= 0.6  # a scaling factor first half the time
 
 
 def test_a_move_needs_a_joint_target_to_start_from_and_room() -> None:
@@ -258,6 +266,26 @@ def test_a_move_needs_a_joint_target_to_start_from_and_room() -> None:
     assert name != "seq_motion"
     full = {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6)] * (MAX - 1)}
     assert MUTATE(full, context(0), "seq_motion")[1] != "seq_motion"
+
+
+def test_with_the_limits_a_move_starts_anywhere_inside_them() -> None:
+    box = ((-1.0, -2.0, 0.0), (1.0, 2.0, 0.5))
+    mutate, _ = for_registry(REGISTRY, MAX, box)
+    parent = {"steps": [GO, step("/remember", data="x")]}
+    targets = []
+    for seed in range(200):
+        child, name = mutate(parent, context(seed), "seq_motion")
+        assert name == "seq_motion" and validate(child, REGISTRY, MAX) is None
+        [target] = [s["msg"] for s in child["steps"] if s["topic"] == "/joint_target"]
+        assert target["name"] == [] and len(target["position"]) == 3  # every joint, in order
+        targets.append(target["position"])
+    inside = [p for p in targets if all(lo <= v <= hi for v, lo, hi in zip(p, *box, strict=True))]
+    for p in targets:  # the others: one joint on an engine interesting value (half the time)
+        outside = [v for v, lo, hi in zip(p, *box, strict=True) if not lo <= v <= hi]
+        assert outside == [] or (len(outside) == 1 and outside[0] in INTERESTING)
+    assert 60 <= len(inside) <= 140
+    assert len({tuple(p) for p in inside}) == len(inside)  # drawn, not a fixed point
+    assert min(p[1] for p in inside) < -1.5 and max(p[1] for p in inside) > 1.5
 
 
 def test_field_types_cover_arrays_of_messages() -> None:

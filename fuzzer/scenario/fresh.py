@@ -49,6 +49,9 @@ class Tables:
     fields: dict[str, dict[str, str]]
     """ROS message type -> dotted field path -> builtin type (``MutationContext.field_types``)."""
     contexts: dict[str, tuple[MutationContext, MutationContext]] = dataclasses.field(default_factory=dict)
+    box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    """The robot's joint limits (lower, upper; rad, m; finite: a continuous joint's are -pi, pi),
+    for a fresh joint target in a scenario that has none to recombine; None: no such target."""
 
     def default(self, topic: str) -> dict[str, Any]:
         """The zero message of ``topic``'s type, unit quaternions instead of zero ones."""
@@ -155,15 +158,18 @@ def fresh_message(topic: str, steps: Steps, ctx: SequenceContext, at: int | None
     msg = ctx.tables.default(topic)
     if msg_type == "sensor_msgs/JointState":
         vectors = [m for m in same if isinstance(m.get("position"), list) and m["position"]]
-        if not vectors:
+        if vectors:
+            msg = clone(ctx.rng.choice(vectors))
+            width = range(len(msg["position"]))
+            columns = [[v["position"][i] for v in vectors if i < len(v["position"])] for i in width]
+            msg["position"] = [ctx.rng.choice(column) for column in columns]
+        elif ctx.tables.box is not None:  # every joint in order, uniform within its limits
+            msg["position"] = [ctx.rng.uniform(lo, hi) for lo, hi in zip(*ctx.tables.box, strict=True)]
+        else:
             raise NotApplicable("no joint target to make a new one from")
-        msg = clone(ctx.rng.choice(vectors))
-        width = range(len(msg["position"]))
-        columns = [[v["position"][i] for v in vectors if i < len(v["position"])] for i in width]
-        msg["position"] = [ctx.rng.choice(column) for column in columns]
         engine = ctx.value.interesting_floats
-        if engine and ctx.rng.random() < INTERESTING_PROBABILITY:
-            msg["position"][ctx.rng.randrange(len(columns))] = float(ctx.rng.choice(engine))
+        if engine and msg["position"] and ctx.rng.random() < INTERESTING_PROBABILITY:
+            msg["position"][ctx.rng.randrange(len(msg["position"]))] = float(ctx.rng.choice(engine))
     elif msg_type == "std_msgs/Float64":
         pool = [float(m["data"]) for m in same if isinstance(m.get("data"), float)]
         msg["data"] = ctx.rng.choice([*pool, *FRESH_FLOATS])

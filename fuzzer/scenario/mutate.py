@@ -15,8 +15,8 @@ Mutators
   target that mostly names one that exists at that point...).
   The context and the fresh steps are ``fuzzer.scenario.fresh``.
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
-  ``/execute``), often right after a ``/remember X`` and then often followed by
-  ``/named_target X`` and a move back.
+  ``/execute``; often after a fresh scaling factor), often right after a ``/remember X`` and
+  then often followed by ``/named_target X`` and a move back.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -63,6 +63,10 @@ RETURN_PROBABILITY: Final = 0.5
 """``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and a move follow the move."""
 PLAN_EXECUTE_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that a move is ``/plan`` + ``/execute`` rather than ``/go``."""
+SETTING_PROBABILITY: Final = 0.5
+"""``seq_motion``: chance that the move starts by setting one of :data:`MOVE_SETTINGS`."""
+MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
+"""What a script sets just before a move (MoveIt's tutorials slow a move down this way)."""
 SPLICE_ATTEMPTS: Final = 8
 
 
@@ -108,9 +112,10 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a move, a call template as syzkaller's: a fresh joint target, then ``/go`` or,
     half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move; the second shows the
-    oracle the trajectory). Half the time it goes right after a ``/remember X`` (when there is
-    one), and then half the time ``/named_target X`` and a move come back to the remembered
-    state (pick and place), when there is room."""
+    oracle the trajectory). Half the time a velocity or acceleration scaling factor is set
+    first (a fresh value), as a script slows a move down. Half the time it goes right after a
+    ``/remember X`` (when there is one), and then half the time ``/named_target X`` and a move
+    come back to the remembered state (pick and place), when there is room."""
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
@@ -122,6 +127,9 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         at, name = ctx.rng.randint(0, len(steps)), None
     target = {"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}
     template = [target, *_move(ctx)]
+    if ctx.rng.random() < SETTING_PROBABILITY:
+        topic = ctx.rng.choice(MOVE_SETTINGS)
+        template.insert(0, {"topic": topic, "msg": fresh_message(topic, steps, ctx, at)})
     if len(steps) + len(template) > ctx.max_steps:
         raise NotApplicable("no room for a move")
     if name is not None and ctx.rng.random() < RETURN_PROBABILITY:
@@ -312,7 +320,9 @@ class SequenceCrossover:
 
 
 def for_registry(
-    registry: MessageRegistry, max_steps: int = MAX_STEPS
+    registry: MessageRegistry,
+    max_steps: int = MAX_STEPS,
+    box: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
 ) -> tuple[SequenceMutator, SequenceCrossover]:
     """The scenario mutator and crossover for messages known to ``registry``.
 
@@ -322,6 +332,9 @@ def for_registry(
         Where the topics' message types (``fuzzer.scenario.steps.TOPICS``) are looked up.
     max_steps : int
         Children have 1..max_steps steps (1 <= max_steps <= ``MAX_STEPS_LIMIT``).
+    box : tuple of two tuples of float, optional
+        The robot's joint limits (lower, upper), each of shape (n_joints,), finite (rad, m):
+        a fresh joint target in a scenario without one is then drawn uniformly inside them.
 
     Returns
     -------
@@ -338,5 +351,5 @@ def for_registry(
         raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
     types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
     fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
-    tables = Tables(registry, types, fields)
+    tables = Tables(registry, types, fields, box=box)
     return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)
