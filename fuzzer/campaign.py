@@ -381,13 +381,11 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
     (``fuzzer.scenario.mutate.for_registry``); {} for the other ops."""
     if session.config.op != "scenario":
         return {}
+    from fuzzer.generation.spacefill import finite_box
     from fuzzer.scenario import mutate
 
     limits = session.reference.joint_limits
-    box = (  # a continuous joint's fresh targets within (-pi, pi], as the space-filling source's
-        tuple(lim.lower if math.isfinite(lim.lower) else -math.pi for lim in limits),
-        tuple(lim.upper if math.isfinite(lim.upper) else math.pi for lim in limits),
-    )
+    box = finite_box([lim.lower for lim in limits], [lim.upper for lim in limits])
     mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps, box)
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 

@@ -32,6 +32,14 @@ BLOCK = 256
 """Points drawn at a time (a power of two keeps Sobol's balance properties per block)."""
 
 
+def finite_box(lower: Sequence[float], upper: Sequence[float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Joint limits (rad, m) with an infinite bound (a continuous joint's) replaced by -pi / pi."""
+    return (
+        tuple(float(x) if math.isfinite(x) else -math.pi for x in lower),
+        tuple(float(x) if math.isfinite(x) else math.pi for x in upper),
+    )
+
+
 @dataclass
 class SpaceFill:
     """An endless stream of joint configurations covering the box ``[lower, upper]``.
@@ -55,8 +63,7 @@ class SpaceFill:
     def __post_init__(self) -> None:
         if len(self.lower) != len(self.upper) or not self.lower:
             raise ValueError("SpaceFill needs lower and upper limits of the same non-zero length")
-        lo = [(-math.pi if not math.isfinite(x) else float(x)) for x in self.lower]
-        hi = [(math.pi if not math.isfinite(x) else float(x)) for x in self.upper]
+        lo, hi = finite_box(self.lower, self.upper)
         self._lo, self._hi = np.array(lo), np.array(hi)
         self._fixed = self._hi <= self._lo  # a joint with lower == upper: always that value
         self._engine = qmc.Sobol(d=len(lo), scramble=True, seed=np.random.default_rng(self.seed))
@@ -122,9 +129,7 @@ class Aligned:
         if len(self.lower) != len(self.upper) or not self.lower:
             raise ValueError("Aligned needs lower and upper limits of the same non-zero length")
         self.choices = []
-        for low, high in zip(self.lower, self.upper, strict=True):
-            lo = float(low) if math.isfinite(low) else -math.pi
-            hi = float(high) if math.isfinite(high) else math.pi
+        for lo, hi in zip(*finite_box(self.lower, self.upper), strict=True):
             quarter = math.pi / 2
             multiples = [k * quarter for k in range(math.ceil(lo / quarter), math.floor(hi / quarter) + 1)]
             self.choices.append(tuple(sorted({lo, hi, *multiples})))
