@@ -215,9 +215,11 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         return build_sidecar(session, case, data, ev, recorded_versions, digest)
 
     features = Features()
+    search = search_parts(session, options.mutator, options.seed, features, seeded=len(filling))
+    context.compared = search["float_tracer"].compared  # what the targets compare floats against
     harness = Harness(
         **_scenario_mutators(session),
-        **search_parts(session, options.mutator, options.seed, features, seeded=len(filling)),
+        **search,
         evaluator=session.evaluator(),
         store=store,
         features=features,

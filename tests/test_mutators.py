@@ -26,12 +26,13 @@ from fuzzer.mutation.mutators import (
     crossover,
     mutate,
 )
+from fuzzer.selection.compared import ComparedValues
 
 Message = dict[str, Any]
 
 EXPECTED_NAMES = {
     "bit_flip", "arithmetic", "interesting", "comb1", "comb2", "comb3", "comb4",
-    "dictionary", "havoc", "splice", "libfuzzer",
+    "dictionary", "havoc", "splice", "libfuzzer", "compared",
     "sign_flip", "wrap_2pi", "array_insert", "array_delete", "array_duplicate", "string_swap", "zero",
 }  # fmt: skip
 ALL_NAMES = sorted(EXPECTED_NAMES)
@@ -156,6 +157,18 @@ def fake_libfuzzer(data: bytes, max_size: int) -> bytes:
     return rng.randbytes(rng.randint(0, max_size + 3))
 
 
+THRESHOLDS = (0.3, 4.05)
+
+
+def thresholds() -> ComparedValues:
+    """A table that has seen ``x < 0.3`` and ``x < 4.05`` at two sites, x varying."""
+    table = ComparedValues()
+    for site, threshold in enumerate(THRESHOLDS):
+        for x in (0.0, 1.0):
+            table.watch(site, x, threshold, x < threshold)
+    return table
+
+
 def make_ctx(seed: int, types: Mapping[str, str], **kwargs: Any) -> MutationContext:
     return MutationContext(rng=random.Random(seed), field_types=types, **kwargs)
 
@@ -167,6 +180,7 @@ def full_ctx(seed: int, types: Mapping[str, str], other: Message | None, **kwarg
         "dictionary": DICTIONARY,
         "libfuzzer_mutate": fake_libfuzzer,
         "other": other,
+        "compared": thresholds(),
     }
     options.update(kwargs)
     return make_ctx(seed, types, **options)
@@ -993,3 +1007,25 @@ def test_string_swap_uses_siblings_and_dictionary() -> None:
     assert seen == {"joint_1", "joint_2", "tool0", ""}
     _, used = mutate({"s": "only"}, make_ctx(0, {"s": "string"}), "string_swap")
     assert used != "string_swap"
+
+
+def test_compared_writes_a_threshold_or_a_value_just_either_side() -> None:
+    near = {
+        t + d
+        for t in THRESHOLDS
+        for d in (0.0, 1e-6 * max(1.0, t), -1e-6 * max(1.0, t), 1e-3 * max(1.0, t), -1e-3 * max(1.0, t))
+    } | {math.nextafter(t, d) for t in THRESHOLDS for d in (math.inf, -math.inf)}
+    written = set()
+    for seed in range(200):
+        seed_msg = joint_state(position=(0.1, 0.2))
+        out = MUTATORS["compared"](seed_msg, full_ctx(seed, JS_TYPES, None))
+        moved = [b for a, b in zip(seed_msg["position"], out["position"], strict=True) if a != b]
+        assert len(moved) == 1 and moved[0] in near
+        written.add(moved[0])
+    assert written == near  # every neighbour of both thresholds comes up
+
+
+def test_compared_does_not_apply_without_a_known_threshold() -> None:
+    for table in (None, ComparedValues()):
+        with pytest.raises(NotApplicable):
+            MUTATORS["compared"](joint_state(position=(0.1, 0.2)), make_ctx(0, JS_TYPES, compared=table))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 import random
 from pathlib import Path
 from types import SimpleNamespace
@@ -22,6 +23,7 @@ from fuzzer.mutation.mutators import MutationContext
 from fuzzer.scenario.fresh import FRESH_FLOATS
 from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_registry
 from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
+from fuzzer.selection.compared import ComparedValues
 from fuzzer.selection.guidance import START, Features, step_bigrams
 from fuzzer.triage.minimize import Minimizer, ddmin, joints_that_matter
 
@@ -68,14 +70,46 @@ def other_scenario() -> dict[str, Any]:
     return {"steps": [step("/pose_target", pose=pose), GO, step("/named_target", data="home"), PLAN]}
 
 
-def context(seed: int, other: dict[str, Any] | None = None) -> MutationContext:
+THRESHOLD = 0.3
+"""The one comparison threshold the test contexts know (``seq_compared``)."""
+
+
+NEAR_THRESHOLD = {
+    THRESHOLD,
+    math.nextafter(THRESHOLD, math.inf),
+    math.nextafter(THRESHOLD, -math.inf),
+    *(THRESHOLD + sign * step for sign in (1, -1) for step in (1e-6, 1e-3)),
+}
+"""What ``compared`` may write for it: the threshold or a value just either side."""
+
+
+def thresholds() -> ComparedValues:
+    """A table that has seen ``0.3 <= x`` with x = 0 and 0.5: threshold 0.3."""
+    table = ComparedValues()
+    for x in (0.0, 0.5):
+        table.watch(7, THRESHOLD, x, x >= THRESHOLD)
+    return table
+
+
+def context(seed: int, other: dict[str, Any] | None = None, known: bool = False) -> MutationContext:
+    """A mutation context; ``known``: with a comparison threshold (``thresholds``)."""
     return MutationContext(
         rng=random.Random(seed),
         field_types={},
         interesting_floats=INTERESTING,
         dictionary=("joint_1", "link_6"),
         other=other,
+        compared=thresholds() if known else None,
     )
+
+
+def floats(node: Any) -> list[float]:
+    """The floats of a message in field order."""
+    if isinstance(node, dict):
+        return [x for value in node.values() for x in floats(value)]
+    if isinstance(node, list):
+        return [x for value in node for x in floats(value)]
+    return [node] if isinstance(node, float) else []
 
 
 def key(s: dict[str, Any]) -> str:
@@ -96,8 +130,9 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
     before, other_before = copy.deepcopy(parent), copy.deepcopy(other)
     used = set()
     for seed in SEEDS:
-        child, reported = MUTATE(parent, context(seed, other), name)
-        again, _ = MUTATE(parent, context(seed, other), name)
+        known = name == "seq_compared"
+        child, reported = MUTATE(parent, context(seed, other, known), name)
+        again, _ = MUTATE(parent, context(seed, other, known), name)
         assert child == again  # a seed gives a mutation
         validate(child, REGISTRY, MAX)
         assert parent == before and other == other_before  # inputs untouched
@@ -121,6 +156,12 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
         elif name == "seq_motion":
             assert motion_at(old, new) is not None
+        elif name == "seq_compared":
+            changed = [i for i in range(len(old)) if old[i] != new[i]]
+            assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
+            before_values, after_values = floats(old[changed[0]]["msg"]), floats(new[changed[0]]["msg"])
+            moved = [b for a, b in zip(before_values, after_values, strict=True) if a != b]
+            assert len(moved) == 1 and moved[0] in NEAR_THRESHOLD
         elif name == SPLICE:
             assert any(new == old[:i] + other["steps"][j:] for i in range(8) for j in range(5))
     if name == "seq_step":
@@ -164,7 +205,7 @@ def test_random_mutations_stay_valid_and_reach_every_mutator() -> None:
     message = base_scenario()
     used = set()
     for seed in range(300):
-        message, name = MUTATE(message, context(seed, other_scenario()))
+        message, name = MUTATE(message, context(seed, other_scenario(), known=True))
         validate(message, REGISTRY, MAX)
         used.add(name.split(":")[0])
     assert used == set(SEQ_MUTATORS)

@@ -7,11 +7,21 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
-from typing import Any, Final, TypeVar
+from typing import Any, Final, Protocol, TypeVar
 
 Message = dict[str, Any]
 Loc = tuple[str | int, ...]
 _T = TypeVar("_T")
+
+
+class Thresholds(Protocol):
+    """Where ``compared`` draws a value (``fuzzer.selection.compared.ComparedValues``): ``pick``
+    gives a comparison threshold of the targets, or None before one is known; ``len`` is how
+    many are known."""
+
+    def pick(self, rng: Random) -> float | None: ...
+
+    def __len__(self) -> int: ...
 
 
 @dataclass
@@ -38,6 +48,9 @@ class MutationContext:
         A second message of the same type, for ``splice``.
     focus : Sequence[str]
         Dotted paths to prefer (``['position']``); empty means any field.
+    compared : Thresholds or None
+        The targets' float comparison thresholds, learned during the campaign, for
+        ``compared``; None: that mutator does not apply.
     """
 
     rng: Random
@@ -48,6 +61,7 @@ class MutationContext:
     libfuzzer_mutate: Callable[[bytes, int], bytes] | None = None
     other: dict[str, Any] | None = None
     focus: Sequence[str] = ()
+    compared: Thresholds | None = None
     memo: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
     """Derived tables (float pools), valid while the fields above do not change."""
 

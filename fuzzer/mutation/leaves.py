@@ -269,6 +269,31 @@ def _libfuzzer(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -
     raise NotApplicable("libFuzzer produced only NaN/inf")
 
 
+def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> bool:
+    """Guard: the campaign has learned a comparison threshold."""
+    return ctx.compared is not None and len(ctx.compared) > 0
+
+
+def _compared(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> Any:
+    """A comparison threshold of the targets or a value just either side of it: the next float
+    either way, or a relative step of 1e-6 or 1e-3 (at least that much absolute)."""
+    assert ctx.compared is not None
+    threshold = ctx.compared.pick(ctx.rng)
+    if threshold is None:
+        raise NotApplicable("no comparison threshold known yet")
+    step = max(1.0, abs(threshold))
+    near = (
+        threshold,
+        math.nextafter(threshold, math.inf),
+        math.nextafter(threshold, -math.inf),
+        threshold + 1e-6 * step,
+        threshold - 1e-6 * step,
+        threshold + 1e-3 * step,
+        threshold - 1e-3 * step,
+    )
+    return ctx.rng.choice([v for v in near if v != value])  # never the value it has
+
+
 _NUMBERS: Final = frozenset({"int", "float"})
 _FLOAT: Final = frozenset({"float"})
 
@@ -282,6 +307,7 @@ LEAF_OPS: dict[str, LeafOp] = {
     "string_swap": LeafOp(frozenset({"str"}), _string_swap, _can_swap),
     "dictionary": LeafOp(frozenset({"int", "float", "str"}), _dictionary_token, _has_tokens),
     "libfuzzer": LeafOp(frozenset({"float", "str"}), _libfuzzer, _has_libfuzzer),
+    "compared": LeafOp(_FLOAT, _compared, _has_thresholds),
 }
 """Value-level operations, looked up by name at call time (so they can be instrumented)."""
 

@@ -13,6 +13,8 @@ Strategies
 * Paper, Section V (future work, after AFL): ``dictionary``, ``havoc``, ``splice``.
 * Byte level: ``libfuzzer`` hands the IEEE-754 bytes of a float (or the UTF-8 bytes of a string) to
   libFuzzer's own mutator (``atheris.Mutate``), which brings its dictionaries and CMP tables.
+* The targets' own float comparisons: ``compared`` writes a threshold the campaign has seen the targets
+  compare a float against (``ctx.compared``), or a value just either side of it.
 * Robotics-aware structure and semantics: ``sign_flip``, ``wrap_2pi``, ``array_insert``, ``array_delete``,
   ``array_duplicate``, ``string_swap``, ``zero``.
 
@@ -307,6 +309,14 @@ def libfuzzer(message: Message, ctx: MutationContext) -> Message:
     are UTF-8 encoded and decoded with ``errors='replace'``.  Not applicable without the callable.
     """
     return _apply_leaf_ops(message, ctx, ("libfuzzer",))
+
+
+@register("compared", weight=1.0)
+def compared(message: Message, ctx: MutationContext) -> Message:
+    """Set one float to a comparison threshold of the targets or a value just either side of it
+    (libFuzzer's TORC, AFL++'s CmpLog, for floats): ``ctx.compared`` learns them during the
+    campaign (``fuzzer.selection.compared``). Not applicable before one is known."""
+    return _apply_leaf_ops(message, ctx, ("compared",))
 
 
 # --- Robotics-aware structure and semantics ----------------------------------------------------------------

@@ -21,6 +21,8 @@ Mutators
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
+* ``seq_compared``: one float of one step set to a comparison threshold of the targets, or a
+  value just either side of it (the value mutator ``compared``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
 Every child has 1..``max_steps`` steps and, when its parents validate, validates
@@ -57,6 +59,7 @@ SeqMutator = Callable[[Steps, "SequenceContext"], tuple[Steps, str]]
 SPLICE: Final = "seq_splice"
 """Lineage name of the crossover."""
 SEQ_STEP: Final = "seq_step"
+SEQ_COMPARED: Final = "seq_compared"
 AFTER_REMEMBER_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move goes right after a ``/remember`` (when there is one)."""
 RETURN_PROBABILITY: Final = 0.5
@@ -213,10 +216,30 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
             message, name = mutators.mutate(step["msg"], inner, ctx.inner)
         finally:
             inner.other = None
-        if name != NOOP:
+        if name != NOOP and message != step["msg"]:  # a value splice of equal fields changes nothing
             steps[index] = {**step, "msg": message}
             return steps, f"{SEQ_STEP}:{name}"
     raise NotApplicable("no step has a value to mutate")
+
+
+@register(SEQ_COMPARED, weight=1.0)
+def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Set one float of one step to a comparison threshold of the targets, or a value just
+    either side of it (the value mutator ``compared``; its own bandit arm, as it needs no other
+    value mutator to come up first)."""
+    if ctx.value.compared is None or not len(ctx.value.compared):
+        raise NotApplicable("no comparison threshold known yet")
+    candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(msg_type_of(s, ctx) or "")]
+    while candidates:
+        index = candidates.pop(ctx.rng.randrange(len(candidates)))
+        inner = ctx.tables.value_context(ctx.tables.types[steps[index]["topic"]], ctx.value)
+        try:
+            message = mutators.MUTATORS["compared"](steps[index]["msg"], inner)
+        except NotApplicable:
+            continue
+        steps[index] = {**steps[index], "msg": message}
+        return steps, SEQ_COMPARED
+    raise NotApplicable("no step has a float")
 
 
 def _splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:

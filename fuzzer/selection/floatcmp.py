@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from fuzzer.selection.compared import ComparedValues
 from fuzzer.selection.guidance import Features
 
 FLOAT_CMP = 11
@@ -66,7 +67,13 @@ class FloatCompareTracer:
         The module holding ``_trace_cmp`` (``atheris``; a stand-in in tests).
     """
 
-    def __init__(self, features: Features, module: Any = None, budget: int = PER_INPUT) -> None:
+    def __init__(
+        self,
+        features: Features,
+        module: Any = None,
+        budget: int = PER_INPUT,
+        compared: ComparedValues | None = None,
+    ) -> None:
         if module is None:
             import atheris
 
@@ -76,7 +83,10 @@ class FloatCompareTracer:
         self.budget = budget
         """Float comparisons traced per input (0: only the leak guard)."""
         self.inner: Callable[..., Any] | None = None
-        self.guard = make_guard(None)
+        self.compared = compared
+        """Learns the comparison thresholds of every float comparison (the guard feeds it, past
+        the budget too), for the ``compared`` mutator; None: not watched (the baselines)."""
+        self.guard = make_guard(None, compared)
         """Compares as ``COMPARE_OP`` would; the pairs Atheris traces go through ``inner``."""
         self.sites: set[int] = set()
         """Comparison sites that compared a float at least once."""
@@ -94,7 +104,7 @@ class FloatCompareTracer:
             return
         if current != self.trace and current is not self.guard:
             self.inner = current
-            self.guard = make_guard(current)
+            self.guard = make_guard(current, self.compared)
         self.module._trace_cmp = self.trace if self.remaining > 0 else self.guard
 
     def trace(self, obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
@@ -136,9 +146,13 @@ _OPS: tuple[Callable[[Any, Any], Any], ...] = (
 """COMPARE_OP's operators in ``dis.cmp_op`` order."""
 
 
-def make_guard(inner: Callable[..., Any] | None) -> Callable[..., Any]:
+def make_guard(
+    inner: Callable[..., Any] | None, compared: ComparedValues | None = None
+) -> Callable[..., Any]:
     """A ``_trace_cmp`` that passes the pairs Atheris traces to ``inner`` (its function) and
-    compares the rest itself (a closure over locals: it runs for every comparison)."""
+    compares the rest itself (a closure over locals: it runs for every comparison); with
+    ``compared``, a comparison of two real numbers (one a float) at a site it still watches is
+    shown to it (``ComparedValues.watch``)."""
     ops, traced, shift = _OPS, _ATHERIS_TRACES, _OPID_SHIFT
 
     def guard(obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
@@ -147,4 +161,17 @@ def make_guard(inner: Callable[..., Any] | None) -> Callable[..., Any]:
             return inner(obj1, obj2, opid, site, is_const)
         return ops[opid >> shift](obj1, obj2)
 
-    return guard
+    if compared is None:
+        return guard
+    floats, numbers, done, watch = _FLOATS, _NUMBERS, compared.done, compared.watch
+
+    def watching(obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
+        t1, t2 = type(obj1), type(obj2)
+        if t1 is t2 and t1 in traced and inner is not None:
+            return inner(obj1, obj2, opid, site, is_const)
+        result = ops[opid >> shift](obj1, obj2)
+        if site not in done and ((t1 in floats and t2 in numbers) or (t2 in floats and t1 in numbers)):
+            watch(site, obj1, obj2, result)
+        return result
+
+    return watching

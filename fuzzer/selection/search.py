@@ -1,6 +1,7 @@
 """What the full engine's search is made of, beside libFuzzer (issue 11): the bandits over input
 sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sources``), the
-float-comparison tracer (``fuzzer.selection.floatcmp``) and, for ``fk`` in process, the batched
+float-comparison tracer (``fuzzer.selection.floatcmp``) with the thresholds it learns for the
+``compared`` mutator (``fuzzer.selection.compared``) and, for ``fk`` in process, the batched
 sweeps (``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harness."""
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     from fuzzer.generation.spacefill import Aligned, SpaceFill, fresh_inputs
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
+    from fuzzer.selection.compared import ComparedValues
     from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
 
     config = session.config
@@ -42,8 +44,9 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
 
         weights = dict(SEQ_WEIGHTS)
     limits = session.reference.joint_limits
+    tracer = FloatCompareTracer(features, compared=ComparedValues())
     if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
-        return {"float_tracer": FloatCompareTracer(features)}
+        return {"float_tracer": tracer}
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=seed)
     first_round = len(probes(facts.lower, facts.upper, rounds=1))
@@ -58,7 +61,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     fresh = maker(stream, boundary=Boundary(facts.lower, facts.upper, start=min(seeded, first_round)))
     aligned = maker(Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED), name=ALIGNED)
     sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
-    search: dict[str, Any] = {"sources": sources, "float_tracer": FloatCompareTracer(features)}
+    search: dict[str, Any] = {"sources": sources, "float_tracer": tracer}
     if config.op == "fk" and config.transport == "inprocess":
         from fuzzer.generation.sweep import Sweep
 

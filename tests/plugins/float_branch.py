@@ -7,3 +7,8 @@ def branch(x: float, y: float) -> int:
     if y > 3:
         return 2
     return 0
+
+
+def band(x: float) -> bool:
+    """A chained comparison (Atheris does not mark its constants ``is_const``)."""
+    return 0.3 <= x < 0.31

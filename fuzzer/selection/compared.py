@@ -1,0 +1,103 @@
+"""The targets' float comparison thresholds, learned while they run, for the ``compared`` mutator.
+
+libFuzzer keeps a table of recent comparison operands (TORC) and its ``CMP`` mutators write
+them into the input; AFL++'s CmpLog and Redqueen do the same with the operands of each
+comparison site. Atheris feeds libFuzzer's table only for int, bytes and str comparisons, so a
+branch on a float (``0.3 <= seed[0] < 0.31``, ``abs(q5) < 2e-3``, a calibration table's
+edge) gives the search nothing to write. :class:`ComparedValues` is that table for floats.
+
+It watches every comparison of two real numbers, at least one a float, that the instrumented
+modules make (the float tracer's guard calls :meth:`ComparedValues.watch`; the modules are the
+Python targets and the oracle, ``fuzzer.selection.instrument``). A site is a *threshold* once
+one operand has kept one value while the other has taken two or more: the fixed one is the
+threshold, whether it is a literal, a module constant or computed once (Atheris marks literal
+operands, ``is_const``, but not in a chained comparison such as ``a <= x < b``). A site where
+both operands vary, or that has given both outcomes, is settled and no longer watched, so the
+steady cost is one set lookup per float comparison. A threshold site whose comparison has only
+ever given one outcome is *unsolved*: the branch behind it has never been taken.
+:meth:`ComparedValues.pick` draws an unsolved site's threshold 3 times out of 4 (when there is
+one), else any threshold; ``fuzzer.mutation.leaves`` writes it, or a value just either side of
+it, into a float field of the input.
+
+Nothing here decides a verdict: the table only shapes mutations. The order of sites is the
+order they were first seen, so a campaign with a given ``-seed`` draws the same values.
+"""
+
+from __future__ import annotations
+
+import math
+from random import Random
+from typing import Final
+
+UNSOLVED_PROBABILITY: Final = 0.75
+""":meth:`ComparedValues.pick`: chance of an unsolved site's threshold (when there is one)."""
+PATIENCE: Final = 1024
+"""Observations after which a site whose operands never varied is no longer watched."""
+MAX_SITES: Final = 4096
+"""Sites watched at most (the rest are ignored): bounds the table's memory."""
+
+_FIRST_A, _FIRST_B, _A_VARIES, _B_VARIES, _OUTCOMES, _COUNT = range(6)
+
+
+class ComparedValues:
+    """Float comparison sites of the instrumented modules and their thresholds.
+
+    Attributes
+    ----------
+    done : set of int
+        Sites no longer watched (settled, or watched :data:`PATIENCE` times without a varying
+        operand); the guard skips them before calling :meth:`watch`.
+    thresholds : dict of int to float
+        Site -> its fixed operand (finite), in the order first seen.
+    """
+
+    def __init__(self) -> None:
+        self.done: set[int] = set()
+        self.thresholds: dict[int, float] = {}
+        self._state: dict[int, list[float | bool | int]] = {}
+
+    def watch(self, site: int, a: float, b: float, result: object) -> None:
+        """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
+        state = self._state.get(site)
+        outcome = 2 if result else 1
+        if state is None:
+            if len(self._state) < MAX_SITES:
+                self._state[site] = [a, b, False, False, outcome, 1]
+            else:
+                self.done.add(site)
+            return
+        if not state[_A_VARIES] and a != state[_FIRST_A]:
+            state[_A_VARIES] = True
+        if not state[_B_VARIES] and b != state[_FIRST_B]:
+            state[_B_VARIES] = True
+        state[_OUTCOMES] = int(state[_OUTCOMES]) | outcome
+        state[_COUNT] = int(state[_COUNT]) + 1
+        a_varies, b_varies = state[_A_VARIES], state[_B_VARIES]
+        if a_varies and b_varies:  # both operands move with the input: no threshold here
+            self.thresholds.pop(site, None)
+            self.done.add(site)
+        elif a_varies or b_varies:
+            fixed = float(state[_FIRST_B] if a_varies else state[_FIRST_A])
+            if math.isfinite(fixed):
+                self.thresholds[site] = fixed
+            if state[_OUTCOMES] == 3:  # both branches taken: solved
+                self.done.add(site)
+        elif int(state[_COUNT]) >= PATIENCE:
+            self.done.add(site)
+
+    def unsolved(self) -> list[float]:
+        """Thresholds of the sites whose comparison has given one outcome only."""
+        return [value for site, value in self.thresholds.items() if self._state[site][_OUTCOMES] != 3]
+
+    def __len__(self) -> int:
+        return len(self.thresholds)
+
+    def pick(self, rng: Random) -> float | None:
+        """A threshold (an unsolved one with probability :data:`UNSOLVED_PROBABILITY`), or None
+        before any site has one."""
+        if not self.thresholds:
+            return None
+        unsolved = self.unsolved()
+        if unsolved and rng.random() < UNSOLVED_PROBABILITY:
+            return rng.choice(unsolved)
+        return rng.choice(list(self.thresholds.values()))

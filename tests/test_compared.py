@@ -1,0 +1,92 @@
+"""The targets' float comparison thresholds are learned while they run (``compared``)."""
+
+from __future__ import annotations
+
+import random
+import types
+
+import atheris
+import pytest
+
+from fuzzer.selection import compared as cv
+from fuzzer.selection.compared import ComparedValues
+from fuzzer.selection.floatcmp import FloatCompareTracer
+from fuzzer.selection.guidance import Features
+from tests.test_floatcmp import _instrumented
+
+
+def test_a_fixed_operand_against_a_varying_one_is_a_threshold() -> None:
+    table = ComparedValues()
+    table.watch(1, 0.5, 0.3, False)  # one observation: nothing known yet
+    assert len(table) == 0 and table.pick(random.Random(0)) is None
+    table.watch(1, 0.7, 0.3, False)
+    assert table.thresholds == {1: 0.3} and table.unsolved() == [0.3]
+    assert 1 not in table.done  # one outcome only: still watched
+    table.watch(1, 0.1, 0.3, True)  # the other branch: solved, no longer watched
+    assert table.thresholds == {1: 0.3} and table.unsolved() == [] and 1 in table.done
+
+
+def test_two_varying_operands_or_none_make_no_threshold() -> None:
+    table = ComparedValues()
+    for x in (0.1, 0.2):
+        table.watch(2, x, 2 * x, True)
+    assert len(table) == 0 and 2 in table.done
+    for _ in range(cv.PATIENCE):
+        table.watch(3, 1.5, 2.5, True)  # the input never reaches it: nothing to learn
+    assert len(table) == 0 and 3 in table.done
+
+
+def test_a_non_finite_fixed_operand_is_no_threshold() -> None:
+    table = ComparedValues()
+    for x in (0.1, 0.2):
+        table.watch(4, x, float("inf"), True)
+    assert len(table) == 0
+
+
+def test_pick_prefers_the_unsolved_sites() -> None:
+    table = ComparedValues()
+    for x in (0.0, 1.0):
+        table.watch(1, x, 0.5, x < 0.5)  # solved
+        table.watch(2, x, 4.05, x < 4.05)  # unsolved
+    rng = random.Random(5)
+    picks = [table.pick(rng) for _ in range(4000)]
+    share = picks.count(4.05) / len(picks)
+    expected = cv.UNSOLVED_PROBABILITY + (1 - cv.UNSOLVED_PROBABILITY) / 2
+    assert set(picks) == {0.5, 4.05} and abs(share - expected) < 0.03
+
+
+def test_the_guard_learns_a_chained_comparison_past_the_budget() -> None:
+    module = _instrumented()
+    table = ComparedValues()
+    tracer = FloatCompareTracer(Features(enabled=False), compared=table)
+    tracer.install(budget=0)  # the guard alone, as after an input's first comparisons
+    try:
+        for x in (0.0, 0.5, 1.0):
+            assert module.band(x) is False
+        assert tracer.traced == 0  # no feature: the guard only
+        assert sorted(table.thresholds.values()) == [0.3, 0.31]
+        assert table.unsolved() == [0.31]  # x < 0.31 was only ever reached with x >= 0.31
+        assert module.band(0.305) is True
+        assert table.unsolved() == []
+    finally:
+        atheris._trace_cmp = tracer.inner
+
+
+def test_the_baselines_guard_watches_nothing() -> None:
+    calls: list[object] = []
+    fake = types.SimpleNamespace(_trace_cmp=lambda *args: calls.append(args))
+    tracer = FloatCompareTracer(Features(enabled=False), fake, budget=0)
+    tracer.install()
+    assert tracer.compared is None
+    assert fake._trace_cmp(0.5, 0.3, 0, 1, False) is False and calls == []
+
+
+@pytest.mark.parametrize("operand", [[0.1, 0.2], "text", None])
+def test_the_guard_shows_only_real_numbers(operand: object) -> None:
+    table = ComparedValues()
+    fake = types.SimpleNamespace(_trace_cmp=lambda *args: False)
+    tracer = FloatCompareTracer(Features(enabled=False), fake, budget=0, compared=table)
+    tracer.install()
+    for x in (0.1, 0.2):
+        fake._trace_cmp(x, operand, 2, 9, False)  # ==: defined for any pair
+    assert len(table) == 0 and 9 not in table.done
