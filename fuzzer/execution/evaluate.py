@@ -55,6 +55,7 @@ from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
 from fuzzer.scenario.nudge import AXIS, Moved, Nudge
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
+from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed
 from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall, ScenarioError, to_call, to_message
 from robot_api.errors import RobotAPIError
@@ -312,11 +313,22 @@ class Evaluator:
         runners: Sequence[Runner],
     ) -> Comparison:
         """A divergence at a step that solves IK, re-run with the state, then the goal, nudged
-        before it."""
+        before it: ``ill_conditioned`` if a target's answer at that step moves under a nudge
+        (``ik_answer_changed``), or, for a divergence of how far a path got (``EXTENT_FIELDS``:
+        its fraction or point count), if a target's path ends elsewhere (``extent_changed``):
+        points that move under a nudge near a singularity do not explain a path that stops at
+        10% on one target and completes on the other whatever the nudge."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
         kind = call.steps[step].kind
+        extent = comparison.field in EXTENT_FIELDS  # how far a path got: does that move?
+
+        def changed(first: Outcome, second: Outcome) -> bool:
+            if extent:
+                return extent_changed(kind, first, second)
+            return ik_answer_changed(kind, first, second, self.tolerance, facts)
+
         tries = [(Moved.STATE, shift, AXIS) for shift in ik_check.IK_PERTURBATIONS]
         goal = (Moved.POSITION, Moved.ORIENTATION)
         tries += [(moved, shift, axis) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
@@ -327,9 +339,7 @@ class Evaluator:
             for first, second in zip(outcomes, nudged, strict=True):
                 if step >= len(first.steps):
                     continue
-                if step >= len(second.steps) or ik_answer_changed(
-                    kind, first.steps[step], second.steps[step], self.tolerance, facts
-                ):
+                if step >= len(second.steps) or changed(first.steps[step], second.steps[step]):
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         return comparison
 

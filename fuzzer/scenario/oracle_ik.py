@@ -281,25 +281,40 @@ def _same_pose(x: Sequence[float], y: Sequence[float], link: str | None, facts: 
     return math.dist(pa, pb) <= IK_AGREEMENT and oracle.rotation_distance(qa, qb) <= IK_AGREEMENT
 
 
-def ik_answer_changed(
-    kind: str, first: Outcome, second: Outcome, tol: Tolerance, facts: ScenarioFacts
-) -> bool:
-    """Whether one target's answer at a step that solves IK changed between two runs: its
-    status, a path's point count or fraction (beyond ``FRACTION_TOLERANCE``), or the IK answer
-    beyond the campaign tolerance (modulo 2pi): the state after ``go``, the last point of a
-    plan, any point of a path; for a step that failed, its ``error_code`` (a plan that fails
-    in IK, ``NO_IK_SOLUTION``, or after it). Timing is not compared (it follows the answer)."""
+EXTENT_FIELDS = ("cartesian_path.fraction", "cartesian_path.trajectory.points")
+"""Divergences of how far a path got: the nudge check asks whether that changes
+(``extent_changed``), not whether the points move."""
+
+
+def extent_changed(kind: str, first: Outcome, second: Outcome) -> bool:
+    """Whether one target's step ended differently between two runs: its status, for a step
+    that failed its ``error_code``, a plan's or path's point count or a path's fraction
+    (beyond ``FRACTION_TOLERANCE``)."""
     if first.label != second.label:
         return True
     if first.status is not Status.OK:
         return tuple(first.values.get("error_code", ())) != tuple(second.values.get("error_code", ()))
-    if kind != "go":
-        times = [len(o.values.get("trajectory.time_from_start", ())) for o in (first, second)]
-        fa, fb = (np.asarray(o.values.get("fraction", (0.0,)), dtype=float) for o in (first, second))
-        if times[0] != times[1] or fa.size != fb.size:
-            return True
-        if absolute("", fa, fb, FRACTION_TOLERANCE, "") is not None:
-            return True
+    if kind == "go":
+        return False
+    times = [len(o.values.get("trajectory.time_from_start", ())) for o in (first, second)]
+    fa, fb = (np.asarray(o.values.get("fraction", (0.0,)), dtype=float) for o in (first, second))
+    if times[0] != times[1] or fa.size != fb.size:
+        return True
+    return absolute("", fa, fb, FRACTION_TOLERANCE, "") is not None
+
+
+def ik_answer_changed(
+    kind: str, first: Outcome, second: Outcome, tol: Tolerance, facts: ScenarioFacts
+) -> bool:
+    """Whether one target's answer at a step that solves IK changed between two runs: its
+    extent (``extent_changed``), or the IK answer beyond the campaign tolerance (modulo 2pi):
+    the state after ``go``, the last point of a plan, any point of a path; for a step that
+    failed, its ``error_code`` (a plan that fails in IK, ``NO_IK_SOLUTION``, or after it).
+    Timing is not compared (it follows the answer)."""
+    if extent_changed(kind, first, second):
+        return True
+    if first.status is not Status.OK:
+        return False
     pairs = ik_answers(kind, first, second, len(facts.joints))
     if pairs is None:
         return True
