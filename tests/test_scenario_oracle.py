@@ -17,7 +17,7 @@ from fuzzer.input.mapping import MoveCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
 from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
-from fuzzer.scenario.oracle_ik import absolute
+from fuzzer.scenario.oracle_ik import absolute, extent_changed
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from robot_api import robots
 
@@ -511,6 +511,48 @@ def test_a_plan_failing_in_ik_on_one_target_and_after_it_on_the_other_is_ill_con
     assert {a.steps[4].values["error_code"], b.steps[4].values["error_code"]} == {(-31.0,), (-1.0,)}
     c = evaluation.comparison
     assert (c.kind, c.step, c.field) == (Kind.ILL_CONDITIONED, 4, "plan.error_code")
+
+
+def test_a_paths_extent_changes_with_its_status_points_or_fraction_not_its_points() -> None:
+    a = with_value(trajectory([(0.0, 0.0), (0.5, 0.5)]), "fraction", (0.25,))
+    moved = with_value(a, "trajectory.positions", (0.0, 0.0, 0.5, 0.5 + 1e-5))
+    assert not extent_changed("cartesian_path", a, moved)  # the points moved, the path ended the same
+    assert ik_answer_changed("cartesian_path", a, moved, TOL, FACTS)
+    assert extent_changed("cartesian_path", a, with_value(a, "fraction", (0.3,)))
+    assert extent_changed("cartesian_path", a, with_value(trajectory([(0.0, 0.0)]), "fraction", (0.25,)))
+    assert extent_changed("cartesian_path", a, Outcome(Status.FAILED))
+
+
+# (x, y, z) beyond PROBOT Anno's reach: a path toward it from home stops at about 10.6%
+FAR_WAYPOINT = {
+    "position": {"x": 0.13834864384846413, "y": 3.1115501448832474, "z": 0.30796881858327496},
+    "orientation": {
+        "x": -0.5180305197743181,
+        "y": -0.29976587965310064,
+        "z": -0.7984607206138545,
+        "w": 0.06515577959748936,
+    },
+}
+
+
+def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -> None:
+    """ik_seed_band (benchmarks/zoo/deep.py) in a 10-s campaign of 88de7ef, minimized: from
+    home, a path toward an unreachable waypoint. Native stops at 10.6% (34 points), as the
+    correct twin does; the faulty twin's IK returns its seed as a solution once a seed's
+    joint_1 is in [0.3, 0.31) and the path "completes" (8 points). Native's points near where
+    it stops move by more than the tolerance under a 1e-7 nudge of the state, so the nudge
+    check called the whole divergence ill-conditioned; no nudge moves either path's fraction."""
+    steps = [live("cartesian_path", header={**HEADER, "frame_id": "link_4"}, poses=[FAR_WAYPOINT])]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    found = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(case, validated=True)
+    c = found.comparison
+    assert (c.kind, c.step, c.field) == (Kind.VALUE, 0, "cartesian_path.fraction")
+    assert [o.steps[0].values["fraction"] for o in found.outcomes] == [
+        (pytest.approx(0.10577, abs=1e-4),),
+        (1.0,),
+    ]
+    correct = evaluator("scenario", "python").evaluate(case, validated=True)
+    assert correct.comparison.kind is Kind.AGREE
 
 
 def test_the_signature_names_the_step_kind_not_its_index() -> None:
