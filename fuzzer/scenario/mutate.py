@@ -45,6 +45,7 @@ from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
 from fuzzer.scenario.fresh import (
     GO,
     SequenceContext,
+    StepDict,
     Steps,
     Tables,
     field_types,
@@ -197,15 +198,35 @@ def seq_move(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     return steps, "seq_move"
 
 
-@register(SEQ_STEP, weight=4.0)
-def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
-    """Mutate one step's message with the value mutators (that step type's field types)."""
+def _one_step(
+    steps: Steps,
+    ctx: SequenceContext,
+    change: Callable[[StepDict, MutationContext], tuple[dict[str, Any], str]],
+) -> tuple[Steps, str]:
+    """``steps`` with one step's message replaced by ``change(step, value context)`` (a step
+    drawn among those with values; another one when it raises ``NotApplicable`` or changes
+    nothing), and the name it gives."""
     candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(msg_type_of(s, ctx) or "")]
     while candidates:
         index = candidates.pop(ctx.rng.randrange(len(candidates)))
         step = steps[index]
+        inner = ctx.tables.value_context(ctx.tables.types[step["topic"]], ctx.value)
+        try:
+            message, name = change(step, inner)
+        except NotApplicable:
+            continue
+        if message != step["msg"]:  # a value splice of equal fields changes nothing
+            steps[index] = {**step, "msg": message}
+            return steps, name
+    raise NotApplicable("no step has a value to mutate")
+
+
+@register(SEQ_STEP, weight=4.0)
+def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Mutate one step's message with the value mutators (that step type's field types)."""
+
+    def change(step: StepDict, inner: MutationContext) -> tuple[dict[str, Any], str]:
         msg_type = ctx.tables.types[step["topic"]]
-        inner = ctx.tables.value_context(msg_type, ctx.value)
         peers = [  # for the value splice: other messages of this type (this scenario, the other parent)
             s["msg"]
             for s in (*steps, *(ctx.other or ()))
@@ -216,10 +237,11 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
             message, name = mutators.mutate(step["msg"], inner, ctx.inner)
         finally:
             inner.other = None
-        if name != NOOP and message != step["msg"]:  # a value splice of equal fields changes nothing
-            steps[index] = {**step, "msg": message}
-            return steps, f"{SEQ_STEP}:{name}"
-    raise NotApplicable("no step has a value to mutate")
+        if name == NOOP:
+            raise NotApplicable("no value mutator applies to this step")
+        return message, f"{SEQ_STEP}:{name}"
+
+    return _one_step(steps, ctx, change)
 
 
 @register(SEQ_COMPARED, weight=1.0)
@@ -229,17 +251,9 @@ def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     value mutator to come up first)."""
     if ctx.value.compared is None or not len(ctx.value.compared):
         raise NotApplicable("no comparison threshold known yet")
-    candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(msg_type_of(s, ctx) or "")]
-    while candidates:
-        index = candidates.pop(ctx.rng.randrange(len(candidates)))
-        inner = ctx.tables.value_context(ctx.tables.types[steps[index]["topic"]], ctx.value)
-        try:
-            message = mutators.MUTATORS["compared"](steps[index]["msg"], inner)
-        except NotApplicable:
-            continue
-        steps[index] = {**steps[index], "msg": message}
-        return steps, SEQ_COMPARED
-    raise NotApplicable("no step has a float")
+    return _one_step(
+        steps, ctx, lambda step, inner: (mutators.MUTATORS["compared"](step["msg"], inner), SEQ_COMPARED)
+    )
 
 
 def _splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:
