@@ -90,3 +90,25 @@ def test_the_guard_shows_only_real_numbers(operand: object) -> None:
     for x in (0.1, 0.2):
         fake._trace_cmp(x, operand, 2, 9, False)  # ==: defined for any pair
     assert len(table) == 0 and 9 not in table.done
+
+
+def test_an_unsolved_site_names_the_values_its_varying_operand_took() -> None:
+    table = ComparedValues()
+    for x in (0.5, 1.2, 2.0):
+        table.watch(7, x, 0.31, x < 0.31)  # x < 0.31 never true: unsolved
+    assert table.crossing(0.5) == [0.31]  # the first value counts too
+    assert table.crossing(2.0) == [0.31] and table.crossing(0.7) == []
+    table.watch(8, 0.0, 4.05, True)
+    table.watch(8, 1.0, 4.05, True)
+    assert table.crossing(1.0) == [4.05] and table.crossing(0.0) == []  # 0.0 matches by coincidence
+    table.watch(7, 0.305, 0.31, True)  # solved: nothing left to cross
+    assert table.crossing(2.0) == [] and 7 in table.done
+
+
+def test_a_site_remembers_only_its_newest_operand_values() -> None:
+    table = ComparedValues()
+    values = [1.0 + i for i in range(cv.RECENT + 2)]
+    for x in values:
+        table.watch(3, x, 0.5, False)
+    assert table.crossing(values[0]) == [] and table.crossing(values[1]) == []
+    assert table.crossing(values[2]) == [0.5] and table.crossing(values[-1]) == [0.5]

@@ -1025,6 +1025,30 @@ def test_compared_writes_a_threshold_or_a_value_just_either_side() -> None:
     assert written == near  # every neighbour of both thresholds comes up
 
 
+def test_compared_writes_past_the_threshold_into_the_leaf_a_comparison_saw() -> None:
+    """Input-to-state: ``x < 0.31`` only ever saw x = 1.2 and 0.5; the leaf holding 1.2 gets 0.31
+    or a value just below it (the side never reached), three times in four."""
+    table = ComparedValues()
+    for x in (0.5, 1.2):
+        table.watch(1, x, 0.31, False)
+    below = {0.31, math.nextafter(0.31, -math.inf), 0.31 - 1e-6, 0.31 - 1e-3}
+    crossed, written = 0, set()
+    for seed in range(400):
+        out = MUTATORS["compared"](joint_state(position=(0.1, 1.2)), make_ctx(seed, JS_TYPES, compared=table))
+        if out["position"][0] == 0.1 and out["position"][1] in below:
+            crossed += 1
+            written.add(out["position"][1])
+    assert written == below
+    share = crossed / 400  # 0.75 by input-to-state, plus the random leaf's draws that land there
+    assert 0.75 <= share <= 0.75 + 0.25 * 0.5 * 4 / 7 + 0.05
+    unseen = [
+        MUTATORS["compared"](joint_state(position=(0.1, 0.9)), make_ctx(s, JS_TYPES, compared=table))
+        for s in range(400)
+    ]
+    random_leaf = 0.5 * 4 / 7  # no leaf matches: either leaf, then 4 of the 7 values near 0.31
+    assert abs(sum(o["position"][1] in below for o in unseen) / 400 - random_leaf) < 0.06
+
+
 def test_compared_does_not_apply_without_a_known_threshold() -> None:
     for table in (None, ComparedValues()):
         with pytest.raises(NotApplicable):

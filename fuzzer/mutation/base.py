@@ -16,10 +16,13 @@ _T = TypeVar("_T")
 
 class Thresholds(Protocol):
     """Where ``compared`` draws a value (``fuzzer.selection.compared.ComparedValues``): ``pick``
-    gives a comparison threshold of the targets, or None before one is known; ``len`` is how
+    gives a comparison threshold of the targets, or None before one is known; ``crossing`` the
+    thresholds of branches never taken whose comparison recently saw a given value; ``len`` is how
     many are known."""
 
     def pick(self, rng: Random) -> float | None: ...
+
+    def crossing(self, value: float) -> list[float]: ...
 
     def __len__(self) -> int: ...
 

@@ -274,6 +274,46 @@ def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationConte
     return ctx.compared is not None and len(ctx.compared) > 0
 
 
+CROSSING_PROBABILITY: Final = 0.75
+""":func:`apply_compared`: chance of writing past a threshold into the leaf a target compared
+with it (when the message has one)."""
+
+
+def apply_compared(message: Message, ctx: MutationContext) -> Message:
+    """The ``compared`` mutator. With probability :data:`CROSSING_PROBABILITY`, Redqueen's
+    input-to-state step: a float leaf whose value an unsolved comparison recently saw
+    (``ctx.compared.crossing``) gets that comparison's threshold, or a value just past it on the
+    far side from the leaf's value (the outcome never seen). Otherwise, or when no leaf matches,
+    one float leaf gets a threshold or a value either side of it (:func:`_compared`)."""
+    if ctx.compared is not None and ctx.rng.random() < CROSSING_PROBABILITY:
+        found = ctx.compared
+        crossing = [
+            (leaf, threshold)
+            for leaf in _eligible_leaves(message, ctx, ("compared",))
+            for threshold in found.crossing(_get(message, leaf.loc))
+        ]
+        if crossing:
+            leaf, threshold = ctx.rng.choice(crossing)
+            value = _get(message, leaf.loc)
+            _set(message, leaf.loc, _coerce(_past(threshold, value, ctx.rng), leaf.spec, ctx))
+            return message
+    return _apply_leaf_ops(message, ctx, ("compared",))
+
+
+def _past(threshold: float, value: float, rng: Random) -> float:
+    """``threshold``, or the next float, a relative 1e-6 or 1e-3 (at least that much absolute)
+    beyond it, on the side away from ``value``."""
+    way = -1.0 if value > threshold else 1.0
+    step = max(1.0, abs(threshold))
+    near = (
+        threshold,
+        math.nextafter(threshold, way * math.inf),
+        threshold + way * 1e-6 * step,
+        threshold + way * 1e-3 * step,
+    )
+    return rng.choice([v for v in near if v != value])
+
+
 def _compared(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> Any:
     """A comparison threshold of the targets or a value just either side of it: the next float
     either way, or a relative step of 1e-6 or 1e-3 (at least that much absolute)."""

@@ -80,6 +80,7 @@ from fuzzer.mutation.leaves import (
     _apply_leaf_ops,
     _dictionary_pool,
     _eligible_leaves,
+    apply_compared,
 )
 from fuzzer.mutation.structure import choose_array, growable, new_element, splice_both
 
@@ -315,8 +316,9 @@ def libfuzzer(message: Message, ctx: MutationContext) -> Message:
 def compared(message: Message, ctx: MutationContext) -> Message:
     """Set one float to a comparison threshold of the targets or a value just either side of it
     (libFuzzer's TORC, AFL++'s CmpLog, for floats): ``ctx.compared`` learns them during the
-    campaign (``fuzzer.selection.compared``). Not applicable before one is known."""
-    return _apply_leaf_ops(message, ctx, ("compared",))
+    campaign (``fuzzer.selection.compared``), and which leaf a comparison saw (input-to-state,
+    :func:`fuzzer.mutation.leaves.apply_compared`). Not applicable before one is known."""
+    return apply_compared(message, ctx)
 
 
 # --- Robotics-aware structure and semantics ----------------------------------------------------------------

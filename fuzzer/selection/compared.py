@@ -19,6 +19,13 @@ ever given one outcome is *unsolved*: the branch behind it has never been taken.
 one), else any threshold; ``fuzzer.mutation.leaves`` writes it, or a value just either side of
 it, into a float field of the input.
 
+Which field? Redqueen's input-to-state correspondence (Aschermann et al., NDSS 2019): an
+operand a target compares is often a value of the input itself (a joint target the arm went
+to, then the seed of the next IK). Each unsolved site keeps the last :data:`RECENT` distinct
+values its varying operand took; :meth:`ComparedValues.crossing` names the thresholds whose
+site compared a given value, and the mutator writes, into the leaf that holds it, the threshold
+or a value past it on the side that value never reached (the branch not yet taken).
+
 Nothing here decides a verdict: the table only shapes mutations. The order of sites is the
 order they were first seen, so a campaign with a given ``-seed`` draws the same values.
 """
@@ -35,6 +42,9 @@ PATIENCE: Final = 1024
 """Observations after which a site whose operands never varied is no longer watched."""
 MAX_SITES: Final = 4096
 """Sites watched at most (the rest are ignored): bounds the table's memory."""
+RECENT: Final = 256
+"""Distinct values of its varying operand an unsolved site remembers (the newest): enough to
+still hold the values of most corpus inputs when one of them is mutated."""
 
 _FIRST_A, _FIRST_B, _A_VARIES, _B_VARIES, _OUTCOMES, _COUNT = range(6)
 
@@ -55,6 +65,7 @@ class ComparedValues:
         self.done: set[int] = set()
         self.thresholds: dict[int, float] = {}
         self._state: dict[int, list[float | bool | int]] = {}
+        self._recent: dict[int, dict[float, None]] = {}
 
     def watch(self, site: int, a: float, b: float, result: object) -> None:
         """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
@@ -75,19 +86,41 @@ class ComparedValues:
         a_varies, b_varies = state[_A_VARIES], state[_B_VARIES]
         if a_varies and b_varies:  # both operands move with the input: no threshold here
             self.thresholds.pop(site, None)
-            self.done.add(site)
+            self._settle(site)
         elif a_varies or b_varies:
             fixed = float(state[_FIRST_B] if a_varies else state[_FIRST_A])
             if math.isfinite(fixed):
                 self.thresholds[site] = fixed
             if state[_OUTCOMES] == 3:  # both branches taken: solved
-                self.done.add(site)
+                self._settle(site)
+                return
+            recent = self._recent.get(site)
+            if recent is None:  # the first value it took counts too
+                recent = self._recent[site] = {}
+                _remember(recent, float(state[_FIRST_A] if a_varies else state[_FIRST_B]))
+            _remember(recent, float(a if a_varies else b))
         elif int(state[_COUNT]) >= PATIENCE:
-            self.done.add(site)
+            self._settle(site)
+
+    def _settle(self, site: int) -> None:
+        self.done.add(site)
+        self._recent.pop(site, None)
 
     def unsolved(self) -> list[float]:
         """Thresholds of the sites whose comparison has given one outcome only."""
         return [value for site, value in self.thresholds.items() if self._state[site][_OUTCOMES] != 3]
+
+    def crossing(self, value: float) -> list[float]:
+        """Thresholds of the unsolved sites that recently compared ``value`` (one of the last
+        :data:`RECENT` values of their varying operand), in the order the sites were first seen.
+        None for 0.0, the default of every field, which matches by coincidence."""
+        if value == 0.0:
+            return []
+        return [
+            threshold
+            for site, threshold in self.thresholds.items()
+            if value in self._recent.get(site, ()) and self._state[site][_OUTCOMES] != 3
+        ]
 
     def __len__(self) -> int:
         return len(self.thresholds)
@@ -101,3 +134,12 @@ class ComparedValues:
         if unsolved and rng.random() < UNSOLVED_PROBABILITY:
             return rng.choice(unsolved)
         return rng.choice(list(self.thresholds.values()))
+
+
+def _remember(recent: dict[float, None], value: float) -> None:
+    """Add ``value`` (finite) to a site's recent operand values, forgetting the oldest past
+    :data:`RECENT`."""
+    if value not in recent and math.isfinite(value):
+        recent[value] = None
+        if len(recent) > RECENT:
+            del recent[next(iter(recent))]
