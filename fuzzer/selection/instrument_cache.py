@@ -77,6 +77,9 @@ def instrument_functions(
     bool
         Whether the code came from the cache.
     """
+    from fuzzer.selection import cmp_gap
+
+    cmp_gap.install(atheris)  # the comparisons Atheris' own pass leaves untraced
     first = int(atheris._reserve_counter())
     key = _digest(functions, atheris, first) if cache is not None else None
     codes = _load(cache / f"{key}.bin", first, len(functions)) if cache is not None and key else None
@@ -114,12 +117,14 @@ def _digest(functions: Sequence[types.FunctionType], atheris: Any, first: int) -
 
 
 def _rewriter_files(atheris: Any) -> list[Path]:
-    """Atheris' bytecode rewriter (its version is in its code), if ``atheris`` is the real one."""
+    """Atheris' bytecode rewriter (its version is in its code) and this program's addition to
+    it (``fuzzer.selection.cmp_gap``), if ``atheris`` is the real one."""
     where = getattr(atheris, "__file__", None)
     if not where:
         return []
     base = Path(where).parent
-    return [base / "instrument_bytecode.py", base / "version_dependent.py", base / "__init__.py"]
+    ours = Path(__file__).resolve().with_name("cmp_gap.py")
+    return [base / "instrument_bytecode.py", base / "version_dependent.py", base / "__init__.py", ours]
 
 
 def _portable(code: types.CodeType, atheris: Any) -> types.CodeType:
