@@ -348,7 +348,8 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
 
 def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
     """A path's known limitation changes only each target's last plan: a later divergence is
-    still found, up to an /execute of that plan (a plan that succeeds on both replaces it)."""
+    still found; after an /execute of that plan that takes the arms apart, only how far later
+    paths get (a plan that succeeds on both replaces it)."""
 
     def origin(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
@@ -367,15 +368,36 @@ def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
     # nothing else differs: the path's known limitation is the verdict
     alone = judge(scenario("cartesian_path", "remember"), run(three, still), run(four, still), facts)
     assert (alone.kind, alone.step) == (Kind.KNOWN_LIMITATION, 0)
-    # an /execute of the plans that differ ends the comparison
+    # an /execute of the plans that differ that leaves the arms together: compared as before
     executed = ok(success=(1.0,), joint_values=(0.3, 0.0))  # each path's last point
-    stop = judge(
+    together = judge(
         scenario("cartesian_path", "execute", "remember"),
         run(three, executed, still),
         run(four, executed, moved),
         facts,
     )
+    assert (together.kind, together.step, together.field) == (Kind.VALUE, 2, "remember.joint_values")
+    # one that leaves them apart: a later step's values are not compared ...
+    apart = ok(success=(1.0,), joint_values=(0.3 + 3e-6, 0.0))
+    stop = judge(
+        scenario("cartesian_path", "execute", "remember"),
+        run(three, executed, still),
+        run(four, apart, moved),
+        facts,
+    )
     assert (stop.kind, stop.step) == (Kind.KNOWN_LIMITATION, 0)
+    # ... but how far a later path gets is
+    off_edge = Step(
+        "cartesian_path",
+        {"header": HEADER, "poses": [{**POSE, "position": {"x": 0.305, "y": 0.0, "z": 0.0}}]},
+    )
+    calls = ScenarioCall((*scenario("cartesian_path", "execute", "remember").steps, off_edge))
+    short = with_value(three, "fraction", (0.25,))
+    full = with_value(three, "fraction", (1.0,))
+    farther = judge(calls, run(three, executed, still, short), run(four, apart, moved, full), facts)
+    assert (farther.kind, farther.step, farther.field) == (Kind.VALUE, 3, "cartesian_path.fraction")
+    same_extent = judge(calls, run(three, executed, still, full), run(four, apart, moved, full), facts)
+    assert (same_extent.kind, same_extent.step) == (Kind.KNOWN_LIMITATION, 0)
     # unless a plan that succeeds on both came in between
     calls = scenario("cartesian_path", "joint_target", "plan", "execute", "remember")
     at_plan = ok(success=(1.0,), joint_values=(0.5, 0.5))
@@ -553,6 +575,95 @@ def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -
     ]
     correct = evaluator("scenario", "python").evaluate(case, validated=True)
     assert correct.comparison.kind is Kind.AGREE
+
+
+NEAR_TOP = {
+    "position": {"x": 0.02617685417101196, "y": -0.03212181473466044, "z": 0.6764255490977282},
+    "orientation": {
+        "x": -0.28551585433878857,
+        "y": -0.24538786536650026,
+        "z": -0.0242173279555893,
+        "w": 0.9261096120215769,
+    },
+}
+ROUND_TRIP = [
+    {
+        "position": {"x": 0.15705705940990874, "y": 7.53895899692325e-07, "z": -0.06374200114648756},
+        "orientation": {
+            "x": 0.5373116855692431,
+            "y": 4.6468757947805565e-06,
+            "z": -0.8433837516387018,
+            "w": 9.868238995889668e-07,
+        },
+    },
+    {
+        "position": {"x": -0.1588919862583076, "y": 1.6483593672062424e-06, "z": -0.021686741374007085},
+        "orientation": {
+            "x": 7.679751301535077e-06,
+            "y": 0.8191607844445206,
+            "z": -1.240245377564716e-06,
+            "w": 0.5735639538601786,
+        },
+    },
+    {
+        "position": {"x": 0.15705705940990874, "y": 7.53895899692325e-07, "z": -0.06374200114648756},
+        "orientation": {
+            "x": 0.5373116855692431,
+            "y": 4.6468757947805565e-06,
+            "z": -0.8433837516387018,
+            "w": 9.868238995889668e-07,
+        },
+    },
+]
+
+
+def test_a_path_after_an_execute_that_left_the_arms_apart_is_compared_by_how_far_it_got() -> None:
+    """ik_seed_band in a 20-s campaign, minimized: a path whose IK answers differ by 1.05e-6 rad
+    (one pose: a known limitation), its /execute (the arms 1.05e-6 apart), then a path on which
+    the faulty twin's IK, seeded with joint_1 in [0.3, 0.31), returns its seed and "completes"
+    while native stops at 11%. The /execute used to end the comparison there."""
+    steps = [
+        live("cartesian_path", header=HEADER, poses=[NEAR_TOP]),
+        live("execute"),
+        live("cartesian_path", header={**HEADER, "frame_id": "link_6"}, poses=ROUND_TRIP),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    found = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(case, validated=True)
+    c = found.comparison
+    assert (c.kind, c.step, c.field) == (Kind.VALUE, 2, "cartesian_path.fraction")
+    correct = evaluator("scenario", "python").evaluate(case, validated=True).comparison
+    assert (correct.kind, correct.step) == (Kind.KNOWN_LIMITATION, 0)
+
+
+HOME_AHEAD = {
+    "position": {"x": 0.22885535000000004, "y": -1.471118577552194e-06, "z": 0.4319999999972982},
+    "orientation": {
+        "w": 0.9999999999983136,
+        "x": 1.8366102067764311e-06,
+        "y": 3.2773177114390402e-102,
+        "z": -1.784448280256061e-96,
+    },
+}
+
+
+def test_a_path_from_joints_on_their_limits_that_one_solver_starts_is_ill_conditioned() -> None:
+    """A control campaign's false positive (unmodified twin, PROBOT Anno, 2026-11-25), minimized:
+    from joint_1 on its upper limit, a path's first IK stalls with joints clamped at their
+    limits; KDL's iterates dip below the solver tolerance (7.8e-7 against 1e-6), the twin's stay
+    at 1.18e-6, so native takes one step of 52 and the twin none. Neither answer moves under the
+    1e-9 or 1e-7 nudges; started 1e-6 inside the limit, which the oracle calls the same state,
+    both take two steps. The state nudge by the tolerance says so."""
+    start = [3.1416, 0.0, 0.0, 0.0, 1.5707963267948966, 3.141592653589793]
+    steps = [
+        live("joint_target", position=start),
+        live("go"),
+        live("cartesian_path", header={**HEADER, "seq": 10940617}, poses=[HOME_AHEAD]),
+    ]
+    found = evaluator("scenario", "python").evaluate(
+        TestCase("rrosfuzz/Scenario", {"steps": steps}), validated=True
+    )
+    assert [o.steps[2].values["fraction"] for o in found.outcomes] == [(1 / 52,), (0.0,)]
+    assert (found.comparison.kind, found.comparison.step) == (Kind.ILL_CONDITIONED, 2)
 
 
 def test_the_signature_names_the_step_kind_not_its_index() -> None:

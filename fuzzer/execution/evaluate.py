@@ -55,7 +55,7 @@ from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
 from fuzzer.scenario.nudge import AXIS, Moved, Nudge
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
-from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed
+from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, state_gap
 from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall, ScenarioError, to_call, to_message
 from robot_api.errors import RobotAPIError
@@ -313,7 +313,9 @@ class Evaluator:
         runners: Sequence[Runner],
     ) -> Comparison:
         """A divergence at a step that solves IK, re-run with the state, then the goal, nudged
-        before it: ``ill_conditioned`` if a target's answer at that step moves under a nudge
+        before it (the state also by the campaign tolerance, a move the oracle itself calls no
+        difference, and by twice the gap between the two arms before the step, ``state_gap``):
+        ``ill_conditioned`` if a target's answer at that step moves under a nudge
         (``ik_answer_changed``), or, for a divergence of how far a path got (``EXTENT_FIELDS``:
         its fraction or point count), if a target's path ends elsewhere (``extent_changed``):
         points that move under a nudge near a singularity do not explain a path that stops at
@@ -330,6 +332,9 @@ class Evaluator:
             return ik_answer_changed(kind, first, second, self.tolerance, facts)
 
         tries = [(Moved.STATE, shift, AXIS) for shift in ik_check.IK_PERTURBATIONS]
+        equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
+        gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
+        tries += [(Moved.STATE, shift, AXIS) for shift in (equal, -equal, 2.0 * gap, -2.0 * gap) if shift]
         goal = (Moved.POSITION, Moved.ORIENTATION)
         tries += [(moved, shift, axis) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
         for moved, shift, axis in tries:

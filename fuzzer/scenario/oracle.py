@@ -81,6 +81,10 @@ ORDER = (
 )
 """Order in which a step's quantities are compared (the first divergent one is reported)."""
 
+COARSE = ("status", "success", "error_code", "fraction", "trajectory.points")
+"""What is compared of a path once an ``/execute`` of plans a path's ``known_limitation`` left has
+taken the arms apart (``first_differential``): how far it got, not its points."""
+
 IN_EFFECT = "in_effect."
 """Prefix of what the executor knew (script settings), not outputs of the target: not compared."""
 POSE_VALUES = ("joint_values", "position", "orientation")
@@ -231,23 +235,32 @@ def first_differential(
 
     A ``known_limitation`` at a ``cartesian_path`` step does not end the comparison: that step
     changes nothing on the group but each target's last plan, so the steps after it are
-    compared as well, up to an ``/execute`` of a plan it left (a later ``/plan`` that succeeds
-    on both, or a later path that agrees, replaces it). A counted divergence found later is
-    the verdict; otherwise the first ``known_limitation`` is.
+    compared as well (a later ``/plan`` that succeeds on both, or a later path that agrees,
+    replaces that plan). After an ``/execute`` of the plans it left the two arms may stand
+    apart (two IK answers of one pose, beyond the tolerance): from there on only how far each
+    later path got is compared (``COARSE``: its status, success, error code, fraction and point
+    count), which such a gap does not explain; the evaluator's nudge check then moves the state
+    by the gap too. A counted divergence found later is the verdict; otherwise the first
+    ``known_limitation`` is.
     """
     largest = 0.0
     pending: Comparison | None = None
-    tainted = False
+    tainted = coarse = False
     before = list(zip(contexts(call, a, facts), contexts(call, b, facts), strict=False))
     for i in range(max(len(a.steps), len(b.steps))):
         kind = call.steps[i].kind if i < len(call.steps) else "step"
-        if tainted and kind == "execute":
-            return pending or Comparison(Kind.AGREE)  # it would execute the plans that differ
         if i >= len(a.steps) or i >= len(b.steps):
             c = _status_of_shorter(kind, a if i >= len(a.steps) else b)
             return replace(c, step=i, step_kind=kind)
         c = compare_step(kind, a.steps[i], b.steps[i], tol, facts)
         largest = max(largest, c.largest)
+        if coarse or (tainted and kind == "execute" and c.divergent):
+            coarse = True  # the plans that differ took the arms apart: how far paths get only
+            if kind == "cartesian_path" and c.divergent and c.field.split(".", 1)[-1] in COARSE:
+                c = classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol)
+                if c.kind is not Kind.KNOWN_LIMITATION:
+                    return replace(c, step=i, step_kind=kind)
+            continue
         if c.divergent:
             c = classify(call, i, a.steps[i], b.steps[i], c, before[i], facts, tol)
             c = replace(c, step=i, step_kind=kind)

@@ -319,3 +319,20 @@ def ik_answer_changed(
     if pairs is None:
         return True
     return any(joints_apart("", x, y, tol, facts) is not None for x, y in pairs)
+
+
+STATE_GAP_MAX = 1e-3
+"""``state_gap``: larger gaps between the arms are not nudged by (rad, m)."""
+
+
+def state_gap(outcomes: Sequence[Outcome], step: int) -> float:
+    """How far apart as numbers the two targets' states are before ``step`` (the largest
+    joint difference after the step before it), when that is above ``IK_EXACT`` and at most
+    :data:`STATE_GAP_MAX`; else 0."""
+    if step < 1 or len(outcomes) < 2 or any(step > len(o.steps) for o in outcomes[:2]):
+        return 0.0
+    x, y = (tuple(o.steps[step - 1].values.get("joint_values", ())) for o in outcomes[:2])
+    if not x or len(x) != len(y):
+        return 0.0
+    gap = max(abs(p - q) for p, q in zip(x, y, strict=True))
+    return gap if IK_EXACT < gap <= STATE_GAP_MAX else 0.0
