@@ -103,6 +103,31 @@ def test_a_claim_without_file_or_temporaries_is_released(tmp_path: Path) -> None
     assert assert_every_claim_complete(tmp_path) == 1
 
 
+def test_crash_files_are_synced_and_generated_seeds_are_not(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A crash file and its sidecar reach the disk before the claim is complete; the seeds a
+    campaign generates can be made again (syncing 64 of them took 30 ms to 0.24 s of its start,
+    depending on what else was writing)."""
+    from fuzzer.generation.corpus import write_seeds
+    from fuzzer.input.testcase import TestCase
+
+    synced: list[int] = []
+    real = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (synced.append(fd), real(fd))[1])
+    store = ArtifactStore(tmp_path / "art")
+    assert store.record("sig", b"data", _sidecar("sig")) is not None
+    assert len(synced) >= 2  # the sidecar and the crash file at least
+    synced.clear()
+    seeds = [TestCase("sensor_msgs/JointState", {"position": [0.1 * i]}, sequence=i) for i in range(3)]
+    write_seeds(tmp_path / "corpus", seeds)
+    assert synced == []
+    written = sorted((tmp_path / "corpus").iterdir())
+    assert len(written) == 3 and [decode(p.read_bytes()).message for p in written] == [
+        c.message for c in seeds
+    ]
+
+
 def test_older_empty_markers_are_matched_to_their_sidecars(tmp_path: Path) -> None:
     store = ArtifactStore(tmp_path)
     store.write(b"legacy", _sidecar("old"))

@@ -42,20 +42,27 @@ def _temporary(path: Path) -> Path:
     return path.parent / f"{TMP_PREFIX}{path.name}.{os.getpid()}.{secrets.token_hex(4)}"
 
 
-def _write_temporary(path: Path, data: bytes) -> Path:
-    """Write ``data`` in full (fsync) to a temporary next to ``path``; return the temporary."""
+def _write_temporary(path: Path, data: bytes, durable: bool = True) -> Path:
+    """Write ``data`` in full (fsync if ``durable``) to a temporary next to ``path``; return the
+    temporary."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = _temporary(path)
     with open(tmp, "wb") as handle:
         handle.write(data)
         handle.flush()
-        os.fsync(handle.fileno())
+        if durable:
+            os.fsync(handle.fileno())
     return tmp
 
 
-def atomic_write(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` all at once (per-process temporary file, fsync, rename)."""
-    tmp = _write_temporary(path, data)
+def atomic_write(path: Path, data: bytes, durable: bool = True) -> None:
+    """Write ``data`` to ``path`` all at once (per-process temporary file, fsync, rename).
+
+    ``durable=False`` skips the fsync, for files that can be made again (a campaign's generated
+    seeds): a reader still sees the old file or the whole new one, and only a power loss can
+    leave a short one behind. 64 fsynced seed files took 30-44 ms on this machine with another
+    process writing (10-25 ms more than without), and once 0.24 s during a two-job benchmark."""
+    tmp = _write_temporary(path, data, durable)
     try:
         os.replace(tmp, path)
     except OSError:

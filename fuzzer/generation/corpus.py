@@ -94,9 +94,12 @@ def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
 
 
 def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
+    """Write the generated seeds into the corpus folder, without fsync: the same seed and robot
+    make them again, and a short file left by a power loss is skipped as malformed (``prescan``)."""
     for case in seeds:
         data = case.encode()
-        atomic_write(corpus / f"seed-{case.sequence:05d}-{hashlib.sha1(data).hexdigest()[:10]}", data)
+        name = f"seed-{case.sequence:05d}-{hashlib.sha1(data).hexdigest()[:10]}"
+        atomic_write(corpus / name, data, durable=False)
 
 
 def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestCase]]:
