@@ -33,6 +33,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
@@ -181,7 +182,14 @@ def replay_fidelity(bug: Bug, artifacts: Path) -> tuple[int, int, tuple[str, ...
 
 
 def run_one(
-    bug: Bug, engine: str, seed: int, budget: float, replay: bool = False, *, stop_at_detection: bool = False
+    bug: Bug,
+    engine: str,
+    seed: int,
+    budget: float,
+    replay: bool = False,
+    *,
+    stop_at_detection: bool = False,
+    keep_failures: Path | None = None,
 ) -> Run:
     """Run one trial of ``engine`` against ``bug`` in a fresh folder and read its logs.
 
@@ -192,6 +200,11 @@ def run_one(
         ``subprocess.TimeoutExpired`` raised, 180 s past it).
     replay
         Replay the full engine's crash files in a new process (``replay_fidelity``).
+    keep_failures
+        A control run that reports a divergence (a false positive) copies its artifacts
+        (crash files, sidecars, logs) to ``keep_failures/<bug>-<engine>-seed<seed>/`` before
+        its temporary folder goes: a campaign depends on the clock, so a rerun may not find
+        it again.
     stop_at_detection
         Kill the trial (its whole process group) once its logs show a detection and a stats
         snapshot with its first input (``benchmarks.trials.run_until_detection``). The time to first detection
@@ -234,6 +247,9 @@ def run_one(
         executions = sum(int(r.get("execs", 0)) for r in last.values())
         elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
         fidelity = replay_fidelity(bug, artifacts) if replay and engine == "full" else (0, 0, ())
+        if keep_failures is not None and bug.is_control and hits and artifacts.is_dir():
+            name = "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{bug.name}-{engine}-seed{seed}")
+            shutil.copytree(artifacts, keep_failures / name, dirs_exist_ok=True)
     return Run(
         bug.name,
         engine,
@@ -623,6 +639,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument(
         "--replay", action="store_true", help="replay each full-engine run's crash files in a new process"
     )
+    parser.add_argument(
+        "--keep-failures",
+        type=Path,
+        default=None,
+        help="where a control run that reports a divergence leaves its artifacts "
+        "(default: control-failures/ next to --out)",
+    )
     args = parser.parse_args(argv)
     if args.render is not None:
         saved: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
@@ -641,9 +664,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     engines = tuple(args.engines or mode.engines)
     replay = args.replay or mode.replay
     jobs = plan_jobs(bugs, engines, seeds, mode.ops)
+    out = args.out or RESULTS / f"zoo-{args.mode}.json"
+    keep = args.keep_failures or out.parent / "control-failures"
     load_before = _load()
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        runs = list(pool.map(lambda job: run_one(job[0], job[1], job[2], budget, replay), jobs))
+        runs = list(
+            pool.map(lambda job: run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep), jobs)
+        )
     result = {
         "mode": args.mode,
         "bugs": list(bugs),
@@ -659,7 +686,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "ops": list(mode.ops),
         "load": f"{load_before} / {_load()}",
     }
-    out = args.out or RESULTS / f"zoo-{args.mode}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=1), encoding="utf-8")
     plot(result, out.with_suffix(".png"))

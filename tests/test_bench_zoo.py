@@ -117,3 +117,19 @@ def test_logs_are_read_incrementally(tmp_path: Path) -> None:
     assert trials.read_new(path, offset) == ([{"b": 2}], path.stat().st_size)
     progress = trials.watch(trials.Progress(), tmp_path)
     assert not progress.detected and not progress.done
+
+
+def test_a_control_run_that_reports_keeps_its_artifacts(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """A false positive's crash files outlive the trial's temporary folder; a bug's detection,
+    or a control run that reports nothing, leaves nothing behind."""
+    _fake(monkeypatch, "value", 0.0, 0)
+    control = BY_NAME["control@scenario/probot_anno"]
+    bench_zoo.run_one(control, "full", 4, 1.0, keep_failures=tmp_path)
+    kept = tmp_path / "control_scenario_probot_anno-full-seed4"
+    assert sorted(p.name for p in kept.iterdir()) == ["divergences.jsonl", "stats.jsonl"]
+    bench_zoo.run_one(BY_NAME["silent_clamp"], "full", 4, 1.0, keep_failures=tmp_path)
+    _fake(monkeypatch, "known_limitation", 0.0, 0)
+    bench_zoo.run_one(control, "full", 5, 1.0, keep_failures=tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == [kept.name]
