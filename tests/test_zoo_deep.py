@@ -90,6 +90,19 @@ def test_wrap_past_pi_needs_a_revolute_joint_beyond_pi() -> None:
     assert group.get_joint_value_target()[0] == 3.9
 
 
+def test_per_joint_band_moves_a_target_only_inside_its_band() -> None:
+    model = deep.per_joint_band.RobotModel(ANNO)
+    group = deep.per_joint_band.MoveGroup(model)
+    for joint in range(6):
+        target = [0.2] * 6
+        target[joint] = deep.CORRECTED_FROM + 1e-5
+        group.set_joint_value_target(target)
+        assert group.get_joint_value_target()[joint] == pytest.approx(target[joint] + deep.SHIFT)
+    for outside in (deep.CORRECTED_FROM - 1e-9, deep.CORRECTED_TO, 0.8613, 0.8614):
+        group.set_joint_value_target([outside] * 6)
+        assert group.get_joint_value_target() == [outside] * 6
+
+
 def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotModel) -> None:
     model = deep.ik_seed_band.RobotModel(ANNO)
     goal = reference.forward_kinematics([0.5, 0.3, 0.6, 0.0, 0.7, 0.0])

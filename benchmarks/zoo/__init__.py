@@ -267,6 +267,12 @@ DEEP: tuple[Bug, ...] = (
         module="deep",
     ),
     Bug(
+        "per_joint_band",
+        "a move target's joint in [0.86131, 0.86133) rad moved by 1 mrad, the band tested per joint inside a list comprehension (a per-joint correction)",
+        "https://github.com/robotology/mesh-support/issues/308 (a wrong per-joint calibration entry); https://github.com/Kinovarobotics/kinova-ros/pull/20 (a per-joint change of targets: 'removed angle normalization of joints 1,4,5,6')",
+        module="deep",
+    ),
+    Bug(
         "ik_seed_band",
         "IK reports its seed as a success when the seed's joint_1 lies in [0.3, 0.31) rad (only from certain seeds)",
         "https://github.com/tesseract-robotics/tesseract_planning/pull/763 (a seed-dependent IK gives a wrong branch from some seeds); https://github.com/TAMS-Group/bio_ik/issues/48 ('returned state may differ from input pose and doesn't respect success criteria')",

@@ -3,12 +3,12 @@
 Each variant is ``python_impl`` with one behaviour changed only inside a region a campaign
 must *find*: a band about 0.1% wide of one joint's range away from round values, a relation
 between two joints, a branch on a computed float (a position of the tool, an ``atan2``
-angle), a calibration-table entry, a near-singular wrist, a revolute joint past pi, an IK
-that goes wrong only from certain seeds. ``benchmarks/zoo/__init__.py`` lists them with the
-public source of each class. Outside its region every variant is the twin itself. The FK
-faults sit in the kernel that ``forward_kinematics`` and ``forward_kinematics_batch`` share
-(``_Deep``), so the batched search of ``fuzzer.generation.sweep`` meets the same fault a
-single call does.
+angle), a calibration-table entry, a near-singular wrist, a revolute joint past pi, a band
+tested per joint inside a list comprehension, an IK that goes wrong only from certain seeds.
+``benchmarks/zoo/__init__.py`` lists them with the public source of each class. Outside its
+region every variant is the twin itself. The FK faults sit in the kernel that
+``forward_kinematics`` and ``forward_kinematics_batch`` share (``_Deep``), so the batched
+search of ``fuzzer.generation.sweep`` meets the same fault a single call does.
 """
 
 from __future__ import annotations
@@ -207,7 +207,27 @@ class _WrapPastPi(Group):
 wrap_past_pi = _impl(group=_WrapPastPi)
 
 
-# -- 8. IK from certain seeds: a seed with joint_1 in [0.3, 0.31) rad reports its seed -------
+# -- 8. a correction per joint, tested inside a list comprehension: targets in a band 2e-5 wide --
+
+CORRECTED_FROM, CORRECTED_TO = 0.86131, 0.86133
+"""``per_joint_band``'s band (rad): any joint's target in it is moved by ``SHIFT``."""
+
+
+class _PerJointBand(Group):
+    """The band sits in a list comprehension, as per-joint corrections in Python often do: a
+    comparison Atheris alone never traced (``fuzzer.selection.cmp_gap``). About 2.3e-5 of
+    uniform random targets of the default robot fall in it (the band over each joint's range,
+    summed over the six joints)."""
+
+    def set_joint_value_target(self, arg1: Any, arg2: Any = None) -> None:
+        super().set_joint_value_target(arg1, arg2)
+        self._target = [v + SHIFT if CORRECTED_FROM <= v < CORRECTED_TO else v for v in self._target]
+
+
+per_joint_band = _impl(group=_PerJointBand)
+
+
+# -- 9. IK from certain seeds: a seed with joint_1 in [0.3, 0.31) rad reports its seed -------
 
 
 class _SeedBandIk(Model):
@@ -229,6 +249,7 @@ __all__ = [
     "joint_relation",
     "narrow_band",
     "narrower_band",
+    "per_joint_band",
     "small_angle_wrist",
     "tight_relation",
     "wrap_past_pi",

@@ -8,9 +8,17 @@ first bound in a condition, ``if 0.3 <= x < 0.31:`` (``SWAP``, ``COPY``, a jump,
 ``LOAD_CONST 0.31``), leaves a stale mark on ``x``'s slot, so its second comparison is taken
 for ``0.31`` against a constant and is never traced: the float tracer and the comparison
 table (``fuzzer.selection.compared``) never see the band's upper edge. The same shape as a
-``return`` value is traced. Atheris also leaves the code of comprehensions and generator
-expressions uninstrumented by design (only nested functions and lambdas are); that is not
-changed here (docs/engine.md, "What is traced").
+``return`` value is traced.
+
+Atheris also leaves the code of comprehensions and generator expressions
+(``<listcomp>``, ``<genexpr>``, ``<setcomp>``, ``<dictcomp>``: separate code objects in Python
+3.11) uninstrumented: ``patch_code`` recurses only into nested functions and lambdas. A band
+``4.0 <= v < 4.05`` tested per joint inside a list comprehension was invisible to the float
+tracer. :func:`install` also wraps ``patch_code``: before Atheris patches a code object, the
+comprehensions among its constants get their comparisons traced (data flow only, both
+Atheris' pass and the one below; no edge counters, so a comprehension's loop costs one call
+per comparison and element, not one per basic block: a float comparison's traced side is
+already a feature, ``fuzzer.selection.floatcmp``).
 
 :func:`install` wraps ``trace_data_flow``: after Atheris' own pass, each ``COMPARE_OP`` still
 in the code gets the same call Atheris would insert. An operand counts as a constant only when
@@ -24,32 +32,64 @@ cached with this file's text in the cache key (``fuzzer.selection.instrument_cac
 from __future__ import annotations
 
 import dis
+import types
+from collections.abc import Callable
 from typing import Any, Final
 
 _PLAIN_LOADS: Final = frozenset({"LOAD_CONST", "LOAD_FAST", "LOAD_DEREF", "LOAD_CLOSURE", "LOAD_NAME"})
 """Instructions that push exactly one value and pop none (``LOAD_GLOBAL`` may push two)."""
 _MARK: Final = "_rrosfuzz_traces_skipped_comparisons"
+_COMPREHENSIONS: Final = frozenset({"<listcomp>", "<genexpr>", "<setcomp>", "<dictcomp>"})
+_INSTRUMENTED: Final = "__ATHERIS_INSTRUMENTED__"
 
 
 def install(atheris: Any) -> bool:
-    """Wrap ``atheris.instrument_bytecode.Instrumentor.trace_data_flow`` once; False when
-    ``atheris`` has no such rewriter (a stand-in)."""
+    """Wrap ``atheris.instrument_bytecode.Instrumentor.trace_data_flow`` and
+    ``atheris.instrument_bytecode.patch_code`` once; False when ``atheris`` has no such
+    rewriter (a stand-in)."""
     rewriter = getattr(atheris, "instrument_bytecode", None)
     instrumentor = getattr(rewriter, "Instrumentor", None)
     original = getattr(instrumentor, "trace_data_flow", None)
-    if rewriter is None or instrumentor is None or original is None:
+    patch = getattr(rewriter, "patch_code", None)
+    if rewriter is None or instrumentor is None or original is None or patch is None:
         return False
-    if getattr(original, _MARK, False):
-        return True
+    if not getattr(original, _MARK, False):
 
-    def trace_data_flow(self: Any) -> None:
-        original(self)
-        trace_skipped(self, rewriter)
+        def trace_data_flow(self: Any) -> None:
+            original(self)
+            trace_skipped(self, rewriter)
 
-    setattr(trace_data_flow, _MARK, True)
-    trace_data_flow.__wrapped__ = original  # type: ignore[attr-defined]
-    instrumentor.trace_data_flow = trace_data_flow
+        setattr(trace_data_flow, _MARK, True)
+        trace_data_flow.__wrapped__ = original  # type: ignore[attr-defined]
+        instrumentor.trace_data_flow = trace_data_flow
+    if not getattr(patch, _MARK, False):
+
+        def patch_code(
+            code: types.CodeType, trace_dataflow: bool, trace_control_flow: bool = True, nested: bool = False
+        ) -> types.CodeType:
+            if trace_dataflow:
+                code = with_comprehensions_traced(code, patch_code)
+            return patch(code, trace_dataflow, trace_control_flow, nested)  # type: ignore[no-any-return]
+
+        setattr(patch_code, _MARK, True)
+        patch_code.__wrapped__ = patch  # type: ignore[attr-defined]
+        rewriter.patch_code = patch_code  # Atheris' own recursion looks it up here too
     return True
+
+
+def with_comprehensions_traced(code: types.CodeType, patch: Callable[..., types.CodeType]) -> types.CodeType:
+    """``code`` with the comprehensions among its constants patched by ``patch`` (the wrapped
+    ``patch_code``, which comes back here for comprehensions nested in them) for data flow
+    only; unchanged when Atheris already instrumented it or it has none."""
+    if any(isinstance(c, str) and c == _INSTRUMENTED for c in code.co_consts):
+        return code
+    consts = tuple(
+        patch(c, True, False, True) if isinstance(c, types.CodeType) and c.co_name in _COMPREHENSIONS else c
+        for c in code.co_consts
+    )
+    if all(a is b for a, b in zip(consts, code.co_consts, strict=True)):
+        return code
+    return code.replace(co_consts=consts)
 
 
 def trace_skipped(inst: Any, rewriter: Any) -> int:
