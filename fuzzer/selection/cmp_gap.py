@@ -1,4 +1,5 @@
-"""Trace the comparisons that Atheris 3.0.0 leaves untraced because it takes them for two constants.
+"""Trace the comparisons Atheris 3.0.0 leaves untraced: those it takes for two constants, and
+those inside comprehensions and generator expressions.
 
 ``atheris.instrument_func`` turns each ``COMPARE_OP`` into a call of ``atheris._trace_cmp``
 (``Instrumentor.trace_data_flow``), unless both operands are constants. It decides that by
@@ -12,7 +13,8 @@ table (``fuzzer.selection.compared``) never see the band's upper edge. The same 
 
 Atheris also leaves the code of comprehensions and generator expressions
 (``<listcomp>``, ``<genexpr>``, ``<setcomp>``, ``<dictcomp>``: separate code objects in Python
-3.11) uninstrumented: ``patch_code`` recurses only into nested functions and lambdas. A band
+3.11; from 3.12 only generator expressions are, PEP 709 inlines the others) uninstrumented:
+``patch_code`` recurses only into nested functions and lambdas. A band
 ``4.0 <= v < 4.05`` tested per joint inside a list comprehension was invisible to the float
 tracer. :func:`install` also wraps ``patch_code``: before Atheris patches a code object, the
 comprehensions among its constants get their comparisons traced (data flow only, both
