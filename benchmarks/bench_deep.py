@@ -39,8 +39,9 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
-from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, replace_section, run_one
+from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, run_one
 from benchmarks.zoo import DEEP, ZOO, Bug
+from benchmarks.zoo_tables import replace_section
 
 ALPHA = 0.05
 MARKS = ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->")

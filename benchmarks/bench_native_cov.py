@@ -30,9 +30,10 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
-from benchmarks.bench_zoo import command, replace_section
+from benchmarks.bench_zoo import command
 from benchmarks.trials import NOT_DETECTIONS
 from benchmarks.zoo import BY_NAME, CONTROL
+from benchmarks.zoo_tables import replace_section
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS, read_lines
 
 ROOT = Path(__file__).resolve().parents[1]

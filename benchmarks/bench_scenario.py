@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 from unittest import mock
 
-from benchmarks.bench_zoo import ROOT, replace_section
+from benchmarks.zoo_tables import ROOT, replace_section
 from fuzzer.artifacts.divlog import STATS, read_lines
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.corpus import make_seeds
