@@ -10,7 +10,9 @@ the paper's tables and figures of them, :mod:`~fuzzer.report.buckets` the bucket
 :mod:`~fuzzer.report.data` gathers it all and adds the runs over time (all pure),
 :mod:`~fuzzer.report.steps` and :mod:`~fuzzer.report.scenario` read scenarios,
 :mod:`~fuzzer.report.figures` and :mod:`~fuzzer.report.arm` draw,
-:mod:`~fuzzer.report.page` renders the HTML, :mod:`~fuzzer.report.build` writes it all.
+:mod:`~fuzzer.report.page` renders the HTML (the buckets in
+:mod:`~fuzzer.report.bucket_section`, small helpers in :mod:`~fuzzer.report.markup`),
+:mod:`~fuzzer.report.build` writes it all.
 This package imports nothing heavy itself: :mod:`fuzzer.triage.pipeline` uses
 :mod:`~fuzzer.report.steps` without loading matplotlib.
 """

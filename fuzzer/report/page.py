@@ -1,22 +1,19 @@
 """The report as one self-contained HTML page: inline CSS, images as data: URIs, no script.
 
 Every string that comes from a file (logs, sidecars, file names, messages) goes
-through :func:`html.escape`.
+through :func:`fuzzer.report.markup.esc` (:func:`html.escape`). The bucket section is
+:mod:`fuzzer.report.bucket_section`.
 """
 
 from __future__ import annotations
 
-import base64
-import math
-import time
 from collections.abc import Mapping, Sequence
-from html import escape
-from typing import Any
 
 from fuzzer.report.arm import ArmView
-from fuzzer.report.buckets import BucketView
-from fuzzer.report.data import RUN_GAP_SECONDS, ReportData, config_label, tolerance_label
+from fuzzer.report.bucket_section import buckets_section
+from fuzzer.report.data import RUN_GAP_SECONDS, ReportData
 from fuzzer.report.figures import MAX_RUNS
+from fuzzer.report.markup import esc, figure, pct, utc
 from fuzzer.report.tables import TABLE_III_RULES, CloserRow, TableRow
 
 CSS = """
@@ -72,37 +69,6 @@ CONTENTS = (
 )
 
 
-def _e(value: Any) -> str:
-    return escape(str(value), quote=True)
-
-
-def _pct(x: float | None) -> str:
-    return "n/a" if x is None else f"{100 * x:.2f}%"
-
-
-def _num(v: float) -> str:
-    return f"{v:.10g}" if math.isfinite(v) else str(v)
-
-
-def _utc(t: float | None) -> str:
-    return "n/a" if t is None else time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(t))
-
-
-def _img(png: bytes, alt: str) -> str:
-    data = base64.b64encode(png).decode("ascii")
-    return f'<img src="data:image/png;base64,{data}" alt="{_e(alt)}">'
-
-
-def _figure(png: bytes | None, alt: str, caption: str, missing: str) -> str:
-    if png is None:
-        return f'<p class="note">{_e(missing)}</p>'
-    return f"<figure>{_img(png, alt)}<figcaption>{caption}</figcaption></figure>"
-
-
-def _kind_class(kind: str) -> str:
-    return f"k-{kind}" if kind in ("crash", "status", "value", "representation") else "k-other"
-
-
 # -- sections -----------------------------------------------------------------------------------------
 
 
@@ -111,21 +77,21 @@ def _summary(data: ReportData, generated: str) -> str:
     cards = [
         (f"{s.executions:,}", "executions (all processes)"),
         (f"{s.divergent:,}", "divergent executions"),
-        (_pct(s.rate), "divergence rate"),
+        (pct(s.rate), "divergence rate"),
         (f"{s.signatures}", "unique signatures"),
         (f"{s.buckets}", "buckets (distinct problems)"),
     ]
     span = "n/a"
     if s.first is not None and s.last is not None:
-        span = f"{_utc(s.first)} to {_utc(s.last)} ({s.last - s.first:,.1f} s)"
-    kinds = ", ".join(f"{_e(k)} {n:,}" for k, n in s.by_kind.items()) or "none"
+        span = f"{utc(s.first)} to {utc(s.last)} ({s.last - s.first:,.1f} s)"
+    kinds = ", ".join(f"{esc(k)} {n:,}" for k, n in s.by_kind.items()) or "none"
     facts = [
-        ("artifacts folder", f"<code>{_e(data.directory)}</code>"),
-        ("robots", _e(", ".join(s.robots) or "n/a")),
-        ("operations", _e(", ".join(s.ops) or "n/a")),
-        ("targets (a vs b)", _e("; ".join(s.targets) or "n/a")),
-        ("tolerance", _e("; ".join(s.tolerances) or "n/a")),
-        ("time span", _e(span)),
+        ("artifacts folder", f"<code>{esc(data.directory)}</code>"),
+        ("robots", esc(", ".join(s.robots) or "n/a")),
+        ("operations", esc(", ".join(s.ops) or "n/a")),
+        ("targets (a vs b)", esc("; ".join(s.targets) or "n/a")),
+        ("tolerance", esc("; ".join(s.tolerances) or "n/a")),
+        ("time span", esc(span)),
         ("campaign processes", f"{s.processes}"),
         (
             "inputs not evaluated",
@@ -135,12 +101,12 @@ def _summary(data: ReportData, generated: str) -> str:
     ]
     return (
         "<h1>RROSFuzz differential fuzzing report</h1>"
-        f'<p class="sub">Generated {_e(generated)}. Robots, operations, targets and tolerance come from the '
+        f'<p class="sub">Generated {esc(generated)}. Robots, operations, targets and tolerance come from the '
         "crash files' sidecars; counts from the campaign logs.</p>"
         '<div class="cards">'
-        + "".join(f"<div class='card'><b>{v}</b><span>{_e(label)}</span></div>" for v, label in cards)
+        + "".join(f"<div class='card'><b>{v}</b><span>{esc(label)}</span></div>" for v, label in cards)
         + '</div><dl class="facts">'
-        + "".join(f"<dt>{_e(k)}</dt><dd>{v}</dd>" for k, v in facts)
+        + "".join(f"<dt>{esc(k)}</dt><dd>{v}</dd>" for k, v in facts)
         + "</dl>"
     )
 
@@ -150,7 +116,7 @@ def _notes(notes: Sequence[str]) -> str:
         return ""
     return (
         '<div class="warn"><b>About the data</b><ul>'
-        + "".join(f"<li>{_e(n)}</li>" for n in notes)
+        + "".join(f"<li>{esc(n)}</li>" for n in notes)
         + "</ul></div>"
     )
 
@@ -162,11 +128,11 @@ def _table_iii(rows: Sequence[TableRow]) -> str:
         first = i == 0 or rows[i - 1].group != row.group
         span = sum(1 for r in rows if r.group == row.group)
         group = (
-            "" if not first else f"<td rowspan='{span}'>{_e('' if row.group == 'total' else row.group)}</td>"
+            "" if not first else f"<td rowspan='{span}'>{esc('' if row.group == 'total' else row.group)}</td>"
         )
         body.append(
-            f"<tr{css}>{group}<td>{_e(row.label)}</td><td class='num'>{row.count:,}</td>"
-            f"<td class='num'>{_pct(row.proportion)}</td><td class='num'>{_pct(row.share)}</td></tr>"
+            f"<tr{css}>{group}<td>{esc(row.label)}</td><td class='num'>{row.count:,}</td>"
+            f"<td class='num'>{pct(row.proportion)}</td><td class='num'>{pct(row.share)}</td></tr>"
         )
     return (
         '<h2 id="table3">Table III: difference statistics</h2>'
@@ -174,7 +140,7 @@ def _table_iii(rows: Sequence[TableRow]) -> str:
         "<th class='num'>Proportion of executions</th><th class='num'>Share of divergences</th></tr>"
         + "".join(body)
         + "</table><div class='note'><b>Row rules.</b><ul>"
-        + "".join(f"<li>{_e(rule)}</li>" for rule in TABLE_III_RULES)
+        + "".join(f"<li>{esc(rule)}</li>" for rule in TABLE_III_RULES)
         + "</ul></div>"
     )
 
@@ -187,11 +153,11 @@ def _table_iv(rows: Sequence[CloserRow]) -> str:
     for r in rows:
         n = r.compared
         body.append(
-            f"<tr><td><span class='a'>a</span> {_e(r.target_a)}<br>"
-            f"<span class='b'>b</span> {_e(r.target_b)}</td>"
-            f"<td class='num'>{r.a:,}<br>{_pct(r.a / n if n else None)}</td>"
-            f"<td class='num'>{r.b:,}<br>{_pct(r.b / n if n else None)}</td>"
-            f"<td class='num'>{r.tie:,}<br>{_pct(r.tie / n if n else None)}</td>"
+            f"<tr><td><span class='a'>a</span> {esc(r.target_a)}<br>"
+            f"<span class='b'>b</span> {esc(r.target_b)}</td>"
+            f"<td class='num'>{r.a:,}<br>{pct(r.a / n if n else None)}</td>"
+            f"<td class='num'>{r.b:,}<br>{pct(r.b / n if n else None)}</td>"
+            f"<td class='num'>{r.tie:,}<br>{pct(r.tie / n if n else None)}</td>"
             f"<td class='num'>{r.excluded:,}</td></tr>"
         )
     excluded = sum(r.excluded for r in rows)
@@ -210,7 +176,7 @@ def _table_iv(rows: Sequence[CloserRow]) -> str:
 
 
 def _fig6(data: ReportData, png: bytes | None) -> str:
-    return '<h2 id="fig6">Fig. 6: divergences by mutation strategy</h2>' + _figure(
+    return '<h2 id="fig6">Fig. 6: divergences by mutation strategy</h2>' + figure(
         png,
         "Divergences per mutation strategy",
         "Left: divergent executions by the strategy that produced the test case (the last mutator of its "
@@ -231,19 +197,19 @@ def _fig7(data: ReportData, png: bytes | None) -> str:
         if total
         else ""
     )
-    return '<h2 id="fig7">Fig. 7: test cases by number of joints close to zero</h2>' + _figure(
+    return '<h2 id="fig7">Fig. 7: test cases by number of joints close to zero</h2>' + figure(
         png,
         "Test cases by joints close to zero",
         f"How many joint values of each evaluated move or fk test case lie within {nz.threshold} rad (or m) "
         f"of zero; blue over all evaluated test cases, orange over the divergent ones (IK test cases have "
-        f"no joint values and are not counted).{_e(share)}",
+        f"no joint values and are not counted).{esc(share)}",
         "No move or fk test case was evaluated.",
     )
 
 
 def _fig8(data: ReportData, png: bytes | None) -> str:
     d = data.differences
-    return '<h2 id="fig8">Fig. 8: difference information</h2>' + _figure(
+    return '<h2 id="fig8">Fig. 8: difference information</h2>' + figure(
         png,
         "Histogram of log10 differences",
         "Left: the size of each value or representation divergence on a log scale (metres for positions, "
@@ -258,166 +224,13 @@ def _fig8(data: ReportData, png: bytes | None) -> str:
 def _timeline(data: ReportData, png: bytes | None) -> str:
     more = len(data.runs) - MAX_RUNS
     extra = f" Only the latest {MAX_RUNS} of {len(data.runs)} runs are drawn." if more > 0 else ""
-    return '<h2 id="time">Executions and divergences over time</h2>' + _figure(
+    return '<h2 id="time">Executions and divergences over time</h2>' + figure(
         png,
         "Executions and divergences over time",
         "Cumulative executions (left) and divergent executions (right) from stats.jsonl, summed over the "
         "processes of each run and stacked by configuration (the top edge is the total). Processes less than "
-        f"{RUN_GAP_SECONDS:.0f} s apart form one run; each run has its own time axis.{_e(extra)}",
+        f"{RUN_GAP_SECONDS:.0f} s apart form one run; each run has its own time axis.{esc(extra)}",
         "No stats.jsonl snapshots: executions over time are unknown.",
-    )
-
-
-# -- buckets ----------------------------------------------------------------------------------------------
-
-
-def _vector(values: Sequence[float]) -> str:
-    return "(" + ", ".join(_num(v) for v in values) + ")"
-
-
-def _outcomes(view: BucketView) -> str:
-    rows = []
-    for side, o in zip("ab", view.outcomes, strict=False):
-        values = "<br>".join(f"{_e(k)} = {_e(_vector(v))}" for k, v in sorted(o.values.items())) or "-"
-        message = f"<br><small>{_e(o.message)}</small>" if o.message else ""
-        rows.append(
-            f"<tr><td><span class='{side}'>{side}</span> {_e(o.target)}</td><td>{_e(o.label)}{message}</td>"
-            f"<td><code>{values}</code></td></tr>"
-        )
-    return (
-        "<table><tr><th>Target</th><th>Outcome</th><th>Values (m, rad, quaternion x y z w)</th></tr>"
-        + "".join(rows)
-        + "</table>"
-    )
-
-
-def _command(view: BucketView) -> list[float] | None:
-    call = view.call or {}
-    positions, names = call.get("positions"), call.get("names")
-    if call.get("kind") != "MoveCall" or not isinstance(positions, list):
-        return None
-    if names is None and len(positions) == len(view.joint_names):
-        return [float(x) for x in positions]
-    if (
-        isinstance(names, list)
-        and sorted(map(str, names)) == sorted(view.joint_names)
-        and len(names) == len(positions)
-    ):
-        given = dict(zip(map(str, names), positions, strict=True))
-        return [float(given[n]) for n in view.joint_names]
-    return None
-
-
-def _joints(view: BucketView) -> str:
-    finals = [o.values.get("joint_values") for o in view.outcomes]
-    command = _command(view)
-    if not view.joint_names or (not any(finals) and command is None):
-        return ""
-    differing = set((view.signature or {}).get("joints") or [])
-    head = "<tr><th>Joint</th>" + ("<th class='num'>commanded</th>" if command else "")
-    head += "".join(f"<th class='num'><span class='{s}'>{s}</span> final</th>" for s in "ab")
-    head += "<th class='num'>|a - b|</th></tr>"
-    rows = []
-    for i, name in enumerate(view.joint_names):
-        cells = [f"<td>{_e(name)}</td>"]
-        if command:
-            cells.append(f"<td class='num'>{_num(command[i])}</td>")
-        got = [f[i] if f and i < len(f) else None for f in [*finals, None, None][:2]]
-        cells += [f"<td class='num'>{'-' if v is None else _num(v)}</td>" for v in got]
-        delta = abs(got[0] - got[1]) if got[0] is not None and got[1] is not None else None
-        cells.append(f"<td class='num'>{'-' if delta is None else _num(delta)}</td>")
-        css = " class='hot'" if i in differing else ""
-        rows.append(f"<tr{css}>{''.join(cells)}</tr>")
-    return (
-        "<table>" + head + "".join(rows) + "</table><p class='note'>Joint values in rad (m for prismatic "
-        "joints), as the sidecar recorded them; highlighted rows are the joints the signature names.</p>"
-    )
-
-
-def _subcommand(replay: str, command: str) -> str:
-    """The replay command line turned into another subcommand on the same file."""
-    return replay.replace(" fuzz_diff.py ", f" fuzz_diff.py {command} ", 1)
-
-
-def _bucket(index: int, view: BucketView, arm: ArmView | None, steps: str = "") -> str:
-    badge = f"<span class='badge {_kind_class(view.kind)}'>{_e(view.kind)}</span>"
-    title = (
-        f"<h3 id='bucket-{_e(view.key)}'>{index}. {badge}<code>{_e(view.key)}</code> "
-        f"{_e(view.description)}</h3>"
-    )
-    files = f"<code>{_e(view.representative)}</code>"
-    if view.minimized:
-        files += f"<br>minimized: <code>{_e(view.minimized)}</code>"
-    if not view.has_sidecar:
-        return (
-            f"<article class='bucket'>{title}<dl class='facts'>"
-            f"<dt>file</dt><dd>{files} ({view.size:,} bytes)</dd>"
-            f"<dt>replay</dt><dd><code>{_e(view.replay)}</code> plus the campaign's options (--robot, --op, "
-            "--targets): there is no sidecar to record them.</dd></dl>"
-            f"<p>libFuzzer wrote this file itself: a target died (native crash) or hung (timeout). "
-            f"First bytes:</p><pre>{_e(view.preview) or '(empty)'}</pre></article>"
-        )
-    sig = view.signature or {}
-    sig_rows = "".join(
-        f"<tr><th>{_e(k)}</th><td>{_e(sig.get(k))}</td></tr>"
-        for k in ("op", "kind", "field", "outcome_a", "outcome_b", "joint_types", "target")
-    )
-    lineage = " → ".join(_e(s) for s in view.lineage) or "(none: a generated seed)"
-    if view.lineage_length > len(view.lineage):
-        lineage = f"... ({view.lineage_length - len(view.lineage)} earlier) → " + lineage
-    facts = [
-        ("divergent executions", f"{view.count:,}"),
-        ("configuration", _e(config_label(view.config))),
-        ("tolerance", _e(tolerance_label(view.config or {}))),
-        ("difference", "n/a" if view.difference is None else _e(f"{_num(view.difference)} {view.unit}")),
-        ("files", files),
-        ("replay", f"<code>{_e(view.replay)}</code>"),
-        ("in RViz", f"<code>{_e(_subcommand(view.replay, 'view'))}</code>"),
-        ("as a bag", f"<code>{_e(_subcommand(view.replay, 'export-bag'))}</code>"),
-        ("lineage", f"seed #{_e(view.sequence)} ({_e(view.origin)}) → {lineage}"),
-        ("written", _e(view.written)),
-    ]
-    if arm is None:
-        picture = ""
-    else:
-        notes = "".join(f"<li>{_e(n)}</li>" for n in arm.notes if n)
-        if arm.png is not None:
-            picture = (
-                f"<figure>{_img(arm.png, 'arm of both targets for ' + view.key)}"
-                "<figcaption>Where each target "
-                "leaves the arm after re-running this test case (links of each target's own model, root to "
-                "tip; diamonds mark the last link). Identical arms overlap: solid a, dashed b."
-                f"<ul>{notes}</ul></figcaption></figure>"
-            )
-        else:
-            picture = f"<div class='warn'><b>No 3D view.</b><ul>{notes}</ul></div>"
-    return (
-        f"<article class='bucket'>{title}<div class='cols'><div>"
-        "<dl class='facts'>" + "".join(f"<dt>{_e(k)}</dt><dd>{v}</dd>" for k, v in facts) + "</dl>"
-        f"<table>{sig_rows}</table></div><div>{picture}</div></div>"
-        f"<h3>Outcomes</h3>{_outcomes(view)}{_joints(view)}{steps}"
-        f"<h3>Test case <small>({_e(view.msg_type)})</small></h3><pre>{_e(view.message)}</pre></article>"
-    )
-
-
-def _buckets(data: ReportData, arms: Mapping[str, ArmView], scenarios: Mapping[str, str]) -> str:
-    head = f'<h2 id="buckets">Buckets: {len(data.views)} distinct problem(s), most severe first</h2>'
-    if not data.views:
-        return head + "<p class='note'>No crash files in this folder: nothing to triage.</p>"
-    index = (
-        "<nav class='buckets'><ol>"
-        + "".join(
-            f"<li><a href='#bucket-{_e(v.key)}'>{_e(v.kind)} x{v.count:,}: {_e(v.description)}</a></li>"
-            for v in data.views
-        )
-        + "</ol></nav>"
-    )
-    return (
-        head
-        + index
-        + "".join(
-            _bucket(i, v, arms.get(v.key), scenarios.get(v.key, "")) for i, v in enumerate(data.views, 1)
-        )
     )
 
 
@@ -463,13 +276,13 @@ def render(
             _fig7(data, figures.get("fig7")),
             _fig8(data, figures.get("fig8")),
             _timeline(data, figures.get("timeline")),
-            _buckets(data, arms, scenarios or {}),
+            buckets_section(data, arms, scenarios or {}),
         ]
     title = f"RROSFuzz report: {data.directory.name or data.directory}"
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f"<title>{_e(title)}</title><style>{CSS}</style></head><body><main>"
+        f"<title>{esc(title)}</title><style>{CSS}</style></head><body><main>"
         + "".join(parts)
         + "</main></body></html>\n"
     )
