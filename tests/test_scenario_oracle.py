@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
 from fuzzer.execution.evaluate import Evaluator, history_of, stored_call
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.execution.targets import Runner
@@ -575,6 +576,47 @@ def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -
     ]
     correct = evaluator("scenario", "python").evaluate(case, validated=True)
     assert correct.comparison.kind is Kind.AGREE
+
+
+DOWN_THROUGH_THE_BASE = {
+    "position": {"x": 0.0, "y": 0.0, "z": -3.14155},
+    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+}
+
+
+def test_a_path_that_kdls_rotation_dead_zone_alone_stops_elsewhere_is_a_known_limitation() -> None:
+    """control@scenario/probot_anno, seed 1, in a 60-s campaign of a87a17c, minimized: the
+    unmodified twin against native. From joint_1 and joint_4 7e-6 and 4e-6 rad inside their
+    lower limits, a wrist near singular, a path down through the base. At its second waypoint
+    the orientation is already held to 1.5e-8 rad: KDL's diff reports no rotation (its dead
+    zone), the twin's exact logarithm 1.5e-8 rad, which the pseudo-inverse turns into a joint_4
+    step that crosses its limit. Clamped there, the twin stalls at 2.4e-6 rad and stops after 1
+    of 313 waypoints; native goes on to 9. No nudge moves either extent. With KDL's dead zone
+    in the twin (``fuzzer.execution.dead_zone``) the two agree."""
+    start = [-math.pi, -math.pi / 2, 0.0, -math.pi, math.pi / 2, 0.0]
+    steps = [
+        live("joint_target", position=start),
+        live("go"),
+        live("cartesian_path", header=HEADER, poses=[DOWN_THROUGH_THE_BASE]),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    found = evaluator("scenario", "python").evaluate(case, validated=True)
+    c = found.comparison
+    assert (c.kind, c.step, c.field) == (Kind.KNOWN_LIMITATION, 2, "cartesian_path.fraction")
+    assert [o.steps[2].values["fraction"] for o in found.outcomes] == [
+        (pytest.approx(9 / 313),),
+        (pytest.approx(1 / 313),),
+    ]
+
+
+def test_the_dead_zone_does_not_hide_a_path_a_faulty_ik_completes() -> None:
+    """The re-run with the dead zone asks whether the two targets then agree: ik_seed_band's
+    twin still returns its seed as a solution, so its path still "completes"."""
+    steps = [live("cartesian_path", header={**HEADER, "frame_id": "link_4"}, poses=[FAR_WAYPOINT])]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    with twin_with_kdl_dead_zone():
+        again = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").run_both(to_call(case.message))
+    assert [o.steps[0].values["fraction"] for o in again] == [(pytest.approx(0.10577, abs=1e-4),), (1.0,)]
 
 
 NEAR_TOP = {

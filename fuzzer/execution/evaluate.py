@@ -46,6 +46,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fuzzer.execution import ik_check, oracle
+from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
@@ -265,7 +266,7 @@ class Evaluator:
         if isinstance(call, ScenarioCall):
             if self._at_ik_step(call, outcomes, comparison):
                 judged = self._scenario_ik(call, outcomes, comparison, fresh or self.fresh())
-                if judged.kind is Kind.ILL_CONDITIONED:
+                if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
                     pair = (outcomes[0], outcomes[1])
                     judged = prefer(judged, first_property(call, pair, self.scenario_facts))
                 return judged, outcomes
@@ -319,7 +320,10 @@ class Evaluator:
         (``ik_answer_changed``), or, for a divergence of how far a path got (``EXTENT_FIELDS``:
         its fraction or point count), if a target's path ends elsewhere (``extent_changed``):
         points that move under a nudge near a singularity do not explain a path that stops at
-        10% on one target and completes on the other whatever the nudge."""
+        10% on one target and completes on the other whatever the nudge. Last, the scenario is
+        run once more with KDL's rotation dead zone in the twin (``dead_zone``): if the two
+        targets then agree at that step, the documented dead zone is the whole difference,
+        ``known_limitation``."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
@@ -346,6 +350,11 @@ class Evaluator:
                     continue
                 if step >= len(second.steps) or changed(first.steps[step], second.steps[step]):
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
+        with twin_with_kdl_dead_zone() as swapped:  # KDL's documented dead zone in the twin
+            again = self.run_both(call, runners=runners) if swapped else ()
+        explained = len(again) == 2 and all(step < len(o.steps) for o in again)
+        if explained and not changed(again[0].steps[step], again[1].steps[step]):
+            return replace(comparison, kind=Kind.KNOWN_LIMITATION)
         return comparison
 
 
