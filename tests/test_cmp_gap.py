@@ -77,6 +77,19 @@ def _comprehensions(code: types.CodeType) -> list[types.CodeType]:
 
 
 @pytest.fixture
+def table() -> Iterator[ComparedValues]:
+    """A comparison table fed by the float tracer while the test runs (Atheris' own function
+    put back after)."""
+    values = ComparedValues()
+    tracer = FloatCompareTracer(Features(enabled=False), compared=values)
+    tracer.install(budget=0)
+    try:
+        yield values
+    finally:
+        atheris._trace_cmp = tracer.inner
+
+
+@pytest.fixture
 def traced() -> Iterator[list[tuple[Any, ...]]]:
     """Every call of ``atheris._trace_cmp`` while the test runs."""
     calls: list[tuple[Any, ...]] = []
@@ -139,20 +152,14 @@ def test_comparisons_in_comprehensions_are_traced_without_edge_counters(
     assert "_trace_branch" in lam.co_names
 
 
-def test_a_band_tested_inside_a_comprehension_becomes_two_thresholds() -> None:
+def test_a_band_tested_inside_a_comprehension_becomes_two_thresholds(table: ComparedValues) -> None:
     """``wrap_past_pi``'s ``4.0 <= v < 4.05`` was invisible to the comparison table before."""
     copy = _copy(band_per_element)
     instrument_functions([copy], atheris, None)
-    table = ComparedValues()
-    tracer = FloatCompareTracer(Features(enabled=False), compared=table)
-    tracer.install(budget=0)
-    try:
-        for v in (0.1, 3.0, 5.0, 6.2):
-            copy([v])
-        assert {4.0, 4.05} <= set(table.thresholds.values())
-        assert 4.05 in table.unsolved()  # v < 4.05 only ever reached with v >= 4.05 or v < 4.0
-    finally:
-        atheris._trace_cmp = tracer.inner
+    for v in (0.1, 3.0, 5.0, 6.2):
+        copy([v])
+    assert {4.0, 4.05} <= set(table.thresholds.values())
+    assert 4.05 in table.unsolved()  # v < 4.05 only ever reached with v >= 4.05 or v < 4.0
 
 
 def test_code_atheris_already_instrumented_is_left_as_it_is() -> None:
@@ -190,23 +197,17 @@ def test_two_literals_stay_untraced() -> None:
     assert [copy(True), copy(False)] == [1, 0]
 
 
-def test_the_upper_edge_of_a_band_in_a_condition_becomes_a_threshold() -> None:
+def test_the_upper_edge_of_a_band_in_a_condition_becomes_a_threshold(table: ComparedValues) -> None:
     """Without the pass the table only ever learned 0.3 (the ``ik_seed_band`` zoo bug)."""
     copy = _copy(seed_band)
     instrument_functions([copy], atheris, None)
-    table = ComparedValues()
-    tracer = FloatCompareTracer(Features(enabled=False), compared=table)
-    tracer.install(budget=0)
-    try:
-        for x in (0.0, 0.5, 1.0, 2.0):
-            copy([x])
-        assert sorted(table.thresholds.values()) == [0.3, 0.31]
-        assert table.unsolved() == [0.31]  # x < 0.31 only ever reached with x >= 0.31
-        assert table.crossing(2.0) == [0.31] and table.crossing(0.7) == []
-        rng = random.Random(0)
-        assert table.pick(rng) is not None
-    finally:
-        atheris._trace_cmp = tracer.inner
+    for x in (0.0, 0.5, 1.0, 2.0):
+        copy([x])
+    assert sorted(table.thresholds.values()) == [0.3, 0.31]
+    assert table.unsolved() == [0.31]  # x < 0.31 only ever reached with x >= 0.31
+    assert table.crossing(2.0) == [0.31] and table.crossing(0.7) == []
+    rng = random.Random(0)
+    assert table.pick(rng) is not None
 
 
 def test_install_is_idempotent_and_skips_a_stand_in() -> None:
