@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from fuzzer import reporting
+from fuzzer import dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
@@ -34,6 +34,7 @@ from fuzzer.generation.corpus import (
     write_seeds,
 )
 from fuzzer.input.testcase import TestCase
+from fuzzer.mutation.dictionary import parse_dictionary
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
@@ -74,22 +75,6 @@ class CampaignOptions:
     """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
 
 
-def parse_dictionary(path: str) -> list[str | float]:
-    """Tokens of a libFuzzer -dict file (``name="value"`` or ``"value"`` lines)."""
-    tokens: list[str | float] = []
-    for raw in Path(path).read_text(encoding="utf-8", errors="replace").splitlines():
-        line = raw.strip()
-        if not line or line.startswith("#") or '"' not in line:
-            continue
-        body = line[line.index('"') + 1 : line.rindex('"')]
-        text = body.encode("latin-1", "backslashreplace").decode("unicode_escape", "replace")
-        try:
-            tokens.append(float(text))
-        except ValueError:
-            tokens.append(text)
-    return tokens
-
-
 def field_types(session: Session, msg_type: str, prefix: str = "") -> dict[str, str]:
     """Dotted path -> ROS builtin type of every mutable leaf (arrays of messages are left out)."""
     out: dict[str, str] = {}
@@ -128,15 +113,11 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     deadline = child_deadline()
     if deadline is not None and time.time() >= deadline:
         os._exit(0)  # a -fork job or merge started after the budget: nothing left to do
-    import atheris
-
-    instrument(config)
-    from fuzzer.harness import Harness
-    from fuzzer.mutation import mutators
-    from fuzzer.selection.guidance import Features
-
+    started = time.time()  # crash files since then are this run's (the dry run's included)
+    # the targets load before Atheris (for fuzzer.dry_run); ``instrument`` rewrites them in place
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
+    supervisor = not child and supervises(options.libfuzzer_flags)
     if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
         from fuzzer.artifacts.travel import record_corpus
 
@@ -154,6 +135,15 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             + (" ..." if len(store.recovered) > 5 else "")
         )
 
+    recorded_versions = versions()
+    digest = session.robot_digest()
+
+    def sidecar(case: TestCase, data: bytes, ev: Any) -> dict[str, Any]:
+        return build_sidecar(session, case, data, ev, recorded_versions, digest)
+
+    evaluator = session.evaluator()
+    dry: dry_run.DryRun | None = None
+    dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
     usable, seeds = prescan(session, folders) if not child else (1, [])
     if options.seeds_from_bag is not None and not child and folders:
         from_bag = bag_seeds(session, options.seeds_from_bag)
@@ -168,13 +158,16 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     filling: list[TestCase] = []
     if wanted and not child and folders:
         generated = make_seeds(session, wanted, options.seed)
-        # the full engine's corpus also starts with as many points covering the joint space
-        # (one for IK, whose inputs are slow: corpus.SLOW_OP_SPACEFILL_SEEDS)
-        filling = (
-            space_filling_seeds(session, space_filling_count(config.op, wanted), options.seed, len(generated))
-            if options.mutator == "rrosfuzz"
-            else []
-        )
+        if dry_ok:  # fuzzer.dry_run: a child evaluates them while libFuzzer starts
+            joints = tuple(session.reference.joint_names)
+            dry = dry_run.launch(
+                lambda: dry_run.harness(evaluator, store, CampaignLog(artifacts), sidecar, generated, joints),
+                generated,
+                int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
+            )
+        # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
+        count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
+        filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
         write_seeds(folders[0], generated + filling)
         seeds = generated + seeds
         reporting.info(
@@ -184,6 +177,15 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         )
     if not seeds:
         seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
+    if dry is not None:
+        reporting.info(f"dry run: process {dry.pid} evaluates the Hypothesis seeds before libFuzzer does")
+
+    import atheris
+
+    instrument(config)
+    from fuzzer.harness import Harness
+    from fuzzer.mutation import mutators
+    from fuzzer.selection.guidance import Features
 
     limits = session.reference.joint_limits
     lower = tuple(lim.lower for lim in limits)
@@ -208,19 +210,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         focus=focus,
     )
 
-    recorded_versions = versions()
-    digest = session.robot_digest()
-
-    def sidecar(case: TestCase, data: bytes, ev: Any) -> dict[str, Any]:
-        return build_sidecar(session, case, data, ev, recorded_versions, digest)
-
     features = Features()
     search = search_parts(session, options.mutator, options.seed, features, seeded=len(filling))
     context.compared = search["float_tracer"].compared  # what the targets compare floats against
     harness = Harness(
         **_scenario_mutators(session),
         **search,
-        evaluator=session.evaluator(),
+        evaluator=evaluator,
         store=store,
         features=features,
         context=context,
@@ -233,7 +229,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         joint_names=tuple(session.reference.joint_names),
     )
     total = flag_value(options.libfuzzer_flags, "-max_total_time")
-    supervisor = not child and supervises(options.libfuzzer_flags)
     progress = reporting.Progress(
         harness.stats,
         features,
@@ -245,7 +240,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     from fuzzer.exit_hook import flush_all, on_exit
 
-    started = time.time()
     timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
 
     def shown(path: Path) -> str:
@@ -255,6 +249,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         progress.close()
         if harness.stats.execs:
             harness.maybe_snapshot(force=True)
+        if dry is not None:  # its crash files are this run's, even one it died writing
+            dry.wait()
+            store.recovered = [*store.recovered, *store.recover()]
         found = new_artifacts(artifacts, started)
         if store.recovered:  # completed for a killed run that never reported them: new to the user
             recovered = [artifacts / name for name in store.recovered]
@@ -304,7 +301,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
     if not child and total and is_number(total) and int_flag(options.libfuzzer_flags, "-fork", 0) > 0:
-        os.environ[DEADLINE_ENV] = repr(started + float(total))
+        os.environ[DEADLINE_ENV] = repr(time.time() + float(total))
     if not child and int_flag(options.libfuzzer_flags, "-jobs", 0) > 0:
         if os.environ.get("PYTHONPATH"):  # the jobs import plugin targets from it
             entries = os.environ["PYTHONPATH"].split(os.pathsep)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pytest
 
+from fuzzer import dry_run
 from fuzzer.artifacts.store import KILL_HOOK, STALE_SECONDS, ArtifactStore, clean_temporaries, crash_name
 from fuzzer.input.testcase import decode
 
@@ -247,7 +248,10 @@ def test_campaigns_killed_at_random_points_lose_no_divergence(tmp_path: Path) ->
         common = (str(corpus), f"--artifacts={artifacts}", *options)
         if i < 3:
             point = points[i]
-            killed = fuzz(*common, "-runs=20000", f"-seed={i + 1}", env={KILL_HOOK: f"{point}:1"})
+            # the campaign process itself records first: without the dry run (test_dry_run.py
+            # kills the dry run's child in its write window)
+            env = {KILL_HOOK: f"{point}:1", dry_run.ENV: "0"}
+            killed = fuzz(*common, "-runs=20000", f"-seed={i + 1}", env=env)
             assert killed.returncode == -signal.SIGKILL, (point, killed.stderr[-2000:])
         else:
             proc = subprocess.Popen(

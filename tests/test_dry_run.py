@@ -1,0 +1,246 @@
+"""The full engine's dry run (fuzzer/dry_run.py): the generated seeds are evaluated in a child
+process while libFuzzer starts; what the child cannot survive, libFuzzer reports."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fuzzer import dry_run
+from fuzzer.execution.session import RunConfig
+from tests.support import ROOT, fuzz
+
+ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
+EVERY_INPUT = "benchmarks.zoo.bugs:axis_not_normalized"
+"""A fault that every fk input of the zoo arm shows (a joint axis used without normalizing)."""
+
+
+def _records(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+@pytest.mark.parametrize(
+    ("op", "transport", "mutator", "several", "stop", "expected"),
+    [
+        ("fk", "inprocess", "rrosfuzz", False, False, True),
+        ("move", "inprocess", "rrosfuzz", False, False, True),
+        ("ik", "inprocess", "rrosfuzz", False, False, False),  # slow seeds: twice costs more than it saves
+        ("scenario", "inprocess", "rrosfuzz", False, False, False),
+        ("move", "ros", "rrosfuzz", False, False, False),
+        ("move", "inprocess", "libfuzzer", False, False, False),  # the baselines keep libFuzzer's start
+        ("move", "inprocess", "weights", False, False, False),
+        ("move", "inprocess", "rrosfuzz", True, False, False),  # -fork / -jobs
+        ("move", "inprocess", "rrosfuzz", False, True, False),  # --stop-on-divergence
+    ],
+)
+def test_the_dry_run_is_for_the_full_engine_on_cheap_ops_in_one_process(
+    op: str, transport: str, mutator: str, several: bool, stop: bool, expected: bool
+) -> None:
+    config = RunConfig(op=op, transport=transport)
+    assert dry_run.applies(config, mutator, several, stop) is expected
+
+
+def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_path: Path) -> None:
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    run = fuzz(
+        str(corpus),
+        "-max_total_time=2",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--no-progress",
+        f"--robot={ZOO_ARM}",
+        "--op=fk",
+        f"--targets=native,{EVERY_INPUT}",
+    )
+    assert run.returncode == 1, run.stderr[-3000:]  # new divergences
+    assert "Traceback" not in run.stderr
+    assert "evaluates the Hypothesis seeds before libFuzzer does" in run.stderr
+    stats = _records(artifacts / "stats.jsonl")
+    campaign = stats[-1]["pid"]  # the campaign's final snapshot is the last line
+    dry = {r["pid"] for r in stats} - {campaign}
+    assert len(dry) == 1, "one dry-run process logged its counters"
+    (child,) = dry
+    child_stats = [r for r in stats if r["pid"] == child]
+    assert child_stats[-1]["execs"] == 32, "the 32 Hypothesis seeds"
+    first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
+    assert min(r["first_input"] for r in child_stats) < first_of_campaign
+    divergences = _records(artifacts / "divergences.jsonl")
+    assert divergences[0]["pid"] == child and divergences[0]["strategy"] == "seed"
+    # the campaign meets the same seeds again: one crash file per signature all the same
+    signatures = {r["sig"] for r in divergences}
+    assert {r["pid"] for r in divergences} == {child, campaign}
+    crashes = sorted(p for p in artifacts.glob("crash-*") if p.suffix != ".json")
+    assert len(crashes) == len(signatures)
+    assert all(Path(f"{p}.json").is_file() for p in crashes)
+    for crash in crashes:  # listed in the campaign's summary, which waited for the child
+        assert crash.name in run.stderr
+
+
+def test_the_baselines_have_no_dry_run(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=100",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--no-progress",
+        "--mutator=weights",
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "dry run" not in run.stderr
+    assert len({r["pid"] for r in _records(artifacts / "stats.jsonl")}) == 1
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def test_a_child_that_dies_leaves_the_campaign_running() -> None:
+    dry = dry_run.DryRun.start(os.abort, budget=30)  # as a native crash on a seed would
+    assert dry is not None
+    assert dry.wait() == -signal.SIGABRT
+    assert dry.wait() is None, "reaped once"
+    assert _gone(dry.pid)
+
+
+def test_a_child_that_hangs_ends_at_its_budget_even_in_compiled_code() -> None:
+    dry = dry_run.DryRun.start(signal.pause, budget=1)  # blocked in a system call, never back in Python
+    assert dry is not None
+    assert dry.wait() == -signal.SIGALRM  # the alarm's default action, not a Python handler
+    assert _gone(dry.pid)
+
+
+def test_a_child_that_ignores_its_alarm_is_killed_when_its_budget_is_spent() -> None:
+    def stubborn() -> None:
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        while True:
+            time.sleep(0.05)
+
+    dry = dry_run.DryRun.start(stubborn, budget=1)
+    assert dry is not None
+    assert dry.wait() == -signal.SIGKILL
+    assert _gone(dry.pid)
+
+
+def test_a_child_that_raises_exits_1_quietly_without_the_parents_exit_hooks(tmp_path: Path) -> None:
+    # in a fresh interpreter, so that the exit hooks are the test's own
+    marker = tmp_path / "hooks"
+    program = f"""
+import atexit, os
+from fuzzer import dry_run
+def hook():
+    with open({str(marker)!r}, "a") as f:
+        f.write(f"{{os.getpid()}}\\n")
+atexit.register(hook)
+def fail():
+    raise ValueError("a seed's evaluation raised")
+dry = dry_run.DryRun.start(fail, budget=30)
+print(dry.wait(), os.getpid(), flush=True)
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", program],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    status, parent = done.stdout.split()
+    assert status == "1"
+    assert "Traceback" not in done.stderr  # libFuzzer runs that seed next and reports what it raises
+    assert marker.read_text().split() == [parent], "the exit hooks ran once, in the parent"
+
+
+def test_targets_opened_before_atheris_are_instrumented_all_the_same() -> None:
+    """The campaign now opens its session before importing Atheris (the dry run needs the
+    targets first); ``instrument`` rewrites their functions in place afterwards, so every
+    function of the twin and the oracle alive in the campaign is instrumented (the ``__repr__``
+    that ``dataclasses`` makes with ``reprlib`` never was, in either order)."""
+    program = """
+import gc, types
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.selection.instrument import instrument
+for op in ("fk", "move", "scenario"):
+    config = RunConfig(op=op)
+    session = Session.open(config)
+    instrument(config)
+    session.evaluator()
+    done, missing = 0, set()
+    for obj in gc.get_objects():
+        module = getattr(obj, "__module__", None) or ""
+        if isinstance(obj, types.FunctionType) and module.startswith(("python_impl", "fuzzer.execution.o")):
+            if "__ATHERIS_INSTRUMENTED__" in obj.__code__.co_consts:
+                done += 1
+            elif "__create_fn__" not in obj.__qualname__:
+                missing.add(obj.__qualname__)
+    print(op, done, sorted(missing))
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", program],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    lines = done.stdout.splitlines()
+    assert len(lines) == 3, done.stdout
+    for line in lines:
+        _, count, missing = line.split(" ", 2)
+        assert missing == "[]", line
+        assert int(count) > 100, line
+
+
+@pytest.mark.parametrize("point", ["claim", "sidecar"])
+def test_a_dry_run_killed_while_writing_a_crash_file_loses_nothing(tmp_path: Path, point: str) -> None:
+    """The child claims a signature and dies in the write window (``KILL_HOOK``): the campaign
+    cannot claim that signature again, so it completes the file from the child's temporaries
+    once the child is gone, and reports it (exit 1) in the same run."""
+    from fuzzer.artifacts.store import KILL_HOOK, sidecar_path
+
+    artifacts = tmp_path / "artifacts"
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "fuzz_diff.py"),
+            str(tmp_path / "corpus"),
+            "-runs=300",
+            "-seed=1",
+            f"--artifacts={artifacts}",
+            "--no-progress",
+            "--robot=kinova",
+            "--targets=native,tests.plugins.faults:wrap_continuous",
+        ],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT), **{KILL_HOOK: f"{point}:1"}),
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert run.returncode == 1, run.stderr[-3000:]
+    assert "Traceback" not in run.stderr
+    crashes = sorted(p for p in artifacts.glob("crash-*") if p.suffix != ".json")
+    assert crashes and all(sidecar_path(p).is_file() for p in crashes)
+    assert not list(artifacts.glob(".tmp-*")), "no temporary left behind"
+    markers = [m for m in (artifacts / ".signatures").iterdir() if not m.name.startswith(".")]
+    named = {m.read_text().strip() for m in markers}
+    assert named == {p.name for p in crashes}, "every claimed signature has its crash file"
+    for crash in crashes:
+        assert crash.name in run.stderr
