@@ -12,15 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
-from fuzzer.cli import UsageError, _config, _config_options, _replay_parser, _trust_option
+from fuzzer.cli_options import UsageError, config_from, config_options, replay_parser, trust_option
 from fuzzer.execution.session import ConfigError
 
 
 def replay_main(argv: Sequence[str]) -> int:
     from fuzzer.triage.replay import replay_file, source_of
 
-    args = _replay_parser().parse_args(argv)
-    base, given = _config(args)
+    args = replay_parser().parse_args(argv)
+    base, given = config_from(args)
     sessions: dict[Any, Any] = {}
     diverging = errors = 0
     files = _inputs(args.paths)
@@ -100,7 +100,7 @@ def minimize_main(argv: Sequence[str]) -> int:
         "configuration their sidecars record (options given here override it).",
     )
     parser.add_argument("paths", nargs="+", type=Path, help="crash files with sidecars (globs work)")
-    _config_options(parser)
+    config_options(parser)
     parser.add_argument("--budget", type=int, default=2000, help="evaluations per file (default 2000)")
     parser.add_argument(
         "-o",
@@ -112,7 +112,7 @@ def minimize_main(argv: Sequence[str]) -> int:
     args = parser.parse_args(argv)
     if args.budget < 1:
         raise UsageError("--budget must be >= 1")
-    _, given = _config(args)
+    _, given = config_from(args)
     files = _inputs(args.paths, folders=False)
     if args.output is not None:
         from fuzzer.input.paths import prepare_folder
@@ -158,7 +158,7 @@ def report_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("directory", type=Path)
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default DIR/report)")
-    _trust_option(parser)
+    trust_option(parser)
     args = parser.parse_args(argv)
     if not args.directory.is_dir():
         raise UsageError(f"{args.directory}: not a folder")
@@ -185,7 +185,7 @@ def promote_main(argv: Sequence[str]) -> int:
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
     parser.add_argument("--suite", type=Path, default=SUITE, help=f"suite folder (default {SUITE})")
-    _trust_option(parser)
+    trust_option(parser)
     args = parser.parse_args(argv)
     status = 0
     for crash in _inputs(args.crash, folders=False):
@@ -206,7 +206,7 @@ def coverage_main(argv: Sequence[str]) -> int:
         prog="fuzz_diff.py coverage", description="Line and branch coverage of python_impl over a corpus."
     )
     parser.add_argument("corpus", nargs="+", type=Path)
-    _config_options(parser)
+    config_options(parser)
     parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
     args = parser.parse_args(argv)
     from fuzzer.input.paths import PathError, check_input_file
@@ -218,7 +218,7 @@ def coverage_main(argv: Sequence[str]) -> int:
     from fuzzer.artifacts.travel import adopt_manifest
 
     adopt_manifest(args, [p for p in args.corpus if p.is_dir()])
-    config, _ = _config(args)
+    config, _ = config_from(args)
     from fuzzer.artifacts.travel import check_manifests
 
     check_manifests([p for p in args.corpus if p.is_dir()], config)

@@ -16,7 +16,8 @@ from typing import Any
 
 import pytest
 
-from fuzzer.execution.evaluate import Evaluator, history_of
+from fuzzer.execution.evaluate import Evaluator
+from fuzzer.execution.history import history_of
 from fuzzer.execution.oracle import compare
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, describe, signature_of
 from fuzzer.execution.session import RunConfig, Session

@@ -25,7 +25,8 @@ from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_regist
 from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
 from fuzzer.selection.compared import ComparedValues
 from fuzzer.selection.guidance import START, Features, step_bigrams
-from fuzzer.triage.minimize import Minimizer, ddmin, joints_that_matter
+from fuzzer.triage.ddmin import ddmin
+from fuzzer.triage.minimize import Minimizer, joints_that_matter
 
 REGISTRY = MessageRegistry()
 MAX = 12

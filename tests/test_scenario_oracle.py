@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
-from fuzzer.execution.evaluate import Evaluator, history_of, stored_call
+from fuzzer.execution.evaluate import Evaluator
+from fuzzer.execution.history import history_of, stored_call
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance

@@ -47,10 +47,11 @@ from typing import Any
 
 from fuzzer.execution import ik_check, oracle
 from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
+from fuzzer.execution.history import HISTORY, AnyCall, stored_call
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
-from fuzzer.input.mapping import Call, IkCall, call_from_json, call_to_json
+from fuzzer.input.mapping import IkCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
 from fuzzer.scenario.nudge import AXIS, Moved, Nudge
@@ -58,18 +59,14 @@ from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, 
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, state_gap
 from fuzzer.scenario.oracle_properties import first_property
-from fuzzer.scenario.steps import ScenarioCall, ScenarioError, to_call, to_message
+from fuzzer.scenario.steps import ScenarioCall
 from robot_api.errors import RobotAPIError
 from robot_api.records import JointType
 
 ABSURD = 1e6
 """Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
 
-HISTORY = 32
-"""Calls on the campaign's targets kept for a ``state_dependent`` divergence's sidecar."""
-
 Seeds = tuple[tuple[float, ...] | None, ...]
-AnyCall = Call | ScenarioCall
 
 
 class Verdict:
@@ -368,39 +365,3 @@ def scenario_outcome(runner: Runner, call: ScenarioCall, nudge: Nudge | None = N
         raise
     except BaseException as exc:  # noqa: BLE001 - a crash of the target is a finding
         return Outcome(Status.CRASHED, type(exc).__name__, None, str(exc)[:500])
-
-
-def stored_call(call: AnyCall, seed: tuple[float, ...] | None = None) -> dict[str, Any]:
-    """A call as plain JSON data (a scenario as its message)."""
-    if isinstance(call, ScenarioCall):
-        return {"kind": "ScenarioCall", "message": to_message(call)}
-    return call_to_json(call, seed)
-
-
-def history_of(sidecar: dict[str, Any] | None) -> list[tuple[AnyCall, tuple[float, ...] | None]]:
-    """The call history a sidecar records (``[]`` without one).
-
-    Raises
-    ------
-    ValueError
-        When it is not a list of calls (``fuzzer.input.mapping.CallError`` names the field).
-    """
-    raw = sidecar.get("history", []) if isinstance(sidecar, dict) else []
-    if not isinstance(raw, list):
-        raise ValueError("'history' must be a list of calls")
-    if len(raw) > 10 * HISTORY:
-        raise ValueError(f"'history' holds {len(raw)} calls, more than {10 * HISTORY}")
-    return [_stored(item) for item in raw]
-
-
-def _stored(item: Any) -> tuple[AnyCall, tuple[float, ...] | None]:
-    if isinstance(item, dict) and item.get("kind") == "ScenarioCall":
-        from fuzzer.input.msgdef import MessageRegistry
-        from fuzzer.scenario.steps import MAX_STEPS_LIMIT, validate
-
-        try:
-            validate(item.get("message"), MessageRegistry(), MAX_STEPS_LIMIT)
-        except ScenarioError as exc:
-            raise ValueError(f"a stored scenario in 'history': {exc}") from None
-        return to_call(item["message"]), None
-    return call_from_json(item)

@@ -17,7 +17,7 @@ from typing import Any
 
 from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
 from fuzzer.artifacts.store import ArtifactStore, sidecar_path
-from fuzzer.execution.evaluate import history_of
+from fuzzer.execution.history import history_of
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.triage.minimize import Minimizer, Shrunk, joints_that_matter

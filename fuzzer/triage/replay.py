@@ -135,7 +135,7 @@ def replay_file(
             config,
             not unrecorded,
         )
-    from fuzzer.execution.evaluate import history_of
+    from fuzzer.execution.history import history_of
 
     try:
         history = history_of(sidecar)
