@@ -27,6 +27,7 @@ from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import (
     bag_seeds,
+    boundary_cases,
     make_seeds,
     prescan,
     space_filling_count,
@@ -162,7 +163,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             joints = tuple(session.reference.joint_names)
             dry = dry_run.launch(
                 lambda: dry_run.harness(evaluator, store, CampaignLog(artifacts), sidecar, generated, joints),
-                generated,
+                generated + boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)),
                 int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
             )
         # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
@@ -178,7 +179,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if not seeds:
         seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
     if dry is not None:
-        reporting.info(f"dry run: process {dry.pid} evaluates the Hypothesis seeds before libFuzzer does")
+        reporting.info(f"dry run: process {dry.pid} evaluates the seeds and boundary probes before libFuzzer")
 
     import atheris
 

@@ -1,5 +1,6 @@
-"""The full engine's dry run: the Hypothesis seeds a fresh campaign generated are evaluated
-once, in a child process, before libFuzzer gets to them (as AFL's dry run of its inputs).
+"""The full engine's dry run: the Hypothesis seeds a fresh campaign generated, then two rounds
+of boundary probes, are evaluated once in a child process before libFuzzer gets to them (as
+AFL's dry run of its inputs and its deterministic stage).
 
 A campaign's first inputs otherwise wait for what only a libFuzzer-based engine pays: the
 space-filling seeds, importing Atheris, the instrumentation, the seed files and libFuzzer's
@@ -45,6 +46,13 @@ DRY_RUN_OPS = frozenset({"fk", "move"})
 """Ops whose seeds are cheap enough to run twice: well under a millisecond each (an ``ik`` or a
 ``scenario`` seed costs 10 to 100 times more, and running 32 of them twice would cost more
 start-up than the dry run saves)."""
+
+BOUNDARY_ROUNDS = 2
+"""Rounds of boundary probes the dry run evaluates after the seeds (``fuzzer.generation.boundary``:
+each joint 5e-5 past a limit, inside MoveIt's goal tolerance, then 1.5e-4 past it, beyond; 24
+inputs on a 6-joint arm): AFL's deterministic stage, run before the rest of the start-up. The
+first round also rides on the space-filling seeds; the campaign's fresh inputs bring both again
+later, on space-filling points."""
 
 DEFAULT_BUDGET = 60.0
 """Seconds the child may take when libFuzzer's ``-timeout`` is 0 (off)."""

@@ -15,7 +15,10 @@ from typing import Any
 import pytest
 
 from fuzzer import dry_run
-from fuzzer.execution.session import RunConfig
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation.boundary import OFFSETS
+from fuzzer.generation.corpus import boundary_cases
+from fuzzer.selection.state import BOUNDARY, SPACEFILL
 from tests.support import ROOT, fuzz
 
 ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
@@ -77,14 +80,16 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     )
     assert run.returncode == 1, run.stderr[-3000:]  # new divergences
     assert "Traceback" not in run.stderr
-    assert "evaluates the Hypothesis seeds before libFuzzer does" in run.stderr
+    assert "evaluates the seeds and boundary probes before libFuzzer" in run.stderr
     stats = _records(artifacts / "stats.jsonl")
     campaign = stats[-1]["pid"]  # the campaign's final snapshot is the last line
     dry = {r["pid"] for r in stats} - {campaign}
     assert len(dry) == 1, "one dry-run process logged its counters"
     (child,) = dry
     child_stats = [r for r in stats if r["pid"] == child]
-    assert child_stats[-1]["execs"] == 32, "the 32 Hypothesis seeds"
+    ran = child_stats[-1]["executed_by_strategy"]
+    assert ran["seed"] == 32, "the 32 Hypothesis seeds"
+    assert ran[BOUNDARY] > 0 and child_stats[-1]["execs"] == 32 + ran[BOUNDARY], "then the boundary probes"
     first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
     assert min(r["first_input"] for r in child_stats) < first_of_campaign
     divergences = _records(artifacts / "divergences.jsonl")
@@ -259,3 +264,24 @@ def test_a_dry_run_killed_while_writing_a_crash_file_loses_nothing(tmp_path: Pat
     assert named == {p.name for p in crashes}, "every claimed signature has its crash file"
     for crash in crashes:
         assert crash.name in run.stderr
+
+
+def test_the_boundary_probes_of_the_dry_run_move_one_joint_of_the_middle_past_a_limit() -> None:
+    session = Session.open(RunConfig(op="move"))
+    limits = session.reference.joint_limits
+    middle = [(lim.lower + lim.upper) / 2 for lim in limits]
+    cases = boundary_cases(session, dry_run.BOUNDARY_ROUNDS, first=32)
+    assert len(cases) == 2 * 2 * len(limits)  # two rounds, both limits of each joint
+    seen = set()
+    for n, case in enumerate(cases):
+        assert (case.origin, case.lineage, case.sequence) == (SPACEFILL, (BOUNDARY,), 32 + n)
+        position = case.message["position"]
+        moved = [j for j, (v, m) in enumerate(zip(position, middle, strict=True)) if v != m]
+        assert len(moved) == 1, position
+        (j,) = moved
+        lim = limits[j]
+        offset = round(max(position[j] - lim.upper, lim.lower - position[j]), 12)
+        assert offset in OFFSETS[: dry_run.BOUNDARY_ROUNDS], (j, position[j])
+        seen.add((j, position[j] > lim.upper, offset))
+    assert len(seen) == len(cases), "every joint, side and offset once"
+    assert boundary_cases(Session.open(RunConfig(op="scenario")), dry_run.BOUNDARY_ROUNDS) == []

@@ -432,6 +432,15 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return artifacts, write_report(artifacts, trust=True)  # its sidecars name the tests' plugin targets
 
 
+def _boundary(robot: str) -> list[Any]:
+    """The boundary probes a move campaign's dry run evaluates on ``robot``."""
+    from fuzzer import dry_run
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.generation.corpus import boundary_cases
+
+    return boundary_cases(Session.open(RunConfig(robot=robot)), dry_run.BOUNDARY_ROUNDS)
+
+
 def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
     artifacts, page = campaign
     assert page == artifacts / "report" / "report.html"
@@ -441,8 +450,9 @@ def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
     data = gather(artifacts)
     # both campaigns' processes, last snapshot each; -runs=3000 includes libFuzzer's empty
     # input, which is not a test case and not counted; each campaign's dry run (its own
-    # process, fuzzer/dry_run.py) evaluated its 32 Hypothesis seeds
-    assert data.summary.executions == 2 * (2999 + 32), "both campaigns' processes, last snapshot each"
+    # process, fuzzer/dry_run.py) evaluated its 32 Hypothesis seeds and its robot's boundary probes
+    dry = sum(32 + len(_boundary(robot)) for robot in ("probot_anno", "kinova"))
+    assert data.summary.executions == 2 * 2999 + dry, "both campaigns' processes, last snapshot each"
     assert {"probot_anno", "kinova"} <= set(data.summary.robots)
     kinds = {b.kind for b in data.buckets}
     assert {"status", "representation"} <= kinds, kinds

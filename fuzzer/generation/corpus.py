@@ -5,6 +5,7 @@ there (Algorithm 1's initial seeds)."""
 from __future__ import annotations
 
 import hashlib
+import math
 from pathlib import Path
 
 from fuzzer import reporting
@@ -79,6 +80,36 @@ def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> 
         if message is None:
             return []
         out.append(TestCase(config.message_type, message, sequence=first + i, origin="spacefill"))
+    return out
+
+
+def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCase]:
+    """The first ``rounds`` rounds of boundary probes (``fuzzer.generation.boundary``), each on
+    the middle of the joint box (0 on a side without a limit): one input per probe, origin
+    ``spacefill:boundary``, numbered from ``first``. For the dry run (``fuzzer.dry_run``): the
+    campaign's own fresh inputs bring the same probes later, on space-filling points. None for a
+    scenario, a chain without joints or a message type without a joint-space field."""
+    from fuzzer.generation.boundary import probes
+    from fuzzer.generation.spacefill import configuration_message
+    from fuzzer.selection.state import BOUNDARY, SPACEFILL
+
+    config = session.config
+    limits = session.reference.joint_limits
+    if config.op == "scenario" or not limits or rounds <= 0:
+        return []
+    facts = session.facts()
+    middle = [
+        (lo + hi) / 2 if math.isfinite(lo) and math.isfinite(hi) else 0.0
+        for lo, hi in zip(facts.lower, facts.upper, strict=True)
+    ]
+    base = session.registry.default(config.message_type)
+    out: list[TestCase] = []
+    for j, value in probes(facts.lower, facts.upper, rounds):
+        values = tuple(value if i == j else v for i, v in enumerate(middle))
+        message = configuration_message(config.message_type, base, values, facts.joint_names, facts.reachable)
+        if message is None:
+            return []
+        out.append(TestCase(config.message_type, message, first + len(out), SPACEFILL, (BOUNDARY,), 1))
     return out
 
 
