@@ -106,13 +106,12 @@ def harness(
     )
 
 
-def evaluate(h: Harness, cases: Sequence[TestCase]) -> int:
+def evaluate(h: Harness, cases: Sequence[TestCase]) -> None:
     """Evaluate ``cases`` in order, as libFuzzer hands inputs over (their encoding), then log
-    a stats snapshot; returns how many were evaluated."""
+    a stats snapshot."""
     for case in cases:
         h.test_one_input(case.encode())
     h.maybe_snapshot(force=True)
-    return len(cases)
 
 
 def launch(make_harness: Callable[[], Harness], seeds: Sequence[TestCase], timeout: int) -> DryRun | None:

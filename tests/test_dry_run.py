@@ -119,6 +119,19 @@ def test_the_baselines_have_no_dry_run(tmp_path: Path) -> None:
     assert len({r["pid"] for r in _records(artifacts / "stats.jsonl")}) == 1
 
 
+def _python(program: str, timeout: float) -> subprocess.CompletedProcess[str]:
+    """``python -c program`` in a fresh interpreter, with the repository importable."""
+    return subprocess.run(
+        [sys.executable, "-c", program],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
 def _gone(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -169,15 +182,7 @@ def fail():
 dry = dry_run.DryRun.start(fail, budget=30)
 print(dry.wait(), os.getpid(), flush=True)
 """
-    done = subprocess.run(
-        [sys.executable, "-c", program],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+    done = _python(program, timeout=60)
     assert done.returncode == 0, done.stderr
     status, parent = done.stdout.split()
     assert status == "1"
@@ -194,6 +199,7 @@ def test_targets_opened_before_atheris_are_instrumented_all_the_same() -> None:
 import gc, types
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.selection.instrument import instrument
+INSTRUMENTED = ("python_impl", "fuzzer.execution.oracle")
 for op in ("fk", "move", "scenario"):
     config = RunConfig(op=op)
     session = Session.open(config)
@@ -202,22 +208,14 @@ for op in ("fk", "move", "scenario"):
     done, missing = 0, set()
     for obj in gc.get_objects():
         module = getattr(obj, "__module__", None) or ""
-        if isinstance(obj, types.FunctionType) and module.startswith(("python_impl", "fuzzer.execution.o")):
+        if isinstance(obj, types.FunctionType) and module.startswith(INSTRUMENTED):
             if "__ATHERIS_INSTRUMENTED__" in obj.__code__.co_consts:
                 done += 1
             elif "__create_fn__" not in obj.__qualname__:
                 missing.add(obj.__qualname__)
     print(op, done, sorted(missing))
 """
-    done = subprocess.run(
-        [sys.executable, "-c", program],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-    )
+    done = _python(program, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     lines = done.stdout.splitlines()
     assert len(lines) == 3, done.stdout

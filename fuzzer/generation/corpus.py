@@ -86,10 +86,11 @@ def space_filling_seeds(session: Session, n: int, seed: int, first: int = 0) -> 
 def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCase]:
     """The first ``rounds`` rounds of boundary probes (``fuzzer.generation.boundary``), each on
     the middle of the joint box (0 on a side without a limit): one input per probe, origin
-    ``spacefill:boundary``, numbered from ``first``. For the dry run (``fuzzer.dry_run``): the
-    campaign's own fresh inputs bring the same probes later, on space-filling points. None for a
-    scenario, a chain without joints or a message type without a joint-space field."""
-    from fuzzer.generation.boundary import probes
+    ``spacefill`` and lineage ``spacefill:boundary``, numbered from ``first``. For the dry run
+    (``fuzzer.dry_run``): the campaign's own fresh inputs bring the same probes later, on
+    space-filling points. None for a scenario, a chain without joints or a message type without
+    a joint-space field."""
+    from fuzzer.generation.boundary import Boundary
     from fuzzer.generation.spacefill import configuration_message
     from fuzzer.selection.state import BOUNDARY, SPACEFILL
 
@@ -104,8 +105,9 @@ def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCa
     ]
     base = session.registry.default(config.message_type)
     out: list[TestCase] = []
-    for j, value in probes(facts.lower, facts.upper, rounds):
-        values = tuple(value if i == j else v for i, v in enumerate(middle))
+    probes = Boundary(facts.lower, facts.upper, rounds=rounds)
+    while probes.left:
+        values, _ = probes.apply(middle)
         message = configuration_message(config.message_type, base, values, facts.joint_names, facts.reachable)
         if message is None:
             return []
