@@ -29,6 +29,7 @@ from fuzzer.generation.corpus import (
     bag_seeds,
     boundary_cases,
     make_seeds,
+    orientation_cases,
     prescan,
     space_filling_count,
     space_filling_seeds,
@@ -169,6 +170,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
         count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
         filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
+        if count:  # a pose target's quaternion at lengths other than one (corpus.orientation_cases)
+            filling += orientation_cases(session, len(generated) + len(filling))
         write_seeds(folders[0], generated + filling)
         seeds = generated + seeds
         reporting.info(

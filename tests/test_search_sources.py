@@ -166,14 +166,74 @@ def test_slow_ops_write_fewer_space_filling_seed_files() -> None:
     assert space_filling_count("ik", 0) == 0 and space_filling_count("fk", 5) == 5
 
 
-def test_an_ik_campaign_writes_one_space_filling_seed(tmp_path: Path) -> None:
+def test_an_ik_campaign_writes_one_space_filling_seed_and_the_orientation_probes(tmp_path: Path) -> None:
     corpus = tmp_path / "corpus"
     art = f"--artifacts={tmp_path / 'art'}"
     done = fuzz(str(corpus), "-runs=0", "--op=ik", "--seeds=4", art, "--no-progress")
     assert done.returncode == 0, done.stderr[-2000:]
-    origins = sorted(decode(p.read_bytes()).origin for p in corpus.iterdir() if p.name.startswith("seed-"))
-    assert origins == ["hypothesis"] * 4 + ["spacefill"]
+    cases = [decode(p.read_bytes()) for p in corpus.iterdir() if p.name.startswith("seed-")]
+    origins = sorted((c.origin, c.lineage) for c in cases)
+    assert (
+        origins
+        == [("hypothesis", ())] * 4 + [("spacefill", ())] + [("spacefill", ("spacefill:boundary",))] * 4
+    )
+    assert sorted(c.sequence for c in cases) == list(range(9))
+    # the baselines' mutators get no generated probes
+    corpus = tmp_path / "plain"
+    done = fuzz(str(corpus), "-runs=0", "--op=ik", "--seeds=4", art, "--no-progress", "--mutator=libfuzzer")
+    assert done.returncode == 0, done.stderr[-2000:]
+    plain = [decode(p.read_bytes()).origin for p in corpus.iterdir() if p.name.startswith("seed-")]
+    assert plain == ["hypothesis"] * 4
 
+
+def test_orientation_probes_scale_the_home_poses_quaternion() -> None:
+    """A pose target's precondition is a unit quaternion: the probes give the home pose's
+    quaternion the lengths of ``ORIENTATION_SCALES``, and nothing else changes."""
+    import math
+
+    from fuzzer.generation.boundary import ORIENTATION_SCALES, scale_orientation
+    from fuzzer.generation.corpus import orientation_cases
+
+    session = Session.open(RunConfig(op="ik"))
+    cases = orientation_cases(session, first=33)
+    home = session.reference.forward_kinematics(list(session.reference.home_values))
+    assert [c.sequence for c in cases] == [33, 34, 35, 36]
+    assert {(c.origin, c.lineage) for c in cases} == {("spacefill", ("spacefill:boundary",))}
+    for case, scale in zip(cases, ORIENTATION_SCALES, strict=True):
+        session.validate(case.message)
+        pose = case.message["pose"]
+        assert [pose["position"][k] for k in "xyz"] == pytest.approx(list(home.position), abs=1e-12)
+        q = [pose["orientation"][k] for k in "xyzw"]
+        assert q == pytest.approx([scale * v for v in home.orientation], abs=1e-15)
+        assert math.hypot(*q) == pytest.approx(scale, rel=1e-12)
+    for op in ("fk", "move", "scenario"):
+        assert orientation_cases(Session.open(RunConfig(op=op))) == []
+    plain = {
+        "position": {"x": 1.0, "y": 0.0, "z": 0.0},
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+    }
+    assert scale_orientation("geometry_msgs/Pose", plain, 2.0) == {
+        **plain,
+        "orientation": {**plain["orientation"], "w": 2.0},
+    }
+    assert plain["orientation"]["w"] == 1.0  # a copy
+    assert scale_orientation("sensor_msgs/JointState", {"position": [0.0]}, 2.0) is None
+
+
+def test_orientation_probes_show_an_unnormalized_quaternion_and_agree_on_correct_targets() -> None:
+    """The zoo's ``quaternion_not_normalized`` diverges from native on the probes of non-zero
+    length other than one; the correct twin agrees with native on all four, zero included."""
+    from fuzzer.generation.corpus import orientation_cases
+
+    for robot in ("probot_anno", "ur5", "panda"):
+        session = Session.open(RunConfig(op="ik", robot=robot))
+        evaluator = session.evaluator()
+        assert not any(evaluator.evaluate(c).divergent for c in orientation_cases(session))
+    buggy = Session.open(
+        RunConfig(op="ik", targets=("native", "benchmarks.zoo.bugs:quaternion_not_normalized"))
+    )
+    evaluator = buggy.evaluator()
+    assert [evaluator.evaluate(c).divergent for c in orientation_cases(buggy)] == [True, True, True, False]
 
 
 def _forced(tmp_path: Path, arm: str) -> Harness:
@@ -195,11 +255,7 @@ def test_libfuzzers_crossover_is_a_bandit_step(tmp_path: Path) -> None:
     h = _forced(tmp_path / "b", "splice")
     crossed = [decode(h.crossover(a.encode(), b.encode(), 4096, s)) for s in range(40)]
     assert {c.strategy for c in crossed} == {"splice"}
-    mixed = [
-        c
-        for c in crossed
-        if any(x not in a.message["position"] for x in c.message["position"])
-    ]
+    mixed = [c for c in crossed if any(x not in a.message["position"] for x in c.message["position"])]
     assert mixed and all(
         set(c.message["position"]) <= {*a.message["position"], *b.message["position"]} for c in mixed
     )

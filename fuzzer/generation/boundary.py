@@ -21,9 +21,11 @@ use up a point of the space-filling sequence. An input that carries one has the 
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 OFFSETS = (5e-5, 1.5e-4, 0.0, 1e-4, 1e-6, 1e-9)
 """How far past a finite limit each round puts a joint (rad or m), in round order: inside
@@ -34,6 +36,13 @@ on the tolerance itself, and the float-noise distances."""
 CONTINUOUS = (math.pi, -math.pi, 0.0, math.pi / 2, -math.pi / 2, 2 * math.pi)
 """The values of a joint without limits (a continuous joint) in the same rounds: the wrap
 points first (``(-pi, pi]`` against ``[-pi, pi)``)."""
+
+ORIENTATION_SCALES = (0.5, 2.0, 1e-6, 0.0)
+"""The lengths a pose target's quaternion gets in the orientation probes (``scale_orientation``):
+a pose's precondition is a unit quaternion, as a joint's is its limits. Half and twice unit length
+(a quaternion written by hand, or averaged without renormalizing: MoveIt warns and goes on), a
+tiny but valid length (the normalization's precision; ``QUATERNION_NORM_EPS`` is 1e-9), and zero
+(rejected as an invalid argument by a correct target)."""
 
 
 def probes(
@@ -109,3 +118,27 @@ class Boundary:
         if j < len(out):
             out[j] = value
         return tuple(out), True
+
+
+def scale_orientation(msg_type: str, message: dict[str, Any], scale: float) -> dict[str, Any] | None:
+    """A copy of a pose message with its orientation quaternion's components times ``scale``.
+
+    Parameters
+    ----------
+    msg_type : str
+        ``geometry_msgs/PoseStamped`` or ``geometry_msgs/Pose``; any other type has no pose
+        target (None).
+    message : dict
+        A valid message of ``msg_type``.
+    scale : float
+        The factor (``ORIENTATION_SCALES``): a unit quaternion gets this length.
+    """
+    out = copy.deepcopy(message)
+    pose = out.get("pose") if msg_type == "geometry_msgs/PoseStamped" else out
+    if msg_type not in ("geometry_msgs/PoseStamped", "geometry_msgs/Pose") or not isinstance(pose, dict):
+        return None
+    orientation = pose.get("orientation")
+    if not isinstance(orientation, dict):
+        return None
+    pose["orientation"] = {k: float(orientation.get(k, 0.0)) * scale for k in "xyzw"}
+    return out

@@ -115,6 +115,34 @@ def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCa
     return out
 
 
+def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
+    """The orientation probes of a pose-target campaign (``ik``): the pose FK gives at the robot's
+    home configuration (where an IK seeded there converges at once), its quaternion scaled to each
+    length of
+    ``fuzzer.generation.boundary.ORIENTATION_SCALES``. Origin ``spacefill``, lineage
+    ``spacefill:boundary``, numbered from ``first``; the full engine writes them as seed files
+    beside the space-filling ones (four IK evaluations at most). None for a message type without
+    a pose, or a chain without joints."""
+    from fuzzer.generation.boundary import ORIENTATION_SCALES, scale_orientation
+    from fuzzer.generation.spacefill import configuration_message
+    from fuzzer.selection.state import BOUNDARY, SPACEFILL
+
+    config = session.config
+    if config.op == "scenario" or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    home = tuple(session.reference.home_values)
+    base = session.registry.default(config.message_type)
+    pose = configuration_message(config.message_type, base, home, facts.joint_names, facts.reachable)
+    out: list[TestCase] = []
+    for scale in ORIENTATION_SCALES:
+        message = None if pose is None else scale_orientation(config.message_type, pose, scale)
+        if message is None:
+            return []
+        out.append(TestCase(config.message_type, message, first + len(out), SPACEFILL, (BOUNDARY,), 1))
+    return out
+
+
 def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
     """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
     from fuzzer.ros.bags import read_seeds
