@@ -278,3 +278,23 @@ def test_every_arm_is_credited_no_more_rewards_than_inputs(tmp_path: Path) -> No
     for bandit in (h.sources.source, h.sources.mutators):
         assert all(arm.rewards <= arm.pulls for arm in bandit.arms.values())
     assert made > 100 and sum(arm.pulls for arm in h.sources.source.arms.values()) == made
+
+
+def test_scipy_stats_is_imported_only_where_a_space_filling_stream_is_made() -> None:
+    """``scipy.stats`` costs about 0.55 s of imports: the baselines, replay and the full engine's
+    dry-run child must not wait for it (BENCHMARKS.md, "Orientation probes, ... start-up")."""
+    import subprocess
+    import sys
+
+    program = (
+        "import sys\n"
+        "import fuzzer.campaign, fuzzer.harness, fuzzer.cli, benchmarks.baselines\n"
+        "assert 'scipy.stats' not in sys.modules, 'imported with the engine'\n"
+        "from fuzzer.generation.spacefill import SpaceFill\n"
+        "SpaceFill((-1.0, -2.0), (1.0, 2.0), seed=1).next()\n"
+        "assert 'scipy.stats' in sys.modules\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", program], capture_output=True, text=True, timeout=120, check=False
+    )
+    assert done.returncode == 0, done.stderr[-2000:]

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import qmc
 
 from fuzzer.generation.boundary import Boundary
 from fuzzer.selection.state import BOUNDARY, SPACEFILL, Made, Maker
@@ -66,6 +65,8 @@ class SpaceFill:
         lo, hi = finite_box(self.lower, self.upper)
         self._lo, self._hi = np.array(lo), np.array(hi)
         self._fixed = self._hi <= self._lo  # a joint with lower == upper: always that value
+        from scipy.stats import qmc  # 0.55 s of imports (scipy.stats): paid where a stream is made
+
         self._engine = qmc.Sobol(d=len(lo), scramble=True, seed=np.random.default_rng(self.seed))
         self._rows = np.empty((0, len(lo)))
 
