@@ -160,18 +160,20 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     filling: list[TestCase] = []
     if wanted and not child and folders:
         generated = make_seeds(session, wanted, options.seed)
+        orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
         if dry_ok:  # fuzzer.dry_run: a child evaluates them while libFuzzer starts
             joints = tuple(session.reference.joint_names)
             dry = dry_run.launch(
                 lambda: dry_run.harness(evaluator, store, CampaignLog(artifacts), sidecar, generated, joints),
-                generated + boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)),
+                dry_run.cases(
+                    generated, boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)), orientation
+                ),
                 int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
             )
         # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
         count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
         filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
-        if count:  # a pose target's quaternion at lengths other than one (corpus.orientation_cases)
-            filling += orientation_cases(session, len(generated) + len(filling))
+        filling += orientation if count else []  # a pose target's quaternion at lengths other than one
         write_seeds(folders[0], generated + filling)
         seeds = generated + seeds
         reporting.info(

@@ -42,10 +42,12 @@ from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
 from fuzzer.selection.guidance import Features
 
-DRY_RUN_OPS = frozenset({"fk", "move"})
-"""Ops whose seeds are cheap enough to run twice: well under a millisecond each (an ``ik`` or a
-``scenario`` seed costs 10 to 100 times more, and running 32 of them twice would cost more
-start-up than the dry run saves)."""
+DRY_RUN_OPS = frozenset({"fk", "move", "ik"})
+"""Ops whose seeds are run twice: ``fk`` and ``move`` seeds cost well under a millisecond each;
+an ``ik`` seed about 5 ms, but an IK campaign's start-up imports ``scipy.stats`` (0.55 s, for its
+space-filling seed) after the fork, so its dry run reports what the seeds show that much sooner
+(BENCHMARKS.md, "Orientation probes ... start-up"). A ``scenario`` seed costs 10 to 100 times
+more than an ``fk`` one, and the scenario op has no dry run."""
 
 BOUNDARY_ROUNDS = 2
 """Rounds of boundary probes the dry run evaluates after the seeds (``fuzzer.generation.boundary``:
@@ -112,6 +114,13 @@ def evaluate(h: Harness, cases: Sequence[TestCase]) -> None:
     for case in cases:
         h.test_one_input(case.encode())
     h.maybe_snapshot(force=True)
+
+
+def cases(seeds: list[TestCase], probes: list[TestCase], orientation: list[TestCase]) -> list[TestCase]:
+    """What the dry run evaluates, in order: a pose campaign's orientation probes (four cheap
+    inputs; ``fuzzer.generation.corpus.orientation_cases``) and its seeds; any other campaign's
+    seeds, then the first ``BOUNDARY_ROUNDS`` rounds of boundary probes (``probes``)."""
+    return orientation + seeds if orientation else seeds + probes
 
 
 def launch(make_harness: Callable[[], Harness], seeds: Sequence[TestCase], timeout: int) -> DryRun | None:

@@ -35,7 +35,7 @@ def _records(path: Path) -> list[dict[str, Any]]:
     [
         ("fk", "inprocess", "rrosfuzz", False, False, True),
         ("move", "inprocess", "rrosfuzz", False, False, True),
-        ("ik", "inprocess", "rrosfuzz", False, False, False),  # slow seeds: twice costs more than it saves
+        ("ik", "inprocess", "rrosfuzz", False, False, True),  # its start-up imports scipy after the fork
         ("scenario", "inprocess", "rrosfuzz", False, False, False),
         ("move", "ros", "rrosfuzz", False, False, False),
         ("move", "inprocess", "libfuzzer", False, False, False),  # the baselines keep libFuzzer's start
@@ -102,6 +102,41 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     assert all(Path(f"{p}.json").is_file() for p in crashes)
     for crash in crashes:  # listed in the campaign's summary, which waited for the child
         assert crash.name in run.stderr
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="needs os.sched_setaffinity (Linux)")
+def test_an_ik_dry_run_evaluates_the_orientation_probes_first(tmp_path: Path) -> None:
+    """An IK campaign's dry run starts with the four orientation probes, which show a target
+    that uses the quaternion without normalizing it, then its seeds."""
+    artifacts = tmp_path / "artifacts"
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "fuzz_diff.py"),
+            str(tmp_path / "corpus"),
+            "-max_total_time=1",
+            "-seed=1",
+            f"--artifacts={artifacts}",
+            "--no-progress",
+            "--op=ik",
+            "--targets=native,benchmarks.zoo.bugs:quaternion_not_normalized",
+        ],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        preexec_fn=_one_cpu,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert run.returncode == 1, run.stderr[-3000:]
+    stats = _records(artifacts / "stats.jsonl")
+    campaign = stats[-1]["pid"]
+    child = [r for r in stats if r["pid"] != campaign]
+    assert child[0]["executed_by_strategy"] == {BOUNDARY: 1}, "an orientation probe first"
+    assert child[-1]["executed_by_strategy"] == {BOUNDARY: 4, "seed": 32}
+    first = _records(artifacts / "divergences.jsonl")[0]
+    assert first["pid"] == child[0]["pid"] and first["strategy"] == BOUNDARY
 
 
 def test_the_baselines_have_no_dry_run(tmp_path: Path) -> None:
