@@ -16,8 +16,9 @@ has no libFuzzer; if a seed kills it, or it outlives ``budget`` seconds (``SIGAL
 action), it ends without a word, and libFuzzer runs every seed next in the campaign process and
 reports that input as it reports any. libFuzzer runs every seed anyway, instrumented, for their
 coverage: the dry run costs the seeds' evaluation once more (in parallel on a second CPU; on
-one, before the rest of the start-up), which is why it is kept to the ops whose inputs are
-cheap (``DRY_RUN_OPS``).
+one, before the rest of the start-up, most of which is importing ``scipy.stats`` for the
+space-filling streams), which is why it is kept to the ops whose seeds are cheap enough
+(``DRY_RUN_OPS``). An ``ik`` campaign's dry run starts with its orientation probes (``cases``).
 """
 
 from __future__ import annotations
