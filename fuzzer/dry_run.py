@@ -47,8 +47,8 @@ DRY_RUN_OPS = frozenset({"fk", "move", "ik"})
 """Ops whose seeds are run twice: ``fk`` and ``move`` seeds cost well under a millisecond each;
 an ``ik`` seed about 5 ms, but an IK campaign's start-up imports ``scipy.stats`` (0.55 s, for its
 space-filling seed) after the fork, so its dry run reports what the seeds show that much sooner
-(BENCHMARKS.md, "Orientation probes ... start-up"). A ``scenario`` seed costs 10 to 100 times
-more than an ``fk`` one, and the scenario op has no dry run."""
+(BENCHMARKS.md, "Orientation probes, and the baselines' scipy.stats import"). Not ``scenario``:
+a scenario seed costs 10 to 100 times more than an ``fk`` one."""
 
 BOUNDARY_ROUNDS = 2
 """Rounds of boundary probes the dry run evaluates after the seeds (``fuzzer.generation.boundary``:

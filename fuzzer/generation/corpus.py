@@ -118,11 +118,10 @@ def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCa
 def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
     """The orientation probes of a pose-target campaign (``ik``): the pose FK gives at the robot's
     home configuration (where an IK seeded there converges at once), its quaternion scaled to each
-    length of
-    ``fuzzer.generation.boundary.ORIENTATION_SCALES``. Origin ``spacefill``, lineage
-    ``spacefill:boundary``, numbered from ``first``; the full engine writes them as seed files
-    beside the space-filling ones (four IK evaluations at most). None for a message type without
-    a pose, or a chain without joints."""
+    length of ``fuzzer.generation.boundary.ORIENTATION_SCALES``. Origin ``spacefill``, lineage
+    ``spacefill:boundary``, numbered from ``first``. The full engine's dry run evaluates them
+    first, and the campaign writes them as seed files beside the space-filling ones (four IK
+    evaluations). None for a message type without a pose, or a chain without joints."""
     from fuzzer.generation.boundary import ORIENTATION_SCALES, scale_orientation
     from fuzzer.generation.spacefill import configuration_message
     from fuzzer.selection.state import BOUNDARY, SPACEFILL
