@@ -166,7 +166,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             dry = dry_run.launch(
                 lambda: dry_run.harness(evaluator, store, CampaignLog(artifacts), sidecar, generated, joints),
                 dry_run.cases(
-                    generated, boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)), orientation
+                    generated,
+                    [] if orientation else boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)),
+                    orientation,
                 ),
                 int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
             )

@@ -119,9 +119,9 @@ def evaluate(h: Harness, cases: Sequence[TestCase]) -> None:
 
 def cases(seeds: list[TestCase], probes: list[TestCase], orientation: list[TestCase]) -> list[TestCase]:
     """What the dry run evaluates, in order: a pose campaign's orientation probes (four cheap
-    inputs; ``fuzzer.generation.corpus.orientation_cases``) and its seeds; any other campaign's
-    seeds, then the first ``BOUNDARY_ROUNDS`` rounds of boundary probes (``probes``)."""
-    return orientation + seeds if orientation else seeds + probes
+    inputs; ``fuzzer.generation.corpus.orientation_cases``), the seeds, then the first
+    ``BOUNDARY_ROUNDS`` rounds of joint boundary probes (``probes``; a pose campaign has none)."""
+    return orientation + seeds + probes
 
 
 def launch(make_harness: Callable[[], Harness], seeds: Sequence[TestCase], timeout: int) -> DryRun | None:

@@ -6,7 +6,7 @@ import math
 import os
 import subprocess
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,15 +25,35 @@ SCRIPT = str(ROOT / "fuzz_diff.py")
 
 
 def fuzz(
-    *args: str, cwd: Path = ROOT, timeout: float = 120, path: Sequence[Path] = ()
+    *args: str,
+    cwd: Path = ROOT,
+    timeout: float = 120,
+    path: Sequence[Path] = (),
+    env: Mapping[str, str] | None = None,
+    preexec_fn: Callable[[], None] | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """``fuzz_diff.py ARGS`` in a subprocess (PYTHONPATH: the repository, then ``path``)."""
+    """``fuzz_diff.py ARGS`` in a subprocess (PYTHONPATH: the repository, then ``path``; ``env``:
+    more variables; ``preexec_fn``: run in the child before the exec)."""
     return subprocess.run(
         [sys.executable, SCRIPT, *args],
         cwd=cwd,
-        env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), *map(str, path)])),
+        env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), *map(str, path)]), **(env or {})),
+        preexec_fn=preexec_fn,
         text=True,
         capture_output=True,
+        timeout=timeout,
+        check=False,
+    )
+
+
+def python(program: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    """``python -c program`` in a fresh interpreter, with the repository importable."""
+    return subprocess.run(
+        [sys.executable, "-c", program],
+        cwd=ROOT,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        capture_output=True,
+        text=True,
         timeout=timeout,
         check=False,
     )

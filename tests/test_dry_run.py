@@ -6,8 +6,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -19,7 +17,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import boundary_cases
 from fuzzer.selection.state import BOUNDARY, SPACEFILL
-from tests.support import ROOT, fuzz
+from tests.support import ROOT, fuzz, python
 
 ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
 EVERY_INPUT = "benchmarks.zoo.bugs:axis_not_normalized"
@@ -61,22 +59,13 @@ def _one_cpu() -> None:
 def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_path: Path) -> None:
     corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
     args = ["-max_total_time=2", "-seed=1", f"--artifacts={artifacts}", "--no-progress", f"--robot={ZOO_ARM}"]
-    run = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "fuzz_diff.py"),
-            str(corpus),
-            *args,
-            "--op=fk",
-            f"--targets=native,{EVERY_INPUT}",
-        ],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        preexec_fn=_one_cpu,  # one system call in the child: safe between fork and exec
-        capture_output=True,
-        text=True,
+    run = fuzz(
+        str(corpus),
+        *args,
+        "--op=fk",
+        f"--targets=native,{EVERY_INPUT}",
         timeout=300,
-        check=False,
+        preexec_fn=_one_cpu,  # one system call in the child: safe between fork and exec
     )
     assert run.returncode == 1, run.stderr[-3000:]  # new divergences
     assert "Traceback" not in run.stderr
@@ -109,25 +98,16 @@ def test_an_ik_dry_run_evaluates_the_orientation_probes_first(tmp_path: Path) ->
     """An IK campaign's dry run starts with the four orientation probes, which show a target
     that uses the quaternion without normalizing it, then its seeds."""
     artifacts = tmp_path / "artifacts"
-    run = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "fuzz_diff.py"),
-            str(tmp_path / "corpus"),
-            "-max_total_time=1",
-            "-seed=1",
-            f"--artifacts={artifacts}",
-            "--no-progress",
-            "--op=ik",
-            "--targets=native,benchmarks.zoo.bugs:quaternion_not_normalized",
-        ],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        preexec_fn=_one_cpu,
-        capture_output=True,
-        text=True,
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-max_total_time=1",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--no-progress",
+        "--op=ik",
+        "--targets=native,benchmarks.zoo.bugs:quaternion_not_normalized",
         timeout=300,
-        check=False,
+        preexec_fn=_one_cpu,
     )
     assert run.returncode == 1, run.stderr[-3000:]
     stats = _records(artifacts / "stats.jsonl")
@@ -152,19 +132,6 @@ def test_the_baselines_have_no_dry_run(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr[-3000:]
     assert "dry run" not in run.stderr
     assert len({r["pid"] for r in _records(artifacts / "stats.jsonl")}) == 1
-
-
-def _python(program: str, timeout: float) -> subprocess.CompletedProcess[str]:
-    """``python -c program`` in a fresh interpreter, with the repository importable."""
-    return subprocess.run(
-        [sys.executable, "-c", program],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-    )
 
 
 def _gone(pid: int) -> bool:
@@ -217,7 +184,7 @@ def fail():
 dry = dry_run.DryRun.start(fail, budget=30)
 print(dry.wait(), os.getpid(), flush=True)
 """
-    done = _python(program, timeout=60)
+    done = python(program, timeout=60)
     assert done.returncode == 0, done.stderr
     status, parent = done.stdout.split()
     assert status == "1"
@@ -250,7 +217,7 @@ for op in ("fk", "move", "scenario"):
                 missing.add(obj.__qualname__)
     print(op, done, sorted(missing))
 """
-    done = _python(program, timeout=300)
+    done = python(program, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     lines = done.stdout.splitlines()
     assert len(lines) == 3, done.stdout
@@ -268,24 +235,16 @@ def test_a_dry_run_killed_while_writing_a_crash_file_loses_nothing(tmp_path: Pat
     from fuzzer.artifacts.store import KILL_HOOK, sidecar_path
 
     artifacts = tmp_path / "artifacts"
-    run = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "fuzz_diff.py"),
-            str(tmp_path / "corpus"),
-            "-runs=300",
-            "-seed=1",
-            f"--artifacts={artifacts}",
-            "--no-progress",
-            "--robot=kinova",
-            "--targets=native,tests.plugins.faults:wrap_continuous",
-        ],
-        cwd=ROOT,
-        env=dict(os.environ, PYTHONPATH=str(ROOT), **{KILL_HOOK: f"{point}:1"}),
-        capture_output=True,
-        text=True,
+    run = fuzz(
+        str(tmp_path / "corpus"),
+        "-runs=300",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        "--no-progress",
+        "--robot=kinova",
+        "--targets=native,tests.plugins.faults:wrap_continuous",
         timeout=300,
-        check=False,
+        env={KILL_HOOK: f"{point}:1"},
     )
     assert run.returncode == 1, run.stderr[-3000:]
     assert "Traceback" not in run.stderr

@@ -283,8 +283,7 @@ def test_every_arm_is_credited_no_more_rewards_than_inputs(tmp_path: Path) -> No
 def test_scipy_stats_is_imported_only_where_a_space_filling_stream_is_made() -> None:
     """``scipy.stats`` costs about 0.55 s of imports: the baselines, replay and the full engine's
     dry-run child must not wait for it (BENCHMARKS.md, "Orientation probes, ... start-up")."""
-    import subprocess
-    import sys
+    from tests.support import python
 
     program = (
         "import sys\n"
@@ -294,7 +293,5 @@ def test_scipy_stats_is_imported_only_where_a_space_filling_stream_is_made() -> 
         "SpaceFill((-1.0, -2.0), (1.0, 2.0), seed=1).next()\n"
         "assert 'scipy.stats' in sys.modules\n"
     )
-    done = subprocess.run(
-        [sys.executable, "-c", program], capture_output=True, text=True, timeout=120, check=False
-    )
+    done = python(program)
     assert done.returncode == 0, done.stderr[-2000:]
