@@ -27,7 +27,6 @@ from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import (
     bag_seeds,
-    boundary_cases,
     make_seeds,
     orientation_cases,
     prescan,
@@ -144,7 +143,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         return build_sidecar(session, case, data, ev, recorded_versions, digest)
 
     evaluator = session.evaluator()
-    dry: dry_run.DryRun | None = None
+    dry: dry_run.Stages | None = None
     dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
     usable, seeds = prescan(session, folders) if not child else (1, [])
     if options.seeds_from_bag is not None and not child and folders:
@@ -159,19 +158,23 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     )
     filling: list[TestCase] = []
     if wanted and not child and folders:
+        if dry_ok:  # fuzzer.dry_run: children evaluate probes, uniform inputs, seeds while libFuzzer starts
+            joints = tuple(session.reference.joint_names)
+            dry = dry_run.Stages(
+                session,
+                options.mutator,
+                options.seed,
+                wanted,
+                int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
+                lambda base, sweep: dry_run.harness(
+                    evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
+                ),
+            )
+            dry.first()  # before the seeds exist
         generated = make_seeds(session, wanted, options.seed)
         orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
-        if dry_ok:  # fuzzer.dry_run: a child evaluates them while libFuzzer starts
-            joints = tuple(session.reference.joint_names)
-            dry = dry_run.launch(
-                lambda: dry_run.harness(evaluator, store, CampaignLog(artifacts), sidecar, generated, joints),
-                dry_run.cases(
-                    generated,
-                    [] if orientation else boundary_cases(session, dry_run.BOUNDARY_ROUNDS, len(generated)),
-                    orientation,
-                ),
-                int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
-            )
+        if dry is not None:
+            dry.second(generated)
         # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
         count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
         filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
@@ -186,7 +189,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if not seeds:
         seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
     if dry is not None:
-        reporting.info(f"dry run: process {dry.pid} evaluates the seeds and boundary probes before libFuzzer")
+        pids = ", ".join(map(str, dry.pids))
+        reporting.info(
+            f"dry run: processes {pids} evaluate probes, uniform inputs and the seeds before libFuzzer"
+        )
 
     import atheris
 

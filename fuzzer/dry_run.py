@@ -1,24 +1,26 @@
-"""The full engine's dry run: the Hypothesis seeds a fresh campaign generated, then two rounds
-of boundary probes, are evaluated once in a child process before libFuzzer gets to them (as
-AFL's dry run of its inputs and its deterministic stage).
+"""The full engine's dry run: inputs that need no libFuzzer, evaluated in child processes before
+libFuzzer starts (as AFL's dry run of its inputs and its deterministic stage), in two stages
+(``Stages``): before the Hypothesis seeds exist, a pose campaign's orientation and reach probes,
+uniform random sweeps (``fk``) or configurations (``move``), aligned configurations and the
+boundary probes; once they exist, the seeds and the rest of the uniform work.
 
 A campaign's first inputs otherwise wait for what only a libFuzzer-based engine pays: the
-space-filling seeds, importing Atheris, the instrumentation, the seed files and libFuzzer's
-start (about 60-80 ms on the default robot, BENCHMARKS.md). A divergence that the first seeds
-show then comes that much later than from an engine without libFuzzer, for no gain. The dry run
-reports it as soon as the seeds exist, as an ordinary crash file (the same ``Harness``:
-sidecar, divergence log, signature claim; the campaign's own Harness then finds the signature
-claimed and does not file it again).
+space-filling seeds, importing ``scipy.stats`` for them (0.55 s on one CPU) and Atheris, the
+instrumentation, the seed files and libFuzzer's start. A divergence those inputs show would
+come that much later than from an engine without libFuzzer. The dry run reports it as an
+ordinary crash file (the same ``Harness``: sidecar, divergence log, signature claim; the
+campaign's own Harness then finds the signature claimed and does not file it again). Its
+uniform rows are numpy's pseudo-random numbers, not Sobol's: ``scipy.stats`` is not imported
+yet (``fuzzer.generation.spacefill.Uniform``, the sweeps' source ``uniform``).
 
-Why a child (``os.fork``, before Atheris is imported): libFuzzer is what turns a target that
-hangs or dies on an input (a deadly signal, an abort) into a timeout or crash file. The child
-has no libFuzzer; if a seed kills it, or it outlives ``budget`` seconds (``SIGALRM``, default
+Why children (``os.fork``, before Atheris is imported): libFuzzer is what turns a target that
+hangs or dies on an input (a deadly signal, an abort) into a timeout or crash file. A child
+has no libFuzzer; if an input kills it, or it outlives ``budget`` seconds (``SIGALRM``, default
 action), it ends without a word, and libFuzzer runs every seed next in the campaign process and
 reports that input as it reports any. libFuzzer runs every seed anyway, instrumented, for their
 coverage: the dry run costs the seeds' evaluation once more (in parallel on a second CPU; on
-one, before the rest of the start-up, most of which is importing ``scipy.stats`` for the
-space-filling streams), which is why it is kept to the ops whose seeds are cheap enough
-(``DRY_RUN_OPS``). An ``ik`` campaign's dry run starts with its orientation probes (``cases``).
+one, before the rest of the start-up), which is why it is kept to the ops whose inputs are cheap
+enough (``DRY_RUN_OPS``).
 """
 
 from __future__ import annotations
@@ -32,16 +34,27 @@ import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.evaluate import Evaluator
-from fuzzer.execution.session import RunConfig
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation.corpus import (
+    aligned_cases,
+    boundary_cases,
+    orientation_cases,
+    reach_cases,
+    space_filling_count,
+    uniform_cases,
+)
+from fuzzer.generation.sweep import Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
 from fuzzer.selection.guidance import Features
+from fuzzer.selection.state import SPACEFILL
 
 DRY_RUN_OPS = frozenset({"fk", "move", "ik"})
 """Ops whose seeds are run twice: ``fk`` and ``move`` seeds cost well under a millisecond each;
@@ -51,11 +64,39 @@ space-filling seed) after the fork, so its dry run reports what the seeds show t
 a scenario seed costs 10 to 100 times more than an ``fk`` one."""
 
 BOUNDARY_ROUNDS = 2
-"""Rounds of boundary probes the dry run evaluates after the seeds (``fuzzer.generation.boundary``:
+"""Rounds of boundary probes the dry run's first stage evaluates (``fuzzer.generation.boundary``:
 each joint 5e-5 past a limit, inside MoveIt's goal tolerance, then 1.5e-4 past it, beyond; 24
 inputs on a 6-joint arm): AFL's deterministic stage, run before the rest of the start-up. The
 first round also rides on the space-filling seeds; the campaign's fresh inputs bring both again
 later, on space-filling points."""
+
+SWEEPS = 32
+"""Sweeps of ``ROWS`` uniform configurations an ``fk`` dry run evaluates in all, ``EARLY`` of
+them in the first stage (32,768 rows, about 60 ms on one CPU for the default robot): a band 1e-4
+of one joint's range wide is met with probability 0.96, one 1e-5 wide with 0.28 (the campaign's
+Sobol sweeps go on from there)."""
+
+SWEEP_SEED = 0xD5
+"""Added to ``-seed`` for the dry run's uniform rows and configurations (not the campaign's
+Sobol streams' seeds)."""
+
+EARLY = {"fk": 4, "move": 32}
+"""The first stage's uniform work, per op (``Stages``): sweeps (``fk``) or configurations
+(``move``)."""
+
+ALIGNED = {"fk": 32, "move": 32}
+"""Aligned configurations (each joint at a multiple of pi/2 or a limit: where axes line up and
+kinematics code branches; ``fuzzer.generation.spacefill.Aligned``) of the first stage, per op:
+one input each (about 0.1 ms for ``fk``, 0.5 ms for ``move``). On the default robot 10% of them
+show ``rpy_gimbal_band`` (a gimbal-lock branch of a roll-pitch-yaw conversion), which no
+uniform configuration of 2,000 did."""
+
+UNIFORM = {"move": 128}
+"""Uniform random configurations the dry run evaluates after the probes, one input each, per op
+(``fuzzer.generation.corpus.uniform_cases``; about 60 ms for ``move`` on one CPU). ``fk`` sweeps
+instead; ``ik`` has none (an FK and an IK solve per input). With 64, ``wrap_past_pi`` (a band
+2.4% of uniform targets hit) was found in the dry run in 6 of 10 trials; 128 miss it with
+odds 0.05."""
 
 DEFAULT_BUDGET = 60.0
 """Seconds the child may take when libFuzzer's ``-timeout`` is 0 (off)."""
@@ -95,8 +136,10 @@ def harness(
     sidecar: Callable[[TestCase, bytes, Any], dict[str, Any]],
     seeds: Sequence[TestCase],
     joint_names: tuple[str, ...],
+    sweep: Sweep | None = None,
 ) -> Harness:
-    """A Harness that evaluates and records, without libFuzzer, coverage or mutation."""
+    """A Harness that evaluates and records, without libFuzzer, coverage or mutation; with
+    ``sweep`` (see ``sweep``), ``evaluate`` runs its sweeps."""
     return Harness(
         evaluator=evaluator,
         store=store,
@@ -106,35 +149,149 @@ def harness(
         seeds=list(seeds),
         log=log,
         joint_names=joint_names,
+        sweep=sweep,
     )
 
 
-def evaluate(h: Harness, cases: Sequence[TestCase]) -> None:
+def sweep(session: Session, mutator: str, seed: int) -> Sweep | None:
+    """A dry run's sweeps for a campaign with ``--mutator mutator``, uniform rows seeded with
+    ``seed``, never due on their own (``evaluate`` runs them); None but for the full engine's
+    ``fk`` in process on a chain with joints (as the campaign's sweeps)."""
+    config = session.config
+    limits = session.reference.joint_limits
+    if mutator != "rrosfuzz" or config.op != "fk" or config.transport != "inprocess" or not limits:
+        return None
+    lower, upper = [lim.lower for lim in limits], [lim.upper for lim in limits]
+    return Sweep(lower, upper, config.tolerance, seed=seed, source="uniform", share=0.0)
+
+
+def evaluate(h: Harness, cases: Sequence[TestCase], before: int = 0, after: int = 0) -> None:
     """Evaluate ``cases`` in order, as libFuzzer hands inputs over (their encoding), then log
-    a stats snapshot."""
+    a stats snapshot; with the Harness's sweep, ``before`` sweeps first and ``after`` sweeps
+    last."""
+    for _ in range(before if h.sweep is not None else 0):
+        h.run_sweep()
     for case in cases:
         h.test_one_input(case.encode())
+    for _ in range(after if h.sweep is not None else 0):
+        h.run_sweep()
     h.maybe_snapshot(force=True)
 
 
-def cases(seeds: list[TestCase], probes: list[TestCase], orientation: list[TestCase]) -> list[TestCase]:
-    """What the dry run evaluates, in order: a pose campaign's orientation probes (four cheap
-    inputs; ``fuzzer.generation.corpus.orientation_cases``), the seeds, then the first
-    ``BOUNDARY_ROUNDS`` rounds of joint boundary probes (``probes``; a pose campaign has none)."""
-    return orientation + seeds + probes
+MakeHarness = Callable[[Sequence[TestCase], Sweep | None], Harness]
+"""``(seeds, sweep) -> Harness``: ``harness`` with the campaign's evaluator, store, log and
+sidecar bound."""
 
 
-def launch(make_harness: Callable[[], Harness], seeds: Sequence[TestCase], timeout: int) -> DryRun | None:
-    """Start the dry run: a child that makes its Harness and evaluates ``seeds``. ``timeout``
-    is libFuzzer's ``-timeout`` (s; 0: off, ``DEFAULT_BUDGET``): the child's whole budget.
+@dataclass
+class Stages:
+    """A campaign's dry run in two children, one per stage (``first``, ``second``).
+
+    The first starts before the Hypothesis seeds exist (making 32 costs the campaign 75-95 ms):
+    a pose campaign's orientation probes and reach probe, the first ``EARLY`` uniform sweeps (``fk``) or
+    configurations (``move``), ``ALIGNED`` aligned configurations, then the boundary probes.
+    The second starts once they exist: the seeds, then the rest of the uniform work
+    (``SWEEPS``, ``UNIFORM``). On one CPU the campaign waits for each child before it goes on
+    (``launch``).
+
+    Parameters
+    ----------
+    session : Session
+        The campaign's.
+    mutator : str
+        ``--mutator`` (only ``rrosfuzz`` sweeps).
+    seed : int
+        ``-seed``: with ``SWEEP_SEED`` (first stage) and ``SWEEP_SEED + 1`` (second), the
+        uniform rows' and configurations' seed.
+    wanted : int
+        Seeds the campaign makes: the probes are numbered after them.
+    timeout : int
+        libFuzzer's ``-timeout`` (s; 0: off): each child's budget.
+    make_harness : MakeHarness
+    """
+
+    session: Session
+    mutator: str
+    seed: int
+    wanted: int
+    timeout: int
+    make_harness: MakeHarness
+    children: list[DryRun] = field(default_factory=list)
+    _first_count: int = 0
+
+    def _base(self) -> list[TestCase]:
+        """The message a sweep's rows go into: the zero message of the campaign's type."""
+        msg_type = self.session.config.message_type
+        return [TestCase(msg_type, self.session.registry.default(msg_type), 0, SPACEFILL)]
+
+    def first_cases(self) -> list[TestCase]:
+        """The first stage's inputs (besides its sweeps): orientation and reach probes, the first
+        ``EARLY`` uniform configurations, the aligned ones, the boundary probes."""
+        session, wanted = self.session, self.wanted
+        op = session.config.op
+        orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
+        probes = [] if orientation else boundary_cases(session, BOUNDARY_ROUNDS, wanted)
+        count = min(EARLY.get(op, 0), UNIFORM.get(op, 0))
+        uniform = uniform_cases(session, count, self.seed + SWEEP_SEED, wanted + len(probes))
+        aligned = aligned_cases(
+            session, ALIGNED.get(op, 0), self.seed + SWEEP_SEED, wanted + len(probes) + count
+        )
+        reach = reach_cases(session, self.seed + SWEEP_SEED, wanted + len(probes) + count + len(aligned))
+        cases = orientation + reach + uniform + aligned + probes
+        self._first_count = len(cases)
+        return cases
+
+    def second_cases(self, seeds: list[TestCase]) -> list[TestCase]:
+        """The second stage's inputs (besides its sweeps): the seeds, then the rest of the
+        uniform configurations."""
+        op = self.session.config.op
+        count = UNIFORM.get(op, 0) - min(EARLY.get(op, 0), UNIFORM.get(op, 0))
+        first = self.wanted + self._first_count  # numbered after the first stage's (first_cases)
+        return seeds + uniform_cases(self.session, count, self.seed + SWEEP_SEED + 1, first)
+
+    def first(self) -> None:
+        """Start the first stage."""
+        early = min(EARLY.get(self.session.config.op, 0), SWEEPS)
+        cases = self.first_cases()
+
+        def work() -> None:
+            made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED)
+            evaluate(self.make_harness(self._base(), made), cases, before=early)
+
+        self._launch(work)
+
+    def second(self, seeds: list[TestCase]) -> None:
+        """Start the second stage, with the campaign's generated ``seeds``."""
+        rest = SWEEPS - min(EARLY.get(self.session.config.op, 0), SWEEPS)
+
+        def work() -> None:
+            made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED + 1)
+            evaluate(self.make_harness(self._base(), made), self.second_cases(seeds), after=rest)
+
+        self._launch(work)
+
+    def _launch(self, work: Callable[[], None]) -> None:
+        child = launch(work, self.timeout)
+        if child is not None:
+            self.children.append(child)
+
+    @property
+    def pids(self) -> list[int]:
+        return [child.pid for child in self.children]
+
+    def wait(self) -> None:
+        """Reap every child (``DryRun.wait``)."""
+        for child in self.children:
+            child.wait()
+
+
+def launch(work: Callable[[], None], timeout: int) -> DryRun | None:
+    """Start a dry-run child that runs ``work``. ``timeout`` is libFuzzer's ``-timeout`` (s;
+    0: off, ``DEFAULT_BUDGET``): the child's whole budget.
 
     On a single CPU (``os.sched_getaffinity``: a pinned process) the campaign waits for the
     child before it goes on: sharing one CPU would slow both, and the scheduler would let the
     new child wait for a time slice while the campaign starts up, for nothing."""
-
-    def work() -> None:
-        evaluate(make_harness(), seeds)
-
     dry = DryRun.start(work, timeout if timeout > 0 else DEFAULT_BUDGET)
     if dry is not None and _cpus() == 1:
         dry.wait()
@@ -149,7 +306,7 @@ def _cpus() -> int:
 
 
 class DryRun:
-    """The child process that evaluates the seeds (``start``), and its end (``wait``)."""
+    """A child process that evaluates a stage's inputs (``start``), and its end (``wait``)."""
 
     def __init__(self, pid: int, budget: float) -> None:
         self.pid = pid

@@ -117,7 +117,7 @@ class Harness:
             paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
             self.sources.reward(case.strategy, paid)
         if self.sweep is not None and self.sweep.due():
-            self._sweep()
+            self.run_sweep()
         if self.log is not None and (first or not self.stats.execs & 255):
             self.maybe_snapshot()  # the first right away: stats.jsonl then says when the search began
         self.on_exec()
@@ -139,10 +139,12 @@ class Harness:
             self._record(case, data, evaluation)
         return evaluation
 
-    def _sweep(self) -> None:
+    def run_sweep(self) -> None:
         """A batched FK sweep (``fuzzer.generation.sweep``): its flagged rows are evaluated as
         ordinary test cases; neighbours that raised the difference become preferred parents."""
         assert self.sweep is not None
+        if self.stats.first_input is None:  # a sweep evaluates inputs: the search has begun
+            self.stats.first_input = time.time()
         centres = []
         for difference, data in reversed(self.pool.entries[-CENTRES:]):
             call = self._call_of(data)

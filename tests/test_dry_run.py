@@ -16,12 +16,14 @@ from fuzzer import dry_run
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import boundary_cases
-from fuzzer.selection.state import BOUNDARY, SPACEFILL
+from fuzzer.generation.sweep import CONFIRM, ROWS
+from fuzzer.selection.state import ALIGNED, BOUNDARY, SPACEFILL
 from tests.support import ROOT, fuzz, python
 
 ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
 EVERY_INPUT = "benchmarks.zoo.bugs:axis_not_normalized"
 """A fault that every fk input of the zoo arm shows (a joint axis used without normalizing)."""
+SWEPT = "sweep:uniform"
 
 
 def _records(path: Path) -> list[dict[str, Any]]:
@@ -69,23 +71,31 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     )
     assert run.returncode == 1, run.stderr[-3000:]  # new divergences
     assert "Traceback" not in run.stderr
-    assert "evaluates the seeds and boundary probes before libFuzzer" in run.stderr
+    assert "evaluate probes, uniform inputs and the seeds before libFuzzer" in run.stderr
     stats = _records(artifacts / "stats.jsonl")
     campaign = stats[-1]["pid"]  # the campaign's final snapshot is the last line
     dry = {r["pid"] for r in stats} - {campaign}
-    assert len(dry) == 1, "one dry-run process logged its counters"
-    (child,) = dry
-    child_stats = [r for r in stats if r["pid"] == child]
-    ran = child_stats[-1]["executed_by_strategy"]
-    assert ran["seed"] == 32, "the 32 Hypothesis seeds"
-    assert ran[BOUNDARY] > 0 and child_stats[-1]["execs"] == 32 + ran[BOUNDARY], "then the boundary probes"
+    assert len(dry) == 2, "two dry-run processes (stages) logged their counters"
+    first, second = sorted(dry, key=lambda pid: min(r["first_input"] for r in stats if r["pid"] == pid))
+    last = {pid: [r for r in stats if r["pid"] == pid][-1] for pid in dry}
+    early = dry_run.EARLY["fk"]
+    # every sweep flags rows of a fault every input shows; CONFIRM of them go to the single call
+    ran = last[first]["executed_by_strategy"]
+    assert ran == {SWEPT: early * CONFIRM, ALIGNED: dry_run.ALIGNED["fk"], BOUNDARY: ran[BOUNDARY]}
+    assert ran[BOUNDARY] > 0, "the boundary probes"
+    assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: (dry_run.SWEEPS - early) * CONFIRM}
+    assert [last[pid]["sweep"]["compared"] for pid in (first, second)] == [
+        early * ROWS,
+        (dry_run.SWEEPS - early) * ROWS,
+    ]
     first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
-    assert min(r["first_input"] for r in child_stats) < first_of_campaign
+    assert max(min(r["first_input"] for r in stats if r["pid"] == pid) for pid in dry) < first_of_campaign
     divergences = _records(artifacts / "divergences.jsonl")
-    assert divergences[0]["pid"] == child and divergences[0]["strategy"] == "seed"
+    assert divergences[0]["pid"] == first and divergences[0]["strategy"] == SWEPT, "a sweep goes first"
+    assert "seed" in {r["strategy"] for r in divergences if r["pid"] == second}
     # the campaign meets the same seeds again: one crash file per signature all the same
     signatures = {r["sig"] for r in divergences}
-    assert {r["pid"] for r in divergences} == {child, campaign}
+    assert {r["pid"] for r in divergences} == {first, second, campaign}
     crashes = sorted(p for p in artifacts.glob("crash-*") if p.suffix != ".json")
     assert len(crashes) == len(signatures)
     assert all(Path(f"{p}.json").is_file() for p in crashes)
@@ -95,8 +105,9 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="needs os.sched_setaffinity (Linux)")
 def test_an_ik_dry_run_evaluates_the_orientation_probes_first(tmp_path: Path) -> None:
-    """An IK campaign's dry run starts with the four orientation probes, which show a target
-    that uses the quaternion without normalizing it, then its seeds."""
+    """An IK campaign's dry run starts with the four orientation probes (first stage, before the
+    seeds exist), which show a target that uses the quaternion without normalizing it; its
+    second stage evaluates the seeds."""
     artifacts = tmp_path / "artifacts"
     run = fuzz(
         str(tmp_path / "corpus"),
@@ -114,7 +125,9 @@ def test_an_ik_dry_run_evaluates_the_orientation_probes_first(tmp_path: Path) ->
     campaign = stats[-1]["pid"]
     child = [r for r in stats if r["pid"] != campaign]
     assert child[0]["executed_by_strategy"] == {BOUNDARY: 1}, "an orientation probe first"
-    assert child[-1]["executed_by_strategy"] == {BOUNDARY: 4, "seed": 32}
+    stages = [[r for r in child if r["pid"] == pid] for pid in dict.fromkeys(r["pid"] for r in child)]
+    # the four orientation probes and the reach probe, then the seeds
+    assert [stage[-1]["executed_by_strategy"] for stage in stages] == [{BOUNDARY: 5}, {"seed": 32}]
     first = _records(artifacts / "divergences.jsonl")[0]
     assert first["pid"] == child[0]["pid"] and first["strategy"] == BOUNDARY
 

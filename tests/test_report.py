@@ -432,13 +432,17 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return artifacts, write_report(artifacts, trust=True)  # its sidecars name the tests' plugin targets
 
 
-def _boundary(robot: str) -> list[Any]:
-    """The boundary probes a move campaign's dry run evaluates on ``robot``."""
+def _dry_run(robot: str) -> int:
+    """The inputs a move campaign's dry run evaluates on ``robot`` besides its 32 seeds (both
+    stages: uniform and aligned configurations, boundary probes)."""
     from fuzzer import dry_run
     from fuzzer.execution.session import RunConfig, Session
-    from fuzzer.generation.corpus import boundary_cases
 
-    return boundary_cases(Session.open(RunConfig(robot=robot)), dry_run.BOUNDARY_ROUNDS)
+    def no_harness(*_: object) -> Any:
+        raise AssertionError("counting the inputs makes no harness")
+
+    stages = dry_run.Stages(Session.open(RunConfig(robot=robot)), "rrosfuzz", 1, 32, 0, no_harness)
+    return len(stages.first_cases()) + len(stages.second_cases([]))
 
 
 def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
@@ -450,8 +454,9 @@ def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
     data = gather(artifacts)
     # both campaigns' processes, last snapshot each; -runs=3000 includes libFuzzer's empty
     # input, which is not a test case and not counted; each campaign's dry run (its own
-    # process, fuzzer/dry_run.py) evaluated its 32 Hypothesis seeds and its robot's boundary probes
-    dry = sum(32 + len(_boundary(robot)) for robot in ("probot_anno", "kinova"))
+    # processes, fuzzer/dry_run.py) evaluated its 32 Hypothesis seeds, its robot's boundary
+    # probes and its uniform and aligned configurations
+    dry = sum(32 + _dry_run(robot) for robot in ("probot_anno", "kinova"))
     assert data.summary.executions == 2 * 2999 + dry, "both campaigns' processes, last snapshot each"
     assert {"probot_anno", "kinova"} <= set(data.summary.robots)
     kinds = {b.kind for b in data.buckets}

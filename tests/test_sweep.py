@@ -171,7 +171,7 @@ def test_the_harness_reports_a_swept_divergence_as_an_ordinary_crash_file(tmp_pa
     h = _fk_harness(tmp_path, ("native", "benchmarks.zoo.deep:narrower_band"))
     assert h.sweep is not None
     for _ in range(600):
-        h._sweep()
+        h.run_sweep()
         if h.stats.signatures:
             break
     assert h.stats.signatures, "the band is met within 600 sweeps"
@@ -187,7 +187,7 @@ def test_no_sweep_reports_between_correct_targets(tmp_path: Path) -> None:
     h = _fk_harness(tmp_path, ("native", "python"))
     assert h.sweep is not None
     for _ in range(100):
-        h._sweep()
+        h.run_sweep()
     assert not h.stats.signatures and h.sweep.flagged == 0 and h.sweep.compared == 100 * ROWS
 
 

@@ -44,6 +44,31 @@ a pose's precondition is a unit quaternion, as a joint's is its limits. Half and
 tiny but valid length (the normalization's precision; ``QUATERNION_NORM_EPS`` is 1e-9), and zero
 (rejected as an invalid argument by a correct target)."""
 
+REACH_FACTOR = 4.0
+"""The reach probe's distance from the base (``beyond_reach``), in multiples of the farthest tip
+of ``REACH_SAMPLES`` uniform configurations: a pose goal out of reach, where an IK solver takes
+its failure path (iterations run out; a status code to report, a classic place to misread one).
+The sampled farthest tip of a serial arm is more than a quarter of its reach."""
+
+REACH_SAMPLES = 64
+
+
+def beyond_reach(msg_type: str, message: dict[str, Any], distance: float) -> dict[str, Any] | None:
+    """A copy of a pose message with its position moved along its direction from the base's
+    origin (x if it is the origin) to ``distance`` m; None for a type without a pose."""
+    out = copy.deepcopy(message)
+    pose = out.get("pose") if msg_type == "geometry_msgs/PoseStamped" else out
+    if msg_type not in ("geometry_msgs/PoseStamped", "geometry_msgs/Pose") or not isinstance(pose, dict):
+        return None
+    position = pose.get("position")
+    if not isinstance(position, dict):
+        return None
+    xyz = [float(position.get(k, 0.0)) for k in "xyz"]
+    norm = math.sqrt(sum(v * v for v in xyz))
+    direction = [v / norm for v in xyz] if norm > 0.0 and math.isfinite(norm) else [1.0, 0.0, 0.0]
+    pose["position"] = {k: distance * d for k, d in zip("xyz", direction, strict=True)}
+    return out
+
 
 def probes(
     lower: Sequence[float], upper: Sequence[float], rounds: int = len(OFFSETS)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from fuzzer import reporting
@@ -115,6 +116,58 @@ def boundary_cases(session: Session, rounds: int, first: int = 0) -> list[TestCa
     return out
 
 
+def configuration_cases(
+    session: Session, configurations: Iterable[Sequence[float]], lineage: str, first: int = 0
+) -> list[TestCase]:
+    """One input per joint configuration (rad, m; the robot's joints in order), each in the
+    zero message of the campaign's type, origin ``spacefill`` and lineage ``lineage``, numbered
+    from ``first``: the dry run's uniform and aligned configurations (``fuzzer.dry_run``). None
+    for a scenario, a chain without joints or a message type without a joint-space field (a
+    pose's would cost an FK each)."""
+    from fuzzer.generation.spacefill import configuration_message
+    from fuzzer.selection.state import SPACEFILL
+
+    config = session.config
+    if config.op == "scenario" or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    base = session.registry.default(config.message_type)
+    out: list[TestCase] = []
+    for values in configurations:
+        message = configuration_message(
+            config.message_type, base, tuple(map(float, values)), facts.joint_names
+        )
+        if message is None:
+            return []
+        out.append(TestCase(config.message_type, message, first + len(out), SPACEFILL, (lineage,), 1))
+    return out
+
+
+def uniform_cases(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
+    """``configuration_cases`` of ``n`` configurations uniform at random inside the limits
+    (``spacefill.Uniform``: no ``scipy.stats``), lineage ``spacefill:uniform``."""
+    from fuzzer.generation.spacefill import Uniform
+    from fuzzer.selection.state import UNIFORM
+
+    if n <= 0 or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    return configuration_cases(session, Uniform(facts.lower, facts.upper, seed=seed).block(n), UNIFORM, first)
+
+
+def aligned_cases(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
+    """``configuration_cases`` of ``n`` aligned configurations (``spacefill.Aligned``: each
+    joint at a multiple of pi/2 or a limit), lineage ``aligned``."""
+    from fuzzer.generation.spacefill import Aligned
+    from fuzzer.selection.state import ALIGNED
+
+    if n <= 0 or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    stream = Aligned(facts.lower, facts.upper, seed=seed)
+    return configuration_cases(session, [stream.next() for _ in range(n)], ALIGNED, first)
+
+
 def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
     """The orientation probes of a pose-target campaign (``ik``): the pose FK gives at the robot's
     home configuration (where an IK seeded there converges at once), its quaternion scaled to each
@@ -140,6 +193,34 @@ def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
             return []
         out.append(TestCase(config.message_type, message, first + len(out), SPACEFILL, (BOUNDARY,), 1))
     return out
+
+
+def reach_cases(session: Session, seed: int, first: int = 0) -> list[TestCase]:
+    """The reach probe of a pose-target campaign (``ik``): the home configuration's pose moved
+    out of reach (``fuzzer.generation.boundary.beyond_reach``: ``REACH_FACTOR`` times the
+    farthest tip of ``REACH_SAMPLES`` uniform configurations, ``seed``). Origin ``spacefill``,
+    lineage ``spacefill:boundary``, numbered ``first``. The dry run's first stage evaluates it
+    (both IK solvers then run out of iterations: about 0.16 s on the default robot). None for a
+    message type without a pose, or a chain without joints."""
+    from fuzzer.generation.boundary import REACH_FACTOR, REACH_SAMPLES, beyond_reach
+    from fuzzer.generation.spacefill import Uniform, configuration_message
+    from fuzzer.selection.state import BOUNDARY, SPACEFILL
+
+    config = session.config
+    if config.op == "scenario" or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    home = tuple(session.reference.home_values)
+    base = session.registry.default(config.message_type)
+    pose = configuration_message(config.message_type, base, home, facts.joint_names, facts.reachable)
+    if pose is None or facts.reachable is None:
+        return []
+    sampled = Uniform(facts.lower, facts.upper, seed=seed).block(REACH_SAMPLES)
+    farthest = max(math.dist(facts.reachable(tuple(map(float, q)))[0], (0.0, 0.0, 0.0)) for q in sampled)
+    message = beyond_reach(config.message_type, pose, REACH_FACTOR * max(farthest, 1.0))
+    if message is None:
+        return []
+    return [TestCase(config.message_type, message, first, SPACEFILL, (BOUNDARY,), 1)]
 
 
 def bag_seeds(session: Session, bag: Path) -> list[TestCase]:

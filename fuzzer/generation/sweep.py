@@ -15,11 +15,14 @@ oracle's) and the rotation angle between the two rotation matrices (rad). The ro
   follows the difference uphill;
 * **space-filling** rows for the rest: the next block of a scrambled Sobol sequence inside the
   limits (``SpaceFill``, its own seed), so a fault confined to a narrow region of the joint
-  space is met at batch speed.
+  space is met at batch speed. The dry run's sweeps (``fuzzer.dry_run``), made before
+  ``scipy.stats`` is imported, draw uniform pseudo-random rows instead (``source`` ``uniform``,
+  ``spacefill.Uniform``).
 
 The vectorized oracle is only a filter. A row it flags (either gap above half the campaign's
 tolerance, or a non-finite answer) becomes an ordinary test case (a ``JointState`` or
-``Float64MultiArray`` made from a seed, lineage ``sweep:sobol`` or ``sweep:<joint>:<step>``)
+``Float64MultiArray`` made from a seed, lineage ``sweep:sobol`` (``sweep:uniform``) or
+``sweep:<joint>:<step>``)
 that the harness evaluates like any other input: the single-call oracle, confirmation on
 fresh targets, a crash file and sidecar per new signature. A flagged row the single call does
 not confirm (the targets' batch and single paths disagree) is counted, not reported.
@@ -42,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fuzzer.execution.tolerance import Tolerance
-from fuzzer.generation.spacefill import SpaceFill
+from fuzzer.generation.spacefill import SpaceFill, Uniform
 
 ROWS = 1024
 """Configurations per sweep (a power of two keeps the Sobol block balanced)."""
@@ -63,6 +66,9 @@ CONFIRM = 2
 """Flagged rows per sweep handed to the single-call path (the others wait for later sweeps)."""
 
 Array = NDArray[np.float64]
+
+SOURCES: dict[str, type[SpaceFill] | type[Uniform]] = {"sobol": SpaceFill, "uniform": Uniform}
+"""A sweep's space-filling rows, by name (its lineage label ``sweep:<name>``)."""
 
 
 def differences(a: Array, b: Array) -> tuple[Array, Array]:
@@ -88,7 +94,7 @@ class Row:
 
     values: tuple[float, ...]
     label: str
-    """The lineage step: ``sweep:sobol`` or ``sweep:<joint index><+|-><step>``."""
+    """The lineage step: ``sweep:sobol``, ``sweep:uniform`` or ``sweep:<joint index><+|-><step>``."""
     difference: float
     """max(position gap in m, rotation angle in rad)."""
 
@@ -116,6 +122,10 @@ class Sweep:
         Seeds the Sobol stream and the random directions.
     link : str or None
         The link the campaign's FK calls ask for (None: the tip).
+    source : {"sobol", "uniform"}
+        The space-filling rows: ``SpaceFill`` (imports ``scipy.stats``) or ``Uniform``.
+    share : float
+        Share of the wall time ``due`` allots to sweeps (0: never due; the caller runs them).
     """
 
     lower: Sequence[float]
@@ -123,6 +133,7 @@ class Sweep:
     tolerance: Tolerance
     seed: int = 0
     link: str | None = None
+    source: str = "sobol"
     rows: int = ROWS
     share: float = SHARE
     sweeps: int = 0
@@ -135,13 +146,15 @@ class Sweep:
     """Sweeps a target raised in (the sweep is then switched off after ``MAX_FAILURES``)."""
     seconds: float = 0.0
     _started: float = field(default=0.0, repr=False)
-    _stream: SpaceFill = field(init=False, repr=False)
+    _stream: SpaceFill | Uniform = field(init=False, repr=False)
     _rng: np.random.Generator = field(init=False, repr=False)
 
     MAX_FAILURES = 3
 
     def __post_init__(self) -> None:
-        self._stream = SpaceFill(self.lower, self.upper, seed=self.seed)
+        if self.source not in SOURCES:
+            raise ValueError(f"unknown sweep source {self.source!r} (one of {', '.join(SOURCES)})")
+        self._stream = SOURCES[self.source](self.lower, self.upper, seed=self.seed)
         self._lo, self._hi = self._stream.box()
         self._rng = np.random.default_rng(self.seed)
 
@@ -186,7 +199,7 @@ class Sweep:
         used = sum(len(p) for p in parts)
         fill = self._stream.block(self.rows - used)
         parts.append(fill)
-        labels += ["sweep:sobol"] * len(fill)
+        labels += [f"sweep:{self.source}"] * len(fill)
         owner += [-1] * len(fill)
         q = np.clip(np.vstack(parts), self._lo, self._hi)
         return q, labels, owner

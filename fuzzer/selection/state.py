@@ -23,6 +23,9 @@ BOUNDARY = f"{SPACEFILL}:boundary"
 """The lineage name of a space-filling input carrying a boundary probe (``fuzzer.generation.boundary``);
 the ``spacefill`` arm made it."""
 
+UNIFORM = f"{SPACEFILL}:uniform"
+"""The lineage name of a dry run's uniform random configuration (``corpus.uniform_cases``)."""
+
 
 ALIGNED = "aligned"
 """The arm (and lineage name) of a fresh aligned configuration: every joint at a multiple of

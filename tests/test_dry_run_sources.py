@@ -1,0 +1,197 @@
+"""What the full engine's dry run evaluates besides the seeds and probes (fuzzer/dry_run.py):
+uniform sweeps for ``fk``, uniform configurations for ``move``, aligned configurations for both,
+made without ``scipy.stats``, most of them before the seeds exist (``Stages``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fuzzer import dry_run
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation.boundary import REACH_FACTOR, beyond_reach
+from fuzzer.generation.corpus import make_seeds, orientation_cases, reach_cases, uniform_cases
+from fuzzer.generation.spacefill import Uniform
+from fuzzer.generation.sweep import ROWS, Sweep
+from fuzzer.harness import Harness
+from fuzzer.input.testcase import decode
+from fuzzer.selection.state import ALIGNED, BOUNDARY, SPACEFILL, UNIFORM
+from tests.support import python
+from tests.test_harness import make_harness
+
+
+def test_a_uniform_stream_stays_in_the_box_and_repeats_with_its_seed() -> None:
+    lower, upper = [-1.0, 0.0, float("-inf"), 2.0], [1.0, 0.5, float("inf"), 2.0]
+    a = Uniform(lower, upper, seed=3).block(4096)
+    assert a.shape == (4096, 4)
+    assert np.array_equal(a, Uniform(lower, upper, seed=3).block(4096))
+    assert not np.array_equal(a, Uniform(lower, upper, seed=4).block(4096))
+    lo, hi = np.array([-1.0, 0.0, -np.pi, 2.0]), np.array([1.0, 0.5, np.pi, 2.0])
+    assert (a >= lo).all() and (a <= hi).all()
+    assert (a[:, 3] == 2.0).all(), "a joint with lower == upper keeps its value"
+    # every tenth of each free joint's range is visited (4096 points: a miss has odds 1e-187)
+    for j in range(3):
+        tenths = np.floor((a[:, j] - lo[j]) / (hi[j] - lo[j]) * 10)
+        assert set(tenths.astype(int)) == set(range(10))
+    with pytest.raises(ValueError, match="same non-zero length"):
+        Uniform([0.0], [1.0, 2.0])
+
+
+def test_a_sweep_names_its_source_in_the_lineage_and_rejects_an_unknown_one() -> None:
+    session = Session.open(RunConfig(op="fk"))
+    sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+    assert sweep is not None and sweep.source == "uniform" and not sweep.due() and not sweep.due()
+    q, labels, owner = sweep.batch([])
+    assert q.shape == (ROWS, len(session.reference.joint_limits))
+    assert set(labels) == {"sweep:uniform"} and set(owner) == {-1}
+    with pytest.raises(ValueError, match="unknown sweep source 'halton'"):
+        Sweep([0.0], [1.0], session.config.tolerance, source="halton")
+
+
+@pytest.mark.parametrize(
+    ("op", "mutator", "transport"),
+    [("move", "rrosfuzz", "inprocess"), ("ik", "rrosfuzz", "inprocess"), ("fk", "libfuzzer", "inprocess")],
+)
+def test_only_the_full_engine_sweeps_in_an_fk_dry_run(op: str, mutator: str, transport: str) -> None:
+    assert dry_run.sweep(Session.open(RunConfig(op=op, transport=transport)), mutator, seed=1) is None
+
+
+def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_crash(tmp_path: Path) -> None:
+    """A band 0.1% of joint 2's range wide (``narrow_band``): 32 sweeps of 1,024 uniform rows
+    miss it with odds of about 1e-14. The flagged row is confirmed on the single-call path."""
+    h = make_harness(tmp_path, targets=("native", "benchmarks.zoo.deep:narrow_band"), op="fk")
+    session = Session.open(RunConfig(op="fk"))
+    h.sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+    h.joint_names = tuple(session.reference.joint_names)
+    dry_run.evaluate(h, [], before=dry_run.SWEEPS)
+    assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
+    assert h.stats.signatures and h.sweep.unconfirmed == 0
+    assert h.stats.first_input is not None
+    crash = next(p for p in (tmp_path / "artifacts").glob("crash-*") if p.suffix != ".json")
+    case = decode(crash.read_bytes())
+    assert case.strategy == "sweep:uniform"
+    assert h.evaluator.evaluate(case).divergent
+    sidecar = json.loads(Path(f"{crash}.json").read_text())
+    assert sidecar["lineage"][-1] == "sweep:uniform"
+
+
+def test_no_dry_run_sweep_reports_between_correct_targets(tmp_path: Path) -> None:
+    h = make_harness(tmp_path, op="fk")
+    h.sweep = dry_run.sweep(Session.open(RunConfig(op="fk")), "rrosfuzz", seed=2)
+    dry_run.evaluate(h, [], before=dry_run.SWEEPS)
+    assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
+    assert h.sweep.flagged == 0 and not h.stats.signatures
+
+
+def _stages(op: str, seed: int = 1, wanted: int = 8) -> dry_run.Stages:
+    def no_harness(*_: object) -> Harness:
+        raise AssertionError("making the inputs needs no harness")
+
+    return dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", seed, wanted, 0, no_harness)
+
+
+def test_the_dry_run_sweeps_do_not_import_scipy_stats() -> None:
+    """They run before the campaign imports it (0.55 s on one CPU): a sweep of the dry run and
+    its uniform and aligned configurations must not pull it in."""
+    program = """
+import sys
+from fuzzer import dry_run
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.generation.corpus import make_seeds
+session = Session.open(RunConfig(op="fk"))
+sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+sweep.run([r.model for r in session.evaluator().runners], [])
+move = Session.open(RunConfig(op="move"))
+stages = dry_run.Stages(move, "rrosfuzz", 1, 4, 0, None)
+made = stages.first_cases() + stages.second_cases(make_seeds(move, 4, 1))
+print(len(made), sweep.compared, "scipy.stats" in sys.modules)
+"""
+    done = python(program)
+    assert done.returncode == 0, done.stderr[-3000:]
+    expected = 2 * 2 * 6 + dry_run.ALIGNED["move"] + dry_run.UNIFORM["move"] + 4
+    assert done.stdout.split() == [str(expected), str(ROWS), "False"]
+
+
+def test_a_move_dry_run_makes_uniform_and_aligned_configurations_and_probes_before_the_seeds() -> None:
+    stages = _stages("move")
+    session = stages.session
+    early, aligned, total = dry_run.EARLY["move"], dry_run.ALIGNED["move"], dry_run.UNIFORM["move"]
+    first = stages.first_cases()
+    lineages = [c.lineage for c in first]
+    probes = len(first) - early - aligned
+    assert lineages == [(UNIFORM,)] * early + [(ALIGNED,)] * aligned + [(BOUNDARY,)] * probes
+    assert probes == 2 * 2 * len(session.reference.joint_limits)
+    seeds = make_seeds(session, 8, 1)
+    second = stages.second_cases(seeds)
+    assert second[:8] == seeds
+    rest = second[8:]
+    assert len(rest) == total - early and all(c.lineage == (UNIFORM,) for c in rest)
+    numbers = [c.sequence for c in first] + [c.sequence for c in rest]
+    assert numbers[:early] == list(range(8 + probes, 8 + probes + early))
+    limits = session.reference.joint_limits
+    for case in first[:early] + rest:
+        assert case.origin == SPACEFILL
+        position = case.message["position"]
+        assert all(lim.lower <= v <= lim.upper for v, lim in zip(position, limits, strict=True))
+    for case in first[early : early + aligned]:
+        position = case.message["position"]
+        on_grid = [abs(v / (np.pi / 2) - round(v / (np.pi / 2))) < 1e-12 for v in position]
+        at_limit = [v in (lim.lower, lim.upper) for v, lim in zip(position, limits, strict=True)]
+        assert all(g or a for g, a in zip(on_grid, at_limit, strict=True)), position
+    again = _stages("move").first_cases()
+    assert [c.message for c in again] == [c.message for c in first], "the same -seed, the same inputs"
+    other = _stages("move", seed=2).first_cases()
+    assert [c.message for c in other[:early]] != [c.message for c in first[:early]]
+    assert [c.message for c in rest] != [c.message for c in first[:early]], "the stages' streams differ"
+
+
+def test_fk_and_ik_dry_runs_have_no_uniform_configurations() -> None:
+    fk = _stages("fk")
+    first = fk.first_cases()
+    assert {c.lineage for c in first} == {(ALIGNED,), (BOUNDARY,)}, "fk sweeps its uniform rows"
+    seeds = make_seeds(fk.session, 4, 1)
+    assert fk.second_cases(seeds) == seeds
+    ik = _stages("ik", wanted=4)
+    reach = reach_cases(ik.session, 1 + dry_run.SWEEP_SEED, 4)
+    assert len(reach) == 1
+    assert ik.first_cases() == orientation_cases(ik.session, 4 + 1) + reach, "the pose probes only"
+    assert ik.second_cases(seeds) == seeds
+    assert uniform_cases(ik.session, 8, 1) == [], "a pose would cost an FK each"
+    assert uniform_cases(Session.open(RunConfig(op="scenario")), 8, 1) == []
+
+
+def test_beyond_reach_moves_a_pose_along_its_direction_and_leaves_other_types_alone() -> None:
+    stamped = {"header": {}, "pose": {"position": {"x": 3.0, "y": 0.0, "z": 4.0}, "orientation": {"w": 1.0}}}
+    out = beyond_reach("geometry_msgs/PoseStamped", stamped, 10.0)
+    assert out is not None and out["pose"]["position"] == pytest.approx({"x": 6.0, "y": 0.0, "z": 8.0})
+    assert out["pose"]["orientation"] == {"w": 1.0} and stamped["pose"]["position"]["x"] == 3.0
+    origin = beyond_reach("geometry_msgs/Pose", {"position": {"x": 0.0, "y": 0.0, "z": 0.0}}, 2.0)
+    assert origin is not None and origin["position"] == {"x": 2.0, "y": 0.0, "z": 0.0}
+    assert beyond_reach("sensor_msgs/JointState", {"position": [0.0]}, 2.0) is None
+
+
+@pytest.mark.parametrize("robot", ["probot_anno", "ur5", "panda"])
+def test_the_reach_probe_is_out_of_reach_and_correct_targets_agree_on_it(robot: str) -> None:
+    """Both correct targets fail on it alike (no report); a target that reports a failed IK as
+    a success (``ik_status_misread``) diverges there."""
+    from fuzzer.execution.records import Status
+
+    session = Session.open(RunConfig(op="ik", robot=robot))
+    (probe,) = reach_cases(session, seed=7)
+    position = probe.message["pose"]["position"]
+    distance = float(np.linalg.norm([position[k] for k in "xyz"]))
+    facts = session.facts()
+    assert facts.reachable is not None
+    samples = Uniform(facts.lower, facts.upper, seed=8).block(256)
+    farthest = max(float(np.linalg.norm(facts.reachable(tuple(map(float, q)))[0])) for q in samples)
+    assert distance >= REACH_FACTOR * farthest * 0.9 > farthest
+    evaluation = session.evaluator().evaluate(probe)
+    assert not evaluation.divergent
+    assert [o.status for o in evaluation.outcomes] == [Status.FAILED] * 2, evaluation.outcomes
+    if robot == "probot_anno":
+        targets = ("native", "benchmarks.zoo.bugs:ik_status_misread")
+        misread = Session.open(RunConfig(op="ik", targets=targets))
+        assert misread.evaluator().evaluate(reach_cases(misread, seed=7)[0]).divergent
