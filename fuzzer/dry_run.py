@@ -188,11 +188,11 @@ class Stages:
     """A campaign's dry run in two children, one per stage (``first``, ``second``).
 
     The first starts before the Hypothesis seeds exist (making 32 costs the campaign 75-95 ms):
-    a pose campaign's orientation probes and reach probe, the first ``EARLY`` uniform sweeps (``fk``) or
-    configurations (``move``), ``ALIGNED`` aligned configurations, then the boundary probes.
+    a pose campaign's orientation and reach probes, the first ``EARLY`` uniform sweeps (``fk``)
+    or configurations (``move``), ``ALIGNED`` aligned configurations, then the boundary probes.
     The second starts once they exist: the seeds, then the rest of the uniform work
     (``SWEEPS``, ``UNIFORM``). On one CPU the campaign waits for each child before it goes on
-    (``launch``).
+    (``launch``); on two, the children run while the campaign starts up.
 
     Parameters
     ----------
