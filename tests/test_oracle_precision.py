@@ -222,6 +222,9 @@ def test_kdl_rotation_dead_zone_is_a_known_limitation() -> None:
 # Reachable UR5 targets (FK of random joint vectors) on which IK from home (all zeros, singular)
 # splits native and the twin. Newton-Raphson's first step from home clamps most joints at their
 # limits, so a 1e-9 move of the seed changes neither answer; a 1e-9 m move of the target does.
+# Which of them split depends on the CPU's BLAS kernels (numpy's OpenBLAS picks them at run
+# time): the first two were found on an Intel Xeon, where both split; on an AMD EPYC the first
+# one fails on both targets, and the third (seed 0, draw 144 of uniform joint vectors) splits.
 UR5_CLAMPED_POSES = (
     (
         (-0.011415478125947485, 0.25515797629826104, -0.5071837507834365),
@@ -231,16 +234,29 @@ UR5_CLAMPED_POSES = (
         (-0.25060921321852114, -0.14157702576289524, -0.2585842756225812),
         (-0.489579913557609, -0.6432193202664225, -0.5526389967928211, 0.20290528209179254),
     ),
+    (
+        (-0.20262758259464564, -0.6161848175383535, -0.3844908567405429),
+        (-0.32686268637020405, -0.580105019686674, 0.6077722945852071, 0.4327259968245602),
+    ),
 )
 
 
-@pytest.mark.parametrize("pose", UR5_CLAMPED_POSES)
 def test_an_ik_status_flip_that_only_a_target_nudge_shows_is_ill_conditioned(
-    pose: tuple[tuple[float, ...], tuple[float, ...]],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    result = evaluator(session(("native", "python"), "ik", robot="ur5")).evaluate(ik_case(*pose))
-    assert {o.status for o in result.outcomes} == {Status.OK, Status.FAILED}
-    assert result.comparison.kind is Kind.ILL_CONDITIONED
+    """Every clamped pose that splits the two targets on this machine is ill-conditioned, and
+    at least one is so only through the goal nudges: without them it stays a divergence."""
+    from fuzzer.execution import ik_check
+
+    def judged(pose: tuple[tuple[float, ...], tuple[float, ...]]) -> tuple[set[Status], Kind]:
+        result = evaluator(session(("native", "python"), "ik", robot="ur5")).evaluate(ik_case(*pose))
+        return {o.status for o in result.outcomes}, result.comparison.kind
+
+    splits = [pose for pose in UR5_CLAMPED_POSES if judged(pose)[0] == {Status.OK, Status.FAILED}]
+    assert splits, "no clamped UR5 pose splits native and the twin here"
+    assert all(judged(pose)[1] is Kind.ILL_CONDITIONED for pose in splits)
+    monkeypatch.setattr(ik_check, "GOAL_NUDGES", ())
+    assert any(judged(pose)[1] is Kind.STATUS for pose in splits)
 
 
 # UR5's home pose turned a half turn about the base (aligned inputs find it): clamped iterates
