@@ -80,9 +80,17 @@ SWEEP_SEED = 0xD5
 """Added to ``-seed`` for the dry run's uniform rows and configurations (not the campaign's
 Sobol streams' seeds)."""
 
-EARLY = {"fk": 4, "move": 32}
+EARLY = {"fk": 4, "move": 128}
 """The first stage's uniform work, per op (``Stages``): sweeps (``fk``) or configurations
-(``move``)."""
+(``move``; ``LEAD`` of them before the aligned configurations and the boundary probes, the rest
+after them)."""
+
+LEAD = 32
+"""Uniform configurations (``move``) the first stage evaluates before its aligned
+configurations and boundary probes (about 15 ms); the rest of ``EARLY`` comes after the probes
+(about 40 ms), still before the seeds. With 32 in the first stage and 96 after the seeds,
+``wrap_past_pi`` (a band 2.4% of uniform targets hit) waited for the second stage in about half
+the trials."""
 
 ALIGNED = {"fk": 32, "move": 32}
 """Aligned configurations (each joint at a multiple of pi/2 or a limit: where axes line up and
@@ -92,8 +100,9 @@ show ``rpy_gimbal_band`` (a gimbal-lock branch of a roll-pitch-yaw conversion), 
 uniform configuration of 2,000 did."""
 
 UNIFORM = {"move": 128}
-"""Uniform random configurations the dry run evaluates after the probes, one input each, per op
-(``fuzzer.generation.corpus.uniform_cases``; about 60 ms for ``move`` on one CPU). ``fk`` sweeps
+"""Uniform random configurations the dry run evaluates in all, one input each, per op, ``EARLY``
+of them in the first stage (``fuzzer.generation.corpus.uniform_cases``; about 60 ms for ``move``
+on one CPU). ``fk`` sweeps
 instead; ``ik`` has none (an FK and an IK solve per input). With 64, ``wrap_past_pi`` (a band
 2.4% of uniform targets hit) was found in the dry run in 6 of 10 trials; 128 miss it with
 odds 0.05."""
@@ -189,7 +198,8 @@ class Stages:
 
     The first starts before the Hypothesis seeds exist (making 32 costs the campaign 75-95 ms):
     a pose campaign's orientation and reach probes, the first ``EARLY`` uniform sweeps (``fk``)
-    or configurations (``move``), ``ALIGNED`` aligned configurations, then the boundary probes.
+    or ``LEAD`` configurations (``move``), ``ALIGNED`` aligned configurations, the boundary
+    probes, then the rest of ``EARLY``'s configurations.
     The second starts once they exist: the seeds, then the rest of the uniform work
     (``SWEEPS``, ``UNIFORM``). On one CPU the campaign waits for each child before it goes on
     (``launch``); on two, the children run while the campaign starts up.
@@ -226,7 +236,8 @@ class Stages:
 
     def first_cases(self) -> list[TestCase]:
         """The first stage's inputs (besides its sweeps): orientation and reach probes, the first
-        ``EARLY`` uniform configurations, the aligned ones, the boundary probes."""
+        ``LEAD`` uniform configurations, the aligned ones, the boundary probes, the rest of the
+        ``EARLY`` uniform configurations."""
         session, wanted = self.session, self.wanted
         op = session.config.op
         orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
@@ -237,7 +248,7 @@ class Stages:
             session, ALIGNED.get(op, 0), self.seed + SWEEP_SEED, wanted + len(probes) + count
         )
         reach = reach_cases(session, self.seed + SWEEP_SEED, wanted + len(probes) + count + len(aligned))
-        cases = orientation + reach + uniform + aligned + probes
+        cases = orientation + reach + uniform[:LEAD] + aligned + probes + uniform[LEAD:]
         self._first_count = len(cases)
         return cases
 

@@ -119,24 +119,28 @@ def test_a_move_dry_run_makes_uniform_and_aligned_configurations_and_probes_befo
     stages = _stages("move")
     session = stages.session
     early, aligned, total = dry_run.EARLY["move"], dry_run.ALIGNED["move"], dry_run.UNIFORM["move"]
+    lead = dry_run.LEAD
     first = stages.first_cases()
     lineages = [c.lineage for c in first]
     probes = len(first) - early - aligned
-    assert lineages == [(UNIFORM,)] * early + [(ALIGNED,)] * aligned + [(BOUNDARY,)] * probes
+    assert 0 < lead < early <= total
+    expected = [(UNIFORM,)] * lead + [(ALIGNED,)] * aligned + [(BOUNDARY,)] * probes
+    assert lineages == expected + [(UNIFORM,)] * (early - lead)
     assert probes == 2 * 2 * len(session.reference.joint_limits)
     seeds = make_seeds(session, 8, 1)
     second = stages.second_cases(seeds)
     assert second[:8] == seeds
     rest = second[8:]
     assert len(rest) == total - early and all(c.lineage == (UNIFORM,) for c in rest)
-    numbers = [c.sequence for c in first] + [c.sequence for c in rest]
-    assert numbers[:early] == list(range(8 + probes, 8 + probes + early))
+    uniform = first[:lead] + first[lead + aligned + probes :]
+    numbers = [c.sequence for c in uniform]
+    assert numbers == list(range(8 + probes, 8 + probes + early))
     limits = session.reference.joint_limits
-    for case in first[:early] + rest:
+    for case in uniform + rest:
         assert case.origin == SPACEFILL
         position = case.message["position"]
         assert all(lim.lower <= v <= lim.upper for v, lim in zip(position, limits, strict=True))
-    for case in first[early : early + aligned]:
+    for case in first[lead : lead + aligned]:
         position = case.message["position"]
         on_grid = [abs(v / (np.pi / 2) - round(v / (np.pi / 2))) < 1e-12 for v in position]
         at_limit = [v in (lim.lower, lim.upper) for v, lim in zip(position, limits, strict=True)]

@@ -56,7 +56,7 @@ class SpaceFill:
     seed: int = 0
     drawn: int = 0
     """Points handed out so far."""
-    _engine: Any = field(init=False, repr=False)
+    _sobol: Any = field(init=False, default=None, repr=False)
     _block: list[tuple[float, ...]] = field(init=False, default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
@@ -65,10 +65,18 @@ class SpaceFill:
         lo, hi = finite_box(self.lower, self.upper)
         self._lo, self._hi = np.array(lo), np.array(hi)
         self._fixed = self._hi <= self._lo  # a joint with lower == upper: always that value
-        from scipy.stats import qmc  # 0.55 s of imports (scipy.stats): paid where a stream is made
-
-        self._engine = qmc.Sobol(d=len(lo), scramble=True, seed=np.random.default_rng(self.seed))
         self._rows = np.empty((0, len(lo)))
+
+    @property
+    def _engine(self) -> Any:
+        """The Sobol engine, made at the first point drawn: importing ``scipy.stats`` costs
+        0.55-0.8 s on one CPU, which a campaign that writes no space-filling seeds (a
+        scenario's) then pays at its first fresh input instead of before libFuzzer starts."""
+        if self._sobol is None:
+            from scipy.stats import qmc
+
+            self._sobol = qmc.Sobol(d=len(self._lo), scramble=True, seed=np.random.default_rng(self.seed))
+        return self._sobol
 
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) as arrays, infinite bounds replaced by -pi / pi."""
