@@ -1049,6 +1049,30 @@ def test_compared_writes_past_the_threshold_into_the_leaf_a_comparison_saw() -> 
     assert abs(sum(o["position"][1] in below for o in unseen) / 400 - random_leaf) < 0.06
 
 
+def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:
+    """``0.3 <= x < 0.31`` (two sites) only ever saw x = 1.2 and 0.5: the leaf holding 1.2 gets
+    the band's middle, 0.305, half the times input-to-state picks it, a value past one edge
+    otherwise; one threshold alone never gives a middle."""
+    table = ComparedValues()
+    for x in (0.5, 1.2):
+        table.watch(1, 0.3, x, x >= 0.3)  # always true: unsolved
+        table.watch(2, x, 0.31, x < 0.31)  # always false: unsolved
+    middles = 0
+    for seed in range(400):
+        out = MUTATORS["compared"](joint_state(position=(0.1, 1.2)), make_ctx(seed, JS_TYPES, compared=table))
+        middles += out["position"][1] == pytest.approx(0.305, abs=1e-15)
+    share = middles / 400  # input-to-state (0.75), then the middle (0.5)
+    assert abs(share - 0.75 * 0.5) < 0.07
+    single = ComparedValues()
+    for x in (0.5, 1.2):
+        single.watch(2, x, 0.31, x < 0.31)
+    outs = [
+        MUTATORS["compared"](joint_state(position=(0.1, 1.2)), make_ctx(s, JS_TYPES, compared=single))
+        for s in range(200)
+    ]
+    assert not any(o["position"][1] == pytest.approx(0.305, abs=1e-9) for o in outs)
+
+
 def test_compared_does_not_apply_without_a_known_threshold() -> None:
     for table in (None, ComparedValues()):
         with pytest.raises(NotApplicable):

@@ -579,6 +579,43 @@ def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -
     assert correct.comparison.kind is Kind.AGREE
 
 
+@pytest.mark.parametrize(
+    ("joint_1", "kind"), [(0.305, Kind.VALUE), (0.309, Kind.VALUE), (0.3, Kind.ILL_CONDITIONED)]
+)
+def test_an_ik_that_answers_with_its_seed_is_a_divergence_not_ill_conditioning(
+    joint_1: float, kind: Kind
+) -> None:
+    """ik_seed_band's IK "succeeds" at its seed when the seed's joint_1 is in [0.3, 0.31): a
+    pose goal from a state in the band leaves the faulty twin where it was. Moved by the
+    tolerance, that state moves its answer by the tolerance: an answer that follows its state
+    that far is continuous in it, not ill-conditioned (the nudge check had called every such
+    divergence ill-conditioned). A state within a nudge of the band's edge is a different
+    matter: a 1e-9 move takes it out of the band, and its answer jumps."""
+    start = [joint_1, 0.3, 0.5, 0.2, 0.6, 0.1]
+    goal = {  # the tip at (0.75, 0.35, 0.55, 0.25, 0.65, 0.15): reachable, near the start
+        "position": {"x": 0.07970808594138655, "y": 0.08905826051043023, "z": 0.6523301351062388},
+        "orientation": {
+            "x": 0.4133660423212985,
+            "y": -0.5713357100580867,
+            "z": 0.22432707711398367,
+            "w": 0.6725930299531397,
+        },
+    }
+    steps = [
+        live("joint_target", position=start),
+        live("go"),
+        live("pose_target", header=HEADER, pose=goal),
+        live("go"),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    found = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(case, validated=True)
+    c = found.comparison
+    assert (c.kind, c.step, c.field) == (kind, 3, "go.joint_values")
+    assert found.outcomes[1].steps[3].values["joint_values"] == tuple(start)  # it stayed where it was
+    correct = evaluator("scenario", "python").evaluate(case, validated=True)
+    assert correct.comparison.kind is Kind.AGREE
+
+
 DOWN_THROUGH_THE_BASE = {
     "position": {"x": 0.0, "y": 0.0, "z": -3.14155},
     "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},

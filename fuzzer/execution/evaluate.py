@@ -336,25 +336,32 @@ class Evaluator:
         kind = call.steps[step].kind
         extent = comparison.field in EXTENT_FIELDS  # how far a path got: does that move?
 
-        def changed(first: Outcome, second: Outcome) -> bool:
+        def changed(first: Outcome, second: Outcome, slack: float = 0.0) -> bool:
             if extent:
                 return extent_changed(kind, first, second)
-            return ik_answer_changed(kind, first, second, self.tolerance, facts)
+            tol = self.tolerance
+            if slack:
+                tol = replace(tol, metres=tol.metres + slack, radians=tol.radians + slack)
+            return ik_answer_changed(kind, first, second, tol, facts)
 
-        tries = [(Moved.STATE, shift, AXIS) for shift in ik_check.IK_PERTURBATIONS]
+        tries = [(Moved.STATE, shift, AXIS, 0.0) for shift in ik_check.IK_PERTURBATIONS]
         equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
+        # moved by the tolerance, an answer that follows the state (the IK seed) as far as the
+        # state moved is continuous in it, not ill-conditioned: an IK that answers with its seed
+        # wherever the goal is would otherwise always pass for ill-conditioned (CONTINUITY)
+        tries += [(Moved.STATE, shift, AXIS, equal) for shift in (equal, -equal)]
         gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
-        tries += [(Moved.STATE, shift, AXIS) for shift in (equal, -equal, 2.0 * gap, -2.0 * gap) if shift]
+        tries += [(Moved.STATE, shift, AXIS, 0.0) for shift in (2.0 * gap, -2.0 * gap) if shift]
         goal = (Moved.POSITION, Moved.ORIENTATION)
-        tries += [(moved, shift, axis) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
-        for moved, shift, axis in tries:
+        tries += [(moved, shift, axis, 0.0) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
+        for moved, shift, axis, slack in tries:
             nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved, axis))
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way
             for first, second in zip(outcomes, nudged, strict=True):
                 if step >= len(first.steps):
                     continue
-                if step >= len(second.steps) or changed(first.steps[step], second.steps[step]):
+                if step >= len(second.steps) or changed(first.steps[step], second.steps[step], slack):
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         with twin_with_kdl_dead_zone() as swapped:  # KDL's documented dead zone in the twin
             again = self.run_both(call, runners=runners) if swapped else ()

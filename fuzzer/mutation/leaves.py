@@ -279,12 +279,21 @@ CROSSING_PROBABILITY: Final = 0.75
 with it (when the message has one)."""
 
 
+BETWEEN_PROBABILITY: Final = 0.5
+""":func:`apply_compared`: chance, when the leaf's value was compared against two or more
+unsolved thresholds, of writing the middle of two of them instead of a value past one."""
+
+
 def apply_compared(message: Message, ctx: MutationContext) -> Message:
     """The ``compared`` mutator. With probability :data:`CROSSING_PROBABILITY`, Redqueen's
     input-to-state step: a float leaf whose value an unsolved comparison recently saw
     (``ctx.compared.crossing``) gets that comparison's threshold, or a value just past it on the
-    far side from the leaf's value (the outcome never seen). Otherwise, or when no leaf matches,
-    one float leaf gets a threshold or a value either side of it (:func:`_compared`)."""
+    far side from the leaf's value (the outcome never seen); or, when the value met two such
+    thresholds (a band ``a <= x < b``, a calibration table's entry), the middle of two of them
+    (:data:`BETWEEN_PROBABILITY`): inside a narrow band as far from both edges as it can be,
+    where the oracle's nudges of the value do not carry it out (an input at a band's very edge
+    is judged ill-conditioned). Otherwise, or when no leaf matches, one float leaf gets a
+    threshold or a value either side of it (:func:`_compared`)."""
     if ctx.compared is not None and ctx.rng.random() < CROSSING_PROBABILITY:
         found = ctx.compared
         crossing = [
@@ -295,7 +304,12 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
         if crossing:
             leaf, threshold = ctx.rng.choice(crossing)
             value = _get(message, leaf.loc)
-            _set(message, leaf.loc, _coerce(_past(threshold, value, ctx.rng), leaf.spec, ctx))
+            others = [t for other, t in crossing if other is leaf and t != threshold]
+            if others and ctx.rng.random() < BETWEEN_PROBABILITY:
+                new = (threshold + ctx.rng.choice(others)) / 2.0
+            else:
+                new = _past(threshold, value, ctx.rng)
+            _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
             return message
     return _apply_leaf_ops(message, ctx, ("compared",))
 
