@@ -34,7 +34,7 @@ from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
-from fuzzer.mutation import mutators
+from fuzzer.mutation import mutators, session_values
 from fuzzer.selection.guidance import Features
 
 ENGINES = ("paper", "hypothesis", "uniform")
@@ -43,8 +43,8 @@ ENGINES = ("paper", "hypothesis", "uniform")
 def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int) -> Harness:
     ctx = mutators.MutationContext(
         rng=random.Random(seed),
-        field_types=campaign.field_types(session, session.config.message_type),
-        interesting_floats=tuple(campaign.interesting_values(session)),
+        field_types=session_values.field_types(session, session.config.message_type),
+        interesting_floats=tuple(session_values.interesting_values(session)),
     )
     recorded, digest = versions(), session.robot_digest()
     return Harness(

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import datetime
 import hashlib
-import math
 import os
 import random
 import sys
@@ -24,7 +23,6 @@ from fuzzer import dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
-from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import (
     bag_seeds,
     make_seeds,
@@ -36,6 +34,7 @@ from fuzzer.generation.corpus import (
 )
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation.dictionary import parse_dictionary
+from fuzzer.mutation.session_values import field_types, interesting_values
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
@@ -74,30 +73,6 @@ class CampaignOptions:
     verbose: bool = False
     seeds_from_bag: Path | None = None
     """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
-
-
-def field_types(session: Session, msg_type: str, prefix: str = "") -> dict[str, str]:
-    """Dotted path -> ROS builtin type of every mutable leaf (arrays of messages are left out)."""
-    out: dict[str, str] = {}
-    for f in session.registry.get(msg_type).fields:
-        path = f"{prefix}{f.name}"
-        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
-        if f.is_builtin:
-            out[path] = f.type + suffix
-        elif not f.is_array:
-            out.update(field_types(session, f.type, path + "."))
-    return out
-
-
-def interesting_values(session: Session) -> list[float]:
-    """Joint limits and the tolerance band around them: where divergences live."""
-    eps = sorted(OFFSETS)
-    values: list[float] = []
-    for lim in session.reference.joint_limits:
-        for bound in (lim.lower, lim.upper):
-            if math.isfinite(bound):
-                values.extend(bound + s * e for e in eps for s in (-1.0, 1.0))
-    return values
 
 
 def libfuzzer_mutate(data: bytes, max_size: int) -> bytes:

@@ -15,7 +15,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation import corpus
 from fuzzer.harness import DivergenceFound, Harness
 from fuzzer.input.testcase import TestCase, decode
-from fuzzer.mutation import mutators
+from fuzzer.mutation import mutators, session_values
 from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import Pool
 
@@ -26,8 +26,8 @@ def make_harness(tmp_path: Path, targets: tuple[str, str] = ("native", "python")
     seeds = corpus.make_seeds(session, 8, 0)
     ctx = mutators.MutationContext(
         rng=random.Random(0),
-        field_types=campaign.field_types(session, config.message_type),
-        interesting_floats=tuple(campaign.interesting_values(session)),
+        field_types=session_values.field_types(session, config.message_type),
+        interesting_floats=tuple(session_values.interesting_values(session)),
     )
     versions = {"python": "test"}
     return Harness(

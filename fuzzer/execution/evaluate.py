@@ -348,7 +348,7 @@ class Evaluator:
         equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
         # moved by the tolerance, an answer that follows the state (the IK seed) as far as the
         # state moved is continuous in it, not ill-conditioned: an IK that answers with its seed
-        # wherever the goal is would otherwise always pass for ill-conditioned (CONTINUITY)
+        # wherever the goal is would otherwise always pass for ill-conditioned (docs/engine.md)
         tries += [(Moved.STATE, shift, AXIS, equal) for shift in (equal, -equal)]
         gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
         tries += [(Moved.STATE, shift, AXIS, 0.0) for shift in (2.0 * gap, -2.0 * gap) if shift]

@@ -102,7 +102,7 @@ class SequenceContext:
 def field_types(registry: MessageRegistry, msg_type: str, prefix: str = "") -> dict[str, str]:
     """Dotted field path -> ROS type of every field of ``msg_type`` the value mutators may touch.
 
-    As ``fuzzer.campaign.field_types``, but arrays of messages are kept (``poses``:
+    As ``fuzzer.mutation.session_values.field_types``, but arrays of messages are kept (``poses``:
     ``geometry_msgs/Pose[]``, their elements' fields as ``poses.position.x``), so the
     waypoints of a ``/cartesian_path`` step can be mutated, inserted and removed.
     """
