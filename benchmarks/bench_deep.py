@@ -136,9 +136,12 @@ def survival(runs: list[Run], budget: float, points: int = 200) -> tuple[list[fl
     return times, share
 
 
-def markdown(runs: list[Run], mode: Mode, cmd: str) -> str:
+def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> str:
+    """The tables; ``jobs``: runs at a time (None: tabulated from a results file, whose runs
+    the text around the table must describe)."""
+    at_once = f"{jobs} run{'s' if jobs != 1 else ''} at a time" if jobs else "tabulated from a results file"
     lines = [
-        f"{mode.trials} trials x {mode.budget:.0f} s per (bug, engine), two runs at a time on "
+        f"{mode.trials} trials x {mode.budget:.0f} s per (bug, engine), {at_once} on "
         f"{os.cpu_count()} CPUs ({platform.machine()}, Python {platform.python_version()}). Command: "
         f"`{cmd}`. "
         + (
@@ -347,7 +350,7 @@ def _report(
         (args.results / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
     plot(runs, mode, args.results / f"deep-{args.mode}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
-    text = markdown(runs, mode, cmd.strip())
+    text = markdown(runs, mode, cmd.strip(), args.jobs if copy else None)
     print(text)
     if args.write_md:
         picture = f"\n\n![survival](benchmarks/results/deep-{args.mode}.png)"

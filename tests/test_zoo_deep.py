@@ -146,6 +146,9 @@ def test_survival_and_markdown() -> None:
     text = bench_deep.markdown(runs, mode, "cmd")
     row = next(line for line in text.splitlines() if line.startswith("| narrow_band"))
     assert "(4/4)" in row and "- (0/4)" in row and "faster" in row
+    assert "tabulated from a results file" in text  # how many ran at once is not known
+    assert "1 run at a time" in bench_deep.markdown(runs, mode, "cmd", jobs=1)
+    assert "2 runs at a time" in bench_deep.markdown(runs, mode, "cmd", jobs=2)
     late = [_run("full", 0, 2.0), _run("full", 1, 12.0)]  # the second past the 10-s budget
     table = bench_deep.markdown(late, mode, "cmd").splitlines()
     row = next(ln for ln in table if ln.startswith("| narrow_band"))
