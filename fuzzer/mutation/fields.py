@@ -11,7 +11,7 @@ import struct
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 from fuzzer.mutation.base import (
     _T,
@@ -24,6 +24,9 @@ from fuzzer.mutation.base import (
     MutationContext,
     NotApplicable,
 )
+
+if TYPE_CHECKING:
+    from fuzzer.input.msgdef import MessageRegistry
 
 # ----------------------------------------------------------------------------------------------------------
 # Types
@@ -118,6 +121,25 @@ def _scalar_spec(base: str) -> ScalarSpec | None:
     if bounded is not None:
         return ScalarSpec("str", bounded["base"], max_len=int(bounded["max"]))
     return None
+
+
+def field_types(
+    registry: MessageRegistry, msg_type: str, prefix: str = "", message_arrays: bool = False
+) -> dict[str, str]:
+    """Dotted path -> ROS type (``float64``, ``uint8[]``, ``geometry_msgs/Pose[]``) of every field
+    of ``msg_type`` a mutator may touch: its builtin leaves, through nested messages. An array of
+    messages is left out, unless ``message_arrays``: then it is a field itself and its elements'
+    fields are typed under its name (``poses.position.x``), so that a ``/cartesian_path``
+    step's waypoints can be mutated, inserted and removed."""
+    out: dict[str, str] = {}
+    for f in registry.get(msg_type).fields:
+        path = f"{prefix}{f.name}"
+        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
+        if f.is_builtin or (message_arrays and f.is_array):
+            out[path] = f.type + suffix
+        if not f.is_builtin and (message_arrays or not f.is_array):
+            out.update(field_types(registry, f.type, path + ".", message_arrays))
+    return out
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -8,19 +8,13 @@ import math
 
 from fuzzer.execution.session import Session
 from fuzzer.generation.boundary import OFFSETS
+from fuzzer.mutation import fields
 
 
-def field_types(session: Session, msg_type: str, prefix: str = "") -> dict[str, str]:
-    """Dotted path -> ROS builtin type of every mutable leaf (arrays of messages are left out)."""
-    out: dict[str, str] = {}
-    for f in session.registry.get(msg_type).fields:
-        path = f"{prefix}{f.name}"
-        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
-        if f.is_builtin:
-            out[path] = f.type + suffix
-        elif not f.is_array:
-            out.update(field_types(session, f.type, path + "."))
-    return out
+def field_types(session: Session, msg_type: str) -> dict[str, str]:
+    """Dotted path -> ROS builtin type of every mutable leaf (arrays of messages are left out;
+    ``fuzzer.mutation.fields.field_types``)."""
+    return fields.field_types(session.registry, msg_type)
 
 
 def interesting_values(session: Session) -> list[float]:

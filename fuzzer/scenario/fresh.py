@@ -17,6 +17,7 @@ from typing import Any, Final
 
 from fuzzer.input.mapping import FOCUS
 from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.mutation import fields
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import MutationContext, NotApplicable
 
@@ -99,22 +100,10 @@ class SequenceContext:
     inner: str | None = None
 
 
-def field_types(registry: MessageRegistry, msg_type: str, prefix: str = "") -> dict[str, str]:
-    """Dotted field path -> ROS type of every field of ``msg_type`` the value mutators may touch.
-
-    As ``fuzzer.mutation.session_values.field_types``, but arrays of messages are kept (``poses``:
-    ``geometry_msgs/Pose[]``, their elements' fields as ``poses.position.x``), so the
-    waypoints of a ``/cartesian_path`` step can be mutated, inserted and removed.
-    """
-    out: dict[str, str] = {}
-    for f in registry.get(msg_type).fields:
-        path = f"{prefix}{f.name}"
-        suffix = "" if not f.is_array else ("[]" if f.length is None else f"[{f.length}]")
-        if f.is_builtin or f.is_array:
-            out[path] = f.type + suffix
-        if not f.is_builtin:
-            out.update(field_types(registry, f.type, path + "."))
-    return out
+def field_types(registry: MessageRegistry, msg_type: str) -> dict[str, str]:
+    """Dotted field path -> ROS type of every field of ``msg_type`` the value mutators may touch,
+    arrays of messages included (``fuzzer.mutation.fields.field_types``)."""
+    return fields.field_types(registry, msg_type, message_arrays=True)
 
 
 def unit_quaternions(node: Any) -> Any:
