@@ -3,7 +3,11 @@
 FK multiplies the segment transforms ``A0 + u1 A1 + u2 A2`` (see
 :mod:`python_impl.chain`). IK is Newton-Raphson on the error twist with a
 truncated-SVD pseudo-inverse of the geometric Jacobian and joint limits
-enforced by clamping after every step (docs/api.md, "Inverse kinematics").
+enforced by clamping after every step (docs/api.md, "Inverse kinematics"). An
+iteration is a function of its iterate alone, so an iterate seen before (clamped joints
+or steps that undo each other, common when the target is out of reach) starts a cycle:
+the loop then skips to the iterate its last iteration would leave (``_cycle_end``), bit
+for bit the answer of running every iteration.
 """
 
 from __future__ import annotations
@@ -88,6 +92,8 @@ class Movable:
     """(k, 3, 1) its unit axis in its joint frame."""
     revolute: NDArray[np.bool_]
     """(k,) bool: it is revolute (else prismatic)."""
+    origins: Array
+    """(k', 4, 4) the joint frames (``chain.origin``) of the movable segments after segment 0."""
 
 
 def movable_segments(chain: Chain, link: int) -> Movable:
@@ -99,6 +105,7 @@ def movable_segments(chain: Chain, link: int) -> Movable:
         variable[index],
         chain.axis[index][:, :, None],
         chain.kind[index] == REVOLUTE,
+        chain.origin[index[index > 0]],
     )
 
 
@@ -128,17 +135,19 @@ def fk_and_jacobian(
     m = segment_transforms(chain, q, link)
     if movable is None:
         movable = movable_segments(chain, link)
-    frames = []
+    # a movable segment's joint frame: the running product before it times its origin (the
+    # products of all of them in one call); segment 0's origin is in the root frame already
+    before: list[Array] = []
     t = m[0]
-    if movable.mask[0]:  # segment 0 moves: its joint frame is its origin in the root frame
-        frames.append(chain.origin[0])
     for s in range(1, link):
         if movable.mask[s]:
-            frames.append(t @ chain.origin[s])
+            before.append(t)
         t = t @ m[s]
-    if not frames:
+    if not movable.columns.size:
         return t, jac
-    f = np.array(frames)  # (k, 4, 4)
+    f = np.matmul(np.array(before), movable.origins) if before else movable.origins  # (k', 4, 4)
+    if movable.mask[0]:
+        f = np.concatenate((chain.origin[:1], f))  # (k, 4, 4)
     z = np.matmul(f[:, :3, :3], movable.axes)[:, :, 0]  # (k, 3): world axis of each movable joint
     r = t[:3, 3] - f[:, :3, 3]
     z0, z1, z2 = z[:, 0], z[:, 1], z[:, 2]
@@ -164,9 +173,9 @@ def is_small(twist: Array) -> bool:
 def pinv_step(jac: Array, twist: Array) -> Array:
     """``J^+ twist`` with singular values below ``IK_PINV_EPS`` treated as zero."""
     u, s, vt = np.linalg.svd(jac, full_matrices=False)
-    ut_twist = u.T @ twist
-    inv = np.where(np.abs(s) < IK_PINV_EPS, 0.0, ut_twist / np.where(s == 0.0, 1.0, s))
-    step: Array = vt.T @ inv
+    ut_twist = (u.T @ twist).tolist()
+    inv = [0.0 if abs(v) < IK_PINV_EPS else w / v for v, w in zip(s.tolist(), ut_twist, strict=True)]
+    step: Array = vt.T @ np.array(inv)
     return step
 
 
@@ -200,11 +209,23 @@ def _ik(
     else:
         start = q.copy()
         movable = movable_segments(chain, link)
-        for _ in range(IK_MAX_ITERATIONS):
+        # iterates so far (their bytes) and where each first came: an iterate seen before means
+        # the rest is a cycle, whose end the loop would reach step by step (see _cycle_end)
+        seen: dict[bytes, int] = {}
+        iterates: list[bytes] = []
+        errors: list[float] = []
+        for k in range(IK_MAX_ITERATIONS):
+            key = q.tobytes()
+            if key in seen:
+                q = _cycle_end(iterates, errors, seen[key], k, trace)
+                break
+            seen[key] = k
+            iterates.append(key)
             current, jac = fk_and_jacobian(chain, q, link, nvars, movable)
             twist = error_twist(current, target)
             if trace is not None:
-                trace.append(float(np.linalg.norm(twist[3:])))
+                errors.append(float(np.linalg.norm(twist[3:])))
+                trace.append(errors[-1])
             if is_small(twist):
                 converged = True
                 break
@@ -224,3 +245,21 @@ def _ik(
     position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
     orientation_error = rotation_angle(reached[:3, :3].T @ target[:3, :3])
     return converged, values, position_error, orientation_error
+
+
+def _cycle_end(
+    iterates: list[bytes], errors: list[float], first: int, now: int, trace: list[float] | None
+) -> Array:
+    """The iterate the loop would end with, once iterate ``now`` repeats iterate ``first``.
+
+    Each iteration is a function of its iterate alone, so from ``first`` on the iterates
+    repeat with period ``now - first``, none of them converged nor non-finite (they were
+    all run once): the loop's last iterate is known without running the rest. ``trace``
+    gets the rotation errors those iterations would have appended (``errors``: one per
+    iterate run so far). The result is bit for bit the one of running every iteration.
+    """
+    period = now - first
+    if trace is not None:
+        trace.extend(errors[first + (k - first) % period] for k in range(now, IK_MAX_ITERATIONS))
+    last = first + (IK_MAX_ITERATIONS - first) % period
+    return np.frombuffer(iterates[last], dtype=np.float64).copy()

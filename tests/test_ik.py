@@ -231,3 +231,60 @@ def test_the_twins_iterate_replay_follows_inverse_kinematics() -> None:
             assert len(errors) == 100
     with pytest.raises(InvalidInputError):
         ik_rotation_errors(m, ((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 0.0)))
+
+
+def _every_iteration(chain, target, seed, link, nvars, trace):  # type: ignore[no-untyped-def]
+    """The twin's Newton-Raphson loop written out with no shortcut: all IK_MAX_ITERATIONS
+    iterations run unless one converges or goes non-finite (the reference for the next test)."""
+    from python_impl import kinematics as k
+
+    lower = np.array([lim.lower for lim in chain.limits[:nvars]])
+    upper = np.array([lim.upper for lim in chain.limits[:nvars]])
+    q = np.array(seed, dtype=np.float64)
+    start, converged = q.copy(), False
+    for _ in range(k.IK_MAX_ITERATIONS):
+        current, jac = k.fk_and_jacobian(chain, q, link, nvars)
+        twist = k.error_twist(current, target)
+        trace.append(float(np.linalg.norm(twist[3:])))
+        if k.is_small(twist):
+            converged = True
+            break
+        if not (np.isfinite(twist).all() and np.isfinite(jac).all()):
+            return False, start.tolist()
+        q[:nvars] += k.pinv_step(jac, twist)
+        q[:nvars] = np.minimum(np.maximum(q[:nvars], lower), upper)
+    return converged, q.tolist()
+
+
+@pytest.mark.parametrize("robot", ["probot_anno", "ur5", "panda"])
+def test_the_twins_ik_ends_a_cycle_as_running_it_would(robot: str, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Unreachable targets make Newton-Raphson revisit an iterate (clamped joints, steps that
+    undo each other); ``kinematics._ik`` then skips to the end of the cycle (``_cycle_end``).
+    Its answer and trace equal those of running every iteration, bit for bit, and some of
+    the cases below do cycle (with periods above 1)."""
+    from python_impl import kinematics
+
+    periods: list[int] = []
+    real_end = kinematics._cycle_end
+
+    def counted(iterates, errors, first, now, trace):  # type: ignore[no-untyped-def]
+        periods.append(now - first)
+        return real_end(iterates, errors, first, now, trace)
+
+    monkeypatch.setattr(kinematics, "_cycle_end", counted)
+    model = python_impl.RobotModel(robot_path(robot))
+    chain, tip = model.chain, len(model.chain.link_names) - 1
+    nvars = model._ik_variables(tip)
+    rng = np.random.default_rng(5)
+    for q in sample_configurations(model, 60, seed=4):
+        target = kinematics.fk(chain, q, tip).copy()
+        target[:3, 3] += rng.normal(0.0, 0.4, 3)  # mostly out of reach
+        seed = model._ik_start(model.forward_kinematics(q), q + rng.normal(0.0, 0.5, len(q)), None)[2]
+        expected_trace: list[float] = []
+        expected = _every_iteration(chain, target, seed, tip, nvars, expected_trace)
+        trace: list[float] = []
+        converged, values, _, _ = kinematics._ik(chain, target, list(seed), tip, nvars, trace)
+        assert (converged, values) == (expected[0], [float(v) for v in expected[1]])
+        assert trace == expected_trace
+        assert kinematics._ik(chain, target, list(seed), tip, nvars, None)[:2] == (converged, values)
+    assert periods and max(periods) > 1
