@@ -118,6 +118,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         return build_sidecar(session, case, data, ev, recorded_versions, digest)
 
     evaluator = session.evaluator()
+    timeout = int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"]))
+    evaluator.check_seconds = check_seconds(timeout)
     dry: dry_run.Stages | None = None
     dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
     usable, seeds = prescan(session, folders) if not child else (1, [])
@@ -140,7 +142,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
                 options.mutator,
                 options.seed,
                 wanted,
-                int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"])),
+                timeout,
                 lambda base, sweep: dry_run.harness(
                     evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
                 ),
@@ -333,6 +335,13 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
         forwarded = [absolute_option(o) for o in forwarded]
         corpus = [str(Path(c).resolve()) for c in corpus]
     return [script, *flags, *forwarded, *corpus]
+
+
+def check_seconds(timeout: int) -> float | None:
+    """One input's time budget for the oracle's re-runs (``Evaluator.check_seconds``): half of
+    libFuzzer's ``-timeout`` (s), so that checking a divergence never makes it a timeout; None
+    (no budget) for ``-timeout=0``, which has none either."""
+    return timeout / 2.0 if timeout > 0 else None
 
 
 def build_sidecar(

@@ -286,6 +286,7 @@ class Harness:
                 "target": cmp.target,
                 "step": cmp.step,
                 "step_kind": cmp.step_kind,
+                "unchecked": cmp.unchecked,
                 "outcome_a": a.label,
                 "outcome_b": b.label,
                 "strategy": case.strategy,

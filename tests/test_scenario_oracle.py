@@ -571,6 +571,7 @@ def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -
     found = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(case, validated=True)
     c = found.comparison
     assert (c.kind, c.step, c.field) == (Kind.VALUE, 0, "cartesian_path.fraction")
+    assert c.unchecked == ""  # no time budget: every re-run ran (tests/test_scenario_budget.py)
     assert [o.steps[0].values["fraction"] for o in found.outcomes] == [
         (pytest.approx(0.10577, abs=1e-4),),
         (1.0,),

@@ -40,6 +40,7 @@ seed (docs/engine.md, "Ill-conditioning").
 from __future__ import annotations
 
 import math
+import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
@@ -53,14 +54,13 @@ from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import IkCall
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, scenario_outcome
 from fuzzer.scenario.nudge import AXIS, Moved, Nudge
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, state_gap
 from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall
-from robot_api.errors import RobotAPIError
 from robot_api.records import JointType
 
 ABSURD = 1e6
@@ -133,6 +133,13 @@ class Evaluator:
     """Live signatures already confirmed on fresh targets (later ones skip the construction)."""
     _facts: ScenarioFacts | None = None
     _replay: Any = None
+    check_seconds: float | None = None
+    """Time budget (s) of one input's evaluation for the ill-conditioning re-runs of a scenario
+    divergence (``_scenario_ik``), None for no budget: a campaign sets half of libFuzzer's
+    ``-timeout``, so that checking a divergence of a slow target never makes it a timeout. A
+    re-run that would end past it (by the longest re-run so far) is not started; the divergence
+    stands, with ``Comparison.unchecked`` saying how many were not run."""
+    _started: float = 0.0
 
     def __post_init__(self) -> None:
         limits = list(getattr(self.runners[0].model, "joint_limits", []))
@@ -214,6 +221,7 @@ class Evaluator:
             Replay: start from fresh targets and make these calls on them first (a
             ``state_dependent`` sidecar's history; ``[]`` for fresh targets only).
         """
+        self._started = time.monotonic()
         message = case.message
         if not validated:
             try:
@@ -354,8 +362,13 @@ class Evaluator:
         tries += [(Moved.STATE, shift, AXIS, 0.0) for shift in (2.0 * gap, -2.0 * gap) if shift]
         goal = (Moved.POSITION, Moved.ORIENTATION)
         tries += [(moved, shift, axis, 0.0) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
-        for moved, shift, axis, slack in tries:
+        longest = 0.0
+        for done, (moved, shift, axis, slack) in enumerate(tries):
+            if self._out_of_time(longest):
+                return replace(comparison, unchecked=self._cut_short(done, len(tries) + 1))
+            began = time.monotonic()
             nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved, axis))
+            longest = max(longest, time.monotonic() - began)
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way
             for first, second in zip(outcomes, nudged, strict=True):
@@ -363,6 +376,8 @@ class Evaluator:
                     continue
                 if step >= len(second.steps) or changed(first.steps[step], second.steps[step], slack):
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
+        if self._out_of_time(longest):
+            return replace(comparison, unchecked=self._cut_short(len(tries), len(tries) + 1))
         with twin_with_kdl_dead_zone() as swapped:  # KDL's documented dead zone in the twin
             again = self.run_both(call, runners=runners) if swapped else ()
         explained = len(again) == 2 and all(step < len(o.steps) for o in again)
@@ -371,13 +386,14 @@ class Evaluator:
         return comparison
 
 
-def scenario_outcome(runner: Runner, call: ScenarioCall, nudge: Nudge | None = None) -> Outcome:
-    """``run_scenario``, never raising: a group that cannot be constructed is the outcome."""
-    try:
-        return run_scenario(runner, call, nudge)
-    except RobotAPIError as exc:
-        return Outcome(Status.REJECTED, type(exc).__name__, int(exc.code), str(exc)[:500])
-    except KeyboardInterrupt:
-        raise
-    except BaseException as exc:  # noqa: BLE001 - a crash of the target is a finding
-        return Outcome(Status.CRASHED, type(exc).__name__, None, str(exc)[:500])
+    def _out_of_time(self, longest: float) -> bool:
+        """A re-run as long as ``longest`` (s) would end past ``check_seconds``."""
+        budget = self.check_seconds
+        return budget is not None and time.monotonic() - self._started + longest > budget
+
+    def _cut_short(self, done: int, total: int) -> str:
+        return (
+            f"{total - done} of {total} ill-conditioning re-runs not run: the input's time budget "
+            f"({self.check_seconds:g} s, half of -timeout) ran out; replaying the file runs them"
+        )
+

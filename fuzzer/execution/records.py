@@ -149,6 +149,10 @@ class Comparison:
     step_kind : str
         Its kind (``go``, ``plan``, ``cartesian_path``...; docs/engine.md, "Scenarios"), else ''.
         ``field`` then reads ``<step_kind>.<quantity>``, e.g. ``plan.trajectory.velocities``.
+    unchecked : str
+        The oracle's checks this verdict did not get to, else '': a campaign stops the
+        ill-conditioning re-runs of one input at its time budget (``Evaluator.check_seconds``),
+        and says so here; a replay runs them all.
     """
 
     kind: Kind
@@ -163,6 +167,7 @@ class Comparison:
     target: str = ""
     step: int | None = None
     step_kind: str = ""
+    unchecked: str = ""
 
     @property
     def divergent(self) -> bool:

@@ -300,3 +300,15 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
         failed = _failure(Status.CRASHED, crash)
         return Outcome(failed.status, failed.error, failed.code, failed.message, final, steps)
     return Outcome(Status.OK, values=final, steps=steps)
+
+
+def scenario_outcome(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) -> Outcome:
+    """``run_scenario``, never raising: a group that cannot be constructed is the outcome."""
+    try:
+        return run_scenario(runner, call, nudge)
+    except RobotAPIError as exc:
+        return Outcome(Status.REJECTED, type(exc).__name__, int(exc.code), str(exc)[:500])
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a crash of the target is a finding
+        return Outcome(Status.CRASHED, type(exc).__name__, None, str(exc)[:500])

@@ -1,0 +1,57 @@
+"""The time budget of the oracle's ill-conditioning re-runs (``Evaluator.check_seconds``):
+a slow target's divergence is reported, not turned into a libFuzzer timeout."""
+
+from __future__ import annotations
+
+import itertools
+import re
+
+import pytest
+
+from fuzzer.campaign import check_seconds
+from fuzzer.execution import evaluate
+from fuzzer.execution.records import Kind
+from fuzzer.input.testcase import TestCase
+from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live
+
+CUT = re.compile(r"^(\d+) of (\d+) ill-conditioning re-runs not run: the input's time budget")
+
+
+def far_path() -> TestCase:
+    """``ik_seed_band``'s path of tests/test_scenario_oracle.py: a ``value`` divergence of the
+    fraction at a step that solves IK, which the nudge check re-runs."""
+    steps = [live("cartesian_path", header={**HEADER, "frame_id": "link_4"}, poses=[FAR_WAYPOINT])]
+    return TestCase("rrosfuzz/Scenario", {"steps": steps})
+
+
+def judged(budget: float | None):  # type: ignore[no-untyped-def]
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    ev.check_seconds = budget
+    return ev.evaluate(far_path(), validated=True).comparison
+
+
+def test_a_spent_budget_keeps_the_divergence_and_says_no_re_run_ran() -> None:
+    c = judged(0.0)
+    assert (c.kind, c.field) == (Kind.VALUE, "cartesian_path.fraction")
+    match = CUT.match(c.unchecked)
+    assert match is not None, c.unchecked
+    assert match.group(1) == match.group(2)  # none ran
+    assert int(match.group(2)) >= 17  # the nudges of docs/engine.md and the dead-zone run
+
+
+def test_the_budget_stops_before_a_re_run_that_would_end_past_it(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A clock that advances one second per reading: each re-run lasts one second, so with
+    a budget of 5 s the checks stop after two re-runs, before the one that would pass 5 s."""
+    clock = itertools.count()
+    monkeypatch.setattr(evaluate.time, "monotonic", lambda: float(next(clock)))
+    c = judged(5.0)
+    match = CUT.match(c.unchecked)
+    assert match is not None, c.unchecked
+    not_run, total = int(match.group(1)), int(match.group(2))
+    assert total - not_run == 2
+    assert c.kind is Kind.VALUE
+
+
+@pytest.mark.parametrize(("timeout", "budget"), [(20, 10.0), (3, 1.5), (0, None)])
+def test_a_campaign_gives_half_of_libfuzzers_timeout(timeout: int, budget: float | None) -> None:
+    assert check_seconds(timeout) == budget
