@@ -11,8 +11,8 @@ import numpy as np
 from python_impl import cartesian, convert
 from python_impl.angles import normalize_angle
 from python_impl.model import RobotModel
-from python_impl.trajectory import plan_trajectory, time_parameterize
-from robot_api.constants import EXECUTE_START_TOLERANCE, GOAL_JOINT_TOLERANCE
+from python_impl.trajectory import check_execution, plan_trajectory, time_parameterize
+from robot_api.constants import GOAL_JOINT_TOLERANCE
 from robot_api.errors import (
     ErrorCode,
     InvalidInputError,
@@ -339,46 +339,9 @@ class MoveGroup:
         return True
 
     def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:
-        def invalid(message: str) -> InvalidInputError:
-            return InvalidInputError(message, ErrorCode.INVALID_TRAJECTORY)
-
-        own = self._model.joint_names
-        if len(names) != len(own):
-            raise invalid("trajectory joints do not match the group's joints")
-        for j, (theirs, ours) in enumerate(zip(names, own, strict=True)):
-            if theirs != ours:
-                raise invalid(f"trajectory joint #{j} is '{theirs}', the group's is '{ours}'")
-        if not len(times):
-            raise invalid("trajectory has no points")
-        stamps = np.asarray(times, dtype=np.float64)
-        # one vector test, not a Python loop over the points: finite, the first >= 0, each
-        # after the one before (NaN fails every comparison, so it fails here too)
-        if not (np.isfinite(stamps).all() and stamps[0] >= 0.0 and (np.diff(stamps) > 0.0).all()):
-            raise invalid("trajectory times must be finite, >= 0 and strictly increasing")
-        if not np.isfinite(positions).all():
-            raise invalid("trajectory has a non-finite position")
-        first = positions[0].tolist()
-        for j, lim in enumerate(self._limits):
-            dev = first[j] - self._current[j]
-            if lim.type == JointType.CONTINUOUS:
-                dev = normalize_angle(dev)
-            if abs(dev) > EXECUTE_START_TOLERANCE:
-                raise invalid(
-                    f"trajectory starts {abs(dev)!r} away from the current value of joint '{lim.name}'"
-                )
-        bounded = [j for j, lim in enumerate(self._limits) if lim.type != JointType.CONTINUOUS]
-        if bounded:
-            lower = np.array([self._limits[j].lower for j in bounded]) - self._tolerance
-            upper = np.array([self._limits[j].upper for j in bounded]) + self._tolerance
-            p = positions[:, bounded]
-            bad = (p < lower) | (p > upper)
-            if bad.any():
-                i, k = (int(x) for x in np.argwhere(bad)[0])
-                lim = self._limits[bounded[k]]
-                raise OutOfBoundsError(
-                    f"trajectory point {i} puts joint '{lim.name}' at {p[i, k]!r}, outside "
-                    f"[{lim.lower!r}, {lim.upper!r}]"
-                )
+        check_execution(
+            self._limits, self._model.joint_names, self._current, self._tolerance, names, times, positions
+        )
         last = positions[-1].tolist()
         self._current = [
             normalize_angle(v) if lim.type == JointType.CONTINUOUS else min(max(v, lim.lower), lim.upper)

@@ -8,13 +8,19 @@ the profile time-optimal along the line (docs/api.md, "plan()").
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from python_impl.angles import normalize_angle, normalize_angles
-from robot_api.constants import ACCELERATION_LIMIT, MAX_TRAJECTORY_DURATION, TRAJECTORY_DT
-from robot_api.errors import PlanningError
+from robot_api.constants import (
+    ACCELERATION_LIMIT,
+    EXECUTE_START_TOLERANCE,
+    MAX_TRAJECTORY_DURATION,
+    TRAJECTORY_DT,
+)
+from robot_api.errors import ErrorCode, InvalidInputError, OutOfBoundsError, PlanningError
 from robot_api.records import JointLimit, JointType, RobotTrajectory
 
 Array = NDArray[np.float64]
@@ -203,3 +209,79 @@ def time_parameterize(
         np.array(velocities, dtype=np.float64).reshape(len(rows), n),
         np.array(accelerations, dtype=np.float64).reshape(len(rows), n),
     )
+
+
+def check_execution(
+    limits: tuple[JointLimit, ...],
+    joint_names: Sequence[str],
+    current: Sequence[float],
+    tolerance: float,
+    names: Sequence[str],
+    times: Sequence[float] | NDArray[np.float64],
+    positions: NDArray[np.float64],
+) -> None:
+    """What ``MoveGroup.execute`` and ``go`` check before they move (docs/api.md, ``execute``).
+
+    Parameters
+    ----------
+    limits : tuple of JointLimit, shape (dof,)
+    joint_names : sequence of str, shape (dof,)
+        The group's joints, in order.
+    current : sequence of float, shape (dof,)
+        The current state (rad, m).
+    tolerance : float
+        The goal joint tolerance (rad, m): how far past a limit a point may be.
+    names : sequence of str
+        The trajectory's joints.
+    times : sequence of float, shape (M,)
+        Time from start of each point (s).
+    positions : ndarray, shape (M, dof)
+
+    Raises
+    ------
+    InvalidInputError
+        ``INVALID_TRAJECTORY``: other joints, no points, times not finite, negative or not
+        increasing, a non-finite position, a start farther than ``EXECUTE_START_TOLERANCE``.
+    OutOfBoundsError
+        A point beyond a limit by more than ``tolerance``.
+    """
+
+    def invalid(message: str) -> InvalidInputError:
+        return InvalidInputError(message, ErrorCode.INVALID_TRAJECTORY)
+
+    if len(names) != len(joint_names):
+        raise invalid("trajectory joints do not match the group's joints")
+    for j, (theirs, ours) in enumerate(zip(names, joint_names, strict=True)):
+        if theirs != ours:
+            raise invalid(f"trajectory joint #{j} is '{theirs}', the group's is '{ours}'")
+    if not len(times):
+        raise invalid("trajectory has no points")
+    stamps = np.asarray(times, dtype=np.float64)
+    # one vector test, not a Python loop over the points: finite, the first >= 0, each
+    # after the one before (NaN fails every comparison, so it fails here too)
+    if not (np.isfinite(stamps).all() and stamps[0] >= 0.0 and (np.diff(stamps) > 0.0).all()):
+        raise invalid("trajectory times must be finite, >= 0 and strictly increasing")
+    if not np.isfinite(positions).all():
+        raise invalid("trajectory has a non-finite position")
+    first = positions[0].tolist()
+    for j, lim in enumerate(limits):
+        dev = first[j] - current[j]
+        if lim.type == JointType.CONTINUOUS:
+            dev = normalize_angle(dev)
+        if abs(dev) > EXECUTE_START_TOLERANCE:
+            raise invalid(
+                f"trajectory starts {abs(dev)!r} away from the current value of joint '{lim.name}'"
+            )
+    bounded = [j for j, lim in enumerate(limits) if lim.type != JointType.CONTINUOUS]
+    if bounded:
+        lower = np.array([limits[j].lower for j in bounded]) - tolerance
+        upper = np.array([limits[j].upper for j in bounded]) + tolerance
+        p = positions[:, bounded]
+        bad = (p < lower) | (p > upper)
+        if bad.any():
+            i, k = (int(x) for x in np.argwhere(bad)[0])
+            lim = limits[bounded[k]]
+            raise OutOfBoundsError(
+                f"trajectory point {i} puts joint '{lim.name}' at {p[i, k]!r}, outside "
+                f"[{lim.lower!r}, {lim.upper!r}]"
+            )
