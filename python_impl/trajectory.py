@@ -269,9 +269,7 @@ def check_execution(
         if lim.type == JointType.CONTINUOUS:
             dev = normalize_angle(dev)
         if abs(dev) > EXECUTE_START_TOLERANCE:
-            raise invalid(
-                f"trajectory starts {abs(dev)!r} away from the current value of joint '{lim.name}'"
-            )
+            raise invalid(f"trajectory starts {abs(dev)!r} away from the current value of joint '{lim.name}'")
     bounded = [j for j, lim in enumerate(limits) if lim.type != JointType.CONTINUOUS]
     if bounded:
         lower = np.array([limits[j].lower for j in bounded]) - tolerance

@@ -385,7 +385,6 @@ class Evaluator:
             return replace(comparison, kind=Kind.KNOWN_LIMITATION)
         return comparison
 
-
     def _out_of_time(self, longest: float) -> bool:
         """A re-run as long as ``longest`` (s) would end past ``check_seconds``."""
         budget = self.check_seconds
@@ -396,4 +395,3 @@ class Evaluator:
             f"{total - done} of {total} ill-conditioning re-runs not run: the input's time budget "
             f"({self.check_seconds:g} s, half of -timeout) ran out; replaying the file runs them"
         )
-
