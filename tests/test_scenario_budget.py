@@ -1,5 +1,6 @@
-"""The time budget of the oracle's ill-conditioning re-runs (``Evaluator.check_seconds``):
-a slow target's divergence is reported, not turned into a libFuzzer timeout."""
+"""The time the oracle's ill-conditioning re-runs take: their budget (``Evaluator.check_seconds``:
+a slow target's divergence is reported, not turned into a libFuzzer timeout), and a signature
+they kept is not re-run for later inputs (``Evaluator._checked``)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 
 from fuzzer.campaign import check_seconds
 from fuzzer.execution import evaluate
+from fuzzer.execution.evaluate import SEEN_BEFORE
 from fuzzer.execution.records import Kind
 from fuzzer.input.testcase import TestCase
 from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live
@@ -55,3 +57,57 @@ def test_the_budget_stops_before_a_re_run_that_would_end_past_it(monkeypatch) ->
 @pytest.mark.parametrize(("timeout", "budget"), [(20, 10.0), (3, 1.5), (0, None)])
 def test_a_campaign_gives_half_of_libfuzzers_timeout(timeout: int, budget: float | None) -> None:
     assert check_seconds(timeout) == budget
+
+
+def seed_band_go(joint_1: float) -> TestCase:
+    """A pose goal from a state whose joint_1 is ``joint_1``: in ``ik_seed_band``'s band the
+    faulty twin stays where it was (tests/test_scenario_oracle.py, the same steps)."""
+    goal = {
+        "position": {"x": 0.07970808594138655, "y": 0.08905826051043023, "z": 0.6523301351062388},
+        "orientation": {
+            "x": 0.4133660423212985,
+            "y": -0.5713357100580867,
+            "z": 0.22432707711398367,
+            "w": 0.6725930299531397,
+        },
+    }
+    steps = [
+        live("joint_target", position=[joint_1, 0.3, 0.5, 0.2, 0.6, 0.1]),
+        live("go"),
+        live("pose_target", header=HEADER, pose=goal),
+        live("go"),
+    ]
+    return TestCase("rrosfuzz/Scenario", {"steps": steps})
+
+
+def test_a_signature_that_passed_every_re_run_is_not_re_run_for_a_later_input() -> None:
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    first = ev.evaluate(seed_band_go(0.305), validated=True)
+    later = ev.evaluate(seed_band_go(0.306), validated=True)
+    assert (first.comparison.kind, first.comparison.unchecked) == (Kind.VALUE, "")
+    assert first.signature is not None and later.signature is not None
+    assert later.signature.key == first.signature.key
+    assert later.comparison.kind is Kind.VALUE
+    assert later.comparison.unchecked.startswith(SEEN_BEFORE)
+    alone = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(
+        seed_band_go(0.306), validated=True
+    )
+    assert (alone.comparison.kind, alone.comparison.unchecked) == (Kind.VALUE, "")  # a new evaluator re-runs
+
+
+def test_a_signature_the_budget_cut_short_is_not_re_run_for_a_later_input() -> None:
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    ev.check_seconds = 0.0
+    first = ev.evaluate(seed_band_go(0.305), validated=True).comparison
+    later = ev.evaluate(seed_band_go(0.306), validated=True).comparison
+    assert CUT.match(first.unchecked) is not None
+    assert later.kind is Kind.VALUE and later.unchecked.startswith(SEEN_BEFORE)
+
+
+def test_a_divergence_the_re_runs_explain_is_re_run_every_time() -> None:
+    """At the band's edge a 1e-9 nudge moves the answer: ``ill_conditioned``, never a finding
+    whose later inputs could skip the re-runs."""
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    for _ in range(2):
+        c = ev.evaluate(seed_band_go(0.3), validated=True).comparison
+        assert (c.kind, c.unchecked) == (Kind.ILL_CONDITIONED, "")

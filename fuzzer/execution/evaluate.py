@@ -39,10 +39,9 @@ seed (docs/engine.md, "Ill-conditioning").
 
 from __future__ import annotations
 
-import math
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -52,6 +51,7 @@ from fuzzer.execution.history import HISTORY, AnyCall, stored_call
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
+from fuzzer.input.filtering import is_reasonable
 from fuzzer.input.mapping import IkCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.execute import NUDGE_FAILED, scenario_outcome
@@ -63,15 +63,13 @@ from fuzzer.scenario.oracle_properties import first_property
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.records import JointType
 
-ABSURD = 1e6
-"""Early input filtering drops floats larger than this in magnitude (and NaN/inf)."""
-
 Seeds = tuple[tuple[float, ...] | None, ...]
 
 UNCOUNTED = frozenset({Kind.KNOWN_LIMITATION, Kind.ILL_CONDITIONED})
 """Kinds the oracle gives a divergence it explains; ``Evaluator._confirm`` does not re-run
 those on fresh targets (a scenario at a step in KDL's dead zone: a quarter of a scenario
 campaign's runs on the default robot went to confirming them)."""
+SEEN_BEFORE = "ill-conditioning re-runs not run: an earlier input of this signature kept the divergence"
 
 
 class Verdict:
@@ -100,23 +98,6 @@ class Evaluation:
         return self.verdict == Verdict.EVALUATED and self.comparison.divergent
 
 
-def floats_of(value: Any) -> Iterator[float]:
-    """Every float leaf of a message."""
-    if isinstance(value, float):
-        yield value
-    elif isinstance(value, dict):
-        for item in value.values():
-            yield from floats_of(item)
-    elif isinstance(value, list):
-        for item in value:
-            yield from floats_of(item)
-
-
-def is_reasonable(message: dict[str, Any]) -> bool:
-    """Early input filtering: finite floats of sane magnitude only."""
-    return all(math.isfinite(x) and abs(x) <= ABSURD for x in floats_of(message))
-
-
 @dataclass
 class Evaluator:
     """Runs test cases on two targets and judges them."""
@@ -131,6 +112,10 @@ class Evaluator:
     _history: deque[tuple[AnyCall, Seeds]] = field(default_factory=lambda: deque(maxlen=HISTORY))
     _stateless: set[str] = field(default_factory=set)
     """Live signatures already confirmed on fresh targets (later ones skip the construction)."""
+    _checked: set[str] = field(default_factory=set)
+    """Live signatures whose ill-conditioning re-runs kept the divergence (all of them, or as
+    many as ``check_seconds`` allowed): a later input with one is not re-run again (its bucket
+    is reported already; a replay re-runs)."""
     _facts: ScenarioFacts | None = None
     _replay: Any = None
     check_seconds: float | None = None
@@ -279,7 +264,11 @@ class Evaluator:
             self._stateless.add(live_key)
         if isinstance(call, ScenarioCall):
             if self._at_ik_step(call, outcomes, comparison):
+                if live_key in self._checked:
+                    return replace(comparison, unchecked=f"{SEEN_BEFORE} ({live_key})"), outcomes
                 judged = self._scenario_ik(call, outcomes, comparison, fresh or self.fresh())
+                if judged.kind is comparison.kind:  # the divergence stands (all re-runs, or the budget's)
+                    self._checked.add(live_key)
                 if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
                     pair = (outcomes[0], outcomes[1])
                     judged = prefer(judged, first_property(call, pair, self.scenario_facts))
