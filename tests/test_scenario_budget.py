@@ -14,7 +14,7 @@ from fuzzer.execution import evaluate
 from fuzzer.execution.evaluate import SEEN_BEFORE
 from fuzzer.execution.records import Kind
 from fuzzer.input.testcase import TestCase
-from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live
+from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live, seed_band_go
 
 CUT = re.compile(r"^(\d+) of (\d+) ill-conditioning re-runs not run: the input's time budget")
 
@@ -57,27 +57,6 @@ def test_the_budget_stops_before_a_re_run_that_would_end_past_it(monkeypatch) ->
 @pytest.mark.parametrize(("timeout", "budget"), [(20, 10.0), (3, 1.5), (0, None)])
 def test_a_campaign_gives_half_of_libfuzzers_timeout(timeout: int, budget: float | None) -> None:
     assert check_seconds(timeout) == budget
-
-
-def seed_band_go(joint_1: float) -> TestCase:
-    """A pose goal from a state whose joint_1 is ``joint_1``: in ``ik_seed_band``'s band the
-    faulty twin stays where it was (tests/test_scenario_oracle.py, the same steps)."""
-    goal = {
-        "position": {"x": 0.07970808594138655, "y": 0.08905826051043023, "z": 0.6523301351062388},
-        "orientation": {
-            "x": 0.4133660423212985,
-            "y": -0.5713357100580867,
-            "z": 0.22432707711398367,
-            "w": 0.6725930299531397,
-        },
-    }
-    steps = [
-        live("joint_target", position=[joint_1, 0.3, 0.5, 0.2, 0.6, 0.1]),
-        live("go"),
-        live("pose_target", header=HEADER, pose=goal),
-        live("go"),
-    ]
-    return TestCase("rrosfuzz/Scenario", {"steps": steps})
 
 
 def test_a_signature_that_passed_every_re_run_is_not_re_run_for_a_later_input() -> None:

@@ -580,6 +580,31 @@ def test_a_path_that_one_target_completes_whatever_the_nudge_is_a_divergence() -
     assert correct.comparison.kind is Kind.AGREE
 
 
+SEED_BAND_REST = [0.3, 0.5, 0.2, 0.6, 0.1]
+"""The start state's joints after joint_1 in :func:`seed_band_go`."""
+SEED_BAND_GOAL = {  # the tip at (0.75, 0.35, 0.55, 0.25, 0.65, 0.15): reachable, near the start
+    "position": {"x": 0.07970808594138655, "y": 0.08905826051043023, "z": 0.6523301351062388},
+    "orientation": {
+        "x": 0.4133660423212985,
+        "y": -0.5713357100580867,
+        "z": 0.22432707711398367,
+        "w": 0.6725930299531397,
+    },
+}
+
+
+def seed_band_go(joint_1: float) -> TestCase:
+    """Go to a state whose joint_1 is ``joint_1``, then to a pose goal near it: inside
+    ``ik_seed_band``'s band the faulty twin stays where it was."""
+    steps = [
+        live("joint_target", position=[joint_1, *SEED_BAND_REST]),
+        live("go"),
+        live("pose_target", header=HEADER, pose=SEED_BAND_GOAL),
+        live("go"),
+    ]
+    return TestCase("rrosfuzz/Scenario", {"steps": steps})
+
+
 @pytest.mark.parametrize(
     ("joint_1", "kind"), [(0.305, Kind.VALUE), (0.309, Kind.VALUE), (0.3, Kind.ILL_CONDITIONED)]
 )
@@ -592,23 +617,8 @@ def test_an_ik_that_answers_with_its_seed_is_a_divergence_not_ill_conditioning(
     that far is continuous in it, not ill-conditioned (the nudge check had called every such
     divergence ill-conditioned). A state within a nudge of the band's edge is a different
     matter: a 1e-9 move takes it out of the band, and its answer jumps."""
-    start = [joint_1, 0.3, 0.5, 0.2, 0.6, 0.1]
-    goal = {  # the tip at (0.75, 0.35, 0.55, 0.25, 0.65, 0.15): reachable, near the start
-        "position": {"x": 0.07970808594138655, "y": 0.08905826051043023, "z": 0.6523301351062388},
-        "orientation": {
-            "x": 0.4133660423212985,
-            "y": -0.5713357100580867,
-            "z": 0.22432707711398367,
-            "w": 0.6725930299531397,
-        },
-    }
-    steps = [
-        live("joint_target", position=start),
-        live("go"),
-        live("pose_target", header=HEADER, pose=goal),
-        live("go"),
-    ]
-    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    start = [joint_1, *SEED_BAND_REST]
+    case = seed_band_go(joint_1)
     found = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(case, validated=True)
     c = found.comparison
     assert (c.kind, c.step, c.field) == (kind, 3, "go.joint_values")
