@@ -213,19 +213,18 @@ def _ik(
         # the rest is a cycle, whose end the loop would reach step by step (see _cycle_end)
         seen: dict[bytes, int] = {}
         iterates: list[bytes] = []
-        errors: list[float] = []
+        base = len(trace) if trace is not None else 0  # where this call's rotation errors start
         for k in range(IK_MAX_ITERATIONS):
             key = q.tobytes()
             if key in seen:
-                q = _cycle_end(iterates, errors, seen[key], k, trace)
+                q = _cycle_end(iterates, seen[key], k, trace, base)
                 break
             seen[key] = k
             iterates.append(key)
             current, jac = fk_and_jacobian(chain, q, link, nvars, movable)
             twist = error_twist(current, target)
             if trace is not None:
-                errors.append(float(np.linalg.norm(twist[3:])))
-                trace.append(errors[-1])
+                trace.append(float(np.linalg.norm(twist[3:])))
             if is_small(twist):
                 converged = True
                 break
@@ -248,18 +247,20 @@ def _ik(
 
 
 def _cycle_end(
-    iterates: list[bytes], errors: list[float], first: int, now: int, trace: list[float] | None
+    iterates: list[bytes], first: int, now: int, trace: list[float] | None, base: int = 0
 ) -> Array:
     """The iterate the loop would end with, once iterate ``now`` repeats iterate ``first``.
 
     Each iteration is a function of its iterate alone, so from ``first`` on the iterates
     repeat with period ``now - first``, none of them converged nor non-finite (they were
     all run once): the loop's last iterate is known without running the rest. ``trace``
-    gets the rotation errors those iterations would have appended (``errors``: one per
-    iterate run so far). The result is bit for bit the one of running every iteration.
+    (this call's rotation errors from index ``base`` on, one per iterate run so far) gets
+    those the remaining iterations would have appended. The result is bit for bit the one of
+    running every iteration.
     """
     period = now - first
     if trace is not None:
-        trace.extend(errors[first + (k - first) % period] for k in range(now, IK_MAX_ITERATIONS))
+        cycle = trace[base + first : base + now]
+        trace.extend(cycle[(k - first) % period] for k in range(now, IK_MAX_ITERATIONS))
     last = first + (IK_MAX_ITERATIONS - first) % period
     return np.frombuffer(iterates[last], dtype=np.float64).copy()

@@ -267,9 +267,9 @@ def test_the_twins_ik_ends_a_cycle_as_running_it_would(robot: str, monkeypatch) 
     periods: list[int] = []
     real_end = kinematics._cycle_end
 
-    def counted(iterates, errors, first, now, trace):  # type: ignore[no-untyped-def]
+    def counted(iterates, first, now, trace, base=0):  # type: ignore[no-untyped-def]
         periods.append(now - first)
-        return real_end(iterates, errors, first, now, trace)
+        return real_end(iterates, first, now, trace, base)
 
     monkeypatch.setattr(kinematics, "_cycle_end", counted)
     model = python_impl.RobotModel(robot_path(robot))
