@@ -27,6 +27,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.records import Status
 from fuzzer.execution.session import ConfigError, RunConfig
@@ -35,7 +36,6 @@ from fuzzer.input.mapping import OPS
 from robot_api import robots
 
 BUILTIN_TARGETS = ("native", "python")
-MAX_SIDECAR_BYTES = 32 * 1024 * 1024
 SCENARIO_OP = "scenario"
 SCENARIO_CALL = "ScenarioCall"
 MAX_STEPS_LIMIT = 256
@@ -254,7 +254,7 @@ def _outcome(raw: Any, where: str, limit: int, fail: Fail, nested: bool = False)
         raise fail(where, f"must be an object, not {_type_name(raw)}")
     if "status" in raw and raw["status"] not in {str(s) for s in Status}:
         raise fail(f"{where}.status", f"is {raw['status']!r}, expected one of {', '.join(map(str, Status))}")
-    for key in ("target", "error", "message"):
+    for key in ("target", "error", "message", "shortened"):
         if key in raw and not isinstance(raw[key], str | type(None)):
             raise fail(f"{where}.{key}", f"must be a string, not {_type_name(raw[key])}")
     code = raw.get("code")

@@ -29,6 +29,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from fuzzer.artifacts.shorten import encode_sidecar
+
 TMP_PREFIX = ".tmp-"
 CRASH_NAME = re.compile(r"crash-[0-9a-f]{40}")
 STALE_SECONDS = 600.0
@@ -176,7 +178,7 @@ class ArtifactStore:
         self.recorded += 1
         path = self.directory / crash_name(data)
         side = sidecar_path(path)
-        tmp_side = _write_temporary(side, json.dumps(sidecar, indent=1, sort_keys=True).encode())
+        tmp_side = _write_temporary(side, encode_sidecar(sidecar))
         tmp_data = _write_temporary(path, data) if with_input else None
         _test_kill("temp", self.recorded)
         if not self.claim(signature_key, path.name):
@@ -266,7 +268,7 @@ class ArtifactStore:
     def write_sidecar(self, data: bytes, sidecar: dict[str, Any]) -> Path:
         """Write the sidecar of the crash file for ``data``; return the crash file's path."""
         path = self.directory / crash_name(data)
-        atomic_write(sidecar_path(path), json.dumps(sidecar, indent=1, sort_keys=True).encode())
+        atomic_write(sidecar_path(path), encode_sidecar(sidecar))
         return path
 
     def write(self, data: bytes, sidecar: dict[str, Any]) -> Path:

@@ -101,6 +101,19 @@ def _step_outcomes(sidecar: Mapping[str, Any]) -> list[tuple[str, tuple[Outcome,
     return out
 
 
+def _shortened(sidecar: Mapping[str, Any], index: int) -> list[str]:
+    """What the writer left out of step ``index``'s values (``fuzzer.artifacts.shorten``), per target."""
+    out = []
+    for item in list(sidecar.get("outcomes") or [])[:2]:
+        steps = item.get("steps") if isinstance(item, dict) else None
+        step = steps[index] if isinstance(steps, list) and index < len(steps) else None
+        note = step.get("shortened") if isinstance(step, dict) else None
+        if isinstance(note, str) and note:
+            target = clean(str(item.get("target", "?")), 60)
+            out.append(f"{target}: {clean(note, 200)} (replay the crash file for all)")
+    return out
+
+
 def _matrix(flat: Sequence[float], rows: int, dof: int) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(flat[r * dof : (r + 1) * dof]) for r in range(rows))
 
@@ -182,6 +195,7 @@ def view_of(sidecar: Mapping[str, Any] | None) -> ScenarioView | None:
             item, note = trajectory(outcome_steps[i], target, len(joint_names))
             found.append(item)
             notes += [note] if note else []
+        notes += _shortened(sidecar, i)
         plots.append(TrajectoryStep(i, steps.steps[i].topic, joint_names, (found[0], found[1]), tuple(notes)))
     return ScenarioView(steps, _values_at(steps.first, outcomes), tuple(plots), len(candidates) - len(plots))
 
