@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fuzzer.mutation import base
+from fuzzer.mutation import base, paper
 from fuzzer.mutation import mutators as m
 from fuzzer.mutation.mutators import (
     MUTATORS,
@@ -802,13 +802,13 @@ def test_havoc_stacks_two_to_sixteen_mutations(monkeypatch: pytest.MonkeyPatch) 
         counts[-1] += 1
         return message
 
-    monkeypatch.setattr(m, "WEIGHTS", {"havoc": 1.0, "splice": 1.0, "spy": 1.0})
+    monkeypatch.setattr(paper, "WEIGHTS", {"havoc": 1.0, "splice": 1.0, "spy": 1.0})  # what havoc draws from
     monkeypatch.setitem(m.MUTATORS, "spy", spy)
     monkeypatch.setitem(m.MUTATORS, "splice", lambda message, ctx: pytest.fail("havoc must not splice"))
     for seed in range(200):
         counts.append(0)
         MUTATORS["havoc"](joint_state(), make_ctx(seed, JS_TYPES, other=joint_state()))
-    assert min(counts) == m.HAVOC_MIN_STACK and max(counts) == m.HAVOC_MAX_STACK
+    assert min(counts) == base.HAVOC_MIN_STACK and max(counts) == base.HAVOC_MAX_STACK
 
 
 def test_havoc_changes_the_message() -> None:

@@ -328,7 +328,7 @@ class SequenceMutator:
         other = _steps_of(ctx.other, "other parent") if isinstance(ctx.other, dict) else None
         sctx = SequenceContext(ctx.rng, ctx, self.max_steps, self.tables, other, inner)
         pool = dict(SEQ_WEIGHTS)
-        pick = first if first is not None else mutators._weighted_choice(pool, ctx.rng)
+        pick = first if first is not None else mutators.weighted_choice(pool, ctx.rng)
         while True:
             try:
                 new, used = SEQ_MUTATORS[pick](steps, sctx)
@@ -336,7 +336,7 @@ class SequenceMutator:
             except NotApplicable:
                 pool.pop(pick, None)
                 try:
-                    pick = mutators._weighted_choice(pool, ctx.rng)
+                    pick = mutators.weighted_choice(pool, ctx.rng)
                 except NotApplicable:
                     return clone(message), NOOP
 
