@@ -111,14 +111,9 @@ FK return code          ``JntToCart``: 0, else -4 (size     a non-zero code is a
 
 from __future__ import annotations
 
-import importlib
-import importlib.machinery
-import importlib.util
 import math
 import os
-import sys
-from pathlib import Path
-from types import ModuleType, SimpleNamespace
+from types import SimpleNamespace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -126,9 +121,10 @@ from numpy.typing import NDArray
 
 import python_impl
 from adapters._common import RowwiseFkModel
+from adapters._kdl import KDL, canonical_quaternion, frame_matrix, segment_of
 from python_impl.angles import normalize_angle
-from python_impl.transforms import rotation_angle, unit
-from python_impl.urdf import Joint, is_path_source, load_urdf
+from python_impl.transforms import rotation_angle
+from python_impl.urdf import is_path_source, load_urdf
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS, IK_PINV_EPS
 from robot_api.errors import ErrorCode, InvalidInputError
 from robot_api.protocol import JointValues
@@ -136,109 +132,11 @@ from robot_api.records import IKResult, IKStatus, JointType, Pose
 
 __all__ = ["KdlParserRobotModel", "MoveGroup", "RobotModel", "api", "kdl_parser_api"]
 
-DEBIAN_DIST_PACKAGES = Path("/usr/lib/python3/dist-packages")
-"""Where Debian's ``python3-pykdl`` installs ``PyKDL.<abi>.so``."""
-
 IK_SVD_ITERATIONS = 150
 """Sweeps of ``ChainIkSolverVel_pinv``'s SVD (KDL's default, and ``native``'s)."""
 
 E_NOERROR = 0
 """KDL's ``SolverI::E_NOERROR`` (PyKDL does not export the codes)."""
-
-
-def load_pykdl() -> ModuleType:
-    """Import PyKDL: from ``sys.path`` if there, else Debian's build by file.
-
-    Raises
-    ------
-    ImportError
-        If no PyKDL matching this interpreter's ABI can be loaded.
-    """
-    if "PyKDL" in sys.modules:
-        return sys.modules["PyKDL"]
-    if importlib.util.find_spec("PyKDL") is not None:
-        return importlib.import_module("PyKDL")
-    suffixes = importlib.machinery.EXTENSION_SUFFIXES
-    candidates = [DEBIAN_DIST_PACKAGES / f"PyKDL{suffix}" for suffix in suffixes]
-    path = next((p for p in candidates if p.is_file()), None)
-    if path is None:
-        found = sorted(p.name for p in DEBIAN_DIST_PACKAGES.glob("PyKDL*.so"))
-        raise ImportError(
-            "PyKDL is not available for this interpreter "
-            f"(Python {sys.version_info.major}.{sys.version_info.minor}, extension suffixes "
-            f"{importlib.machinery.EXTENSION_SUFFIXES}); found in {DEBIAN_DIST_PACKAGES}: "
-            f"{found or 'nothing'}. Install Debian's python3-pykdl (scripts/apt-ensure.sh python3-pykdl) "
-            "and run with a CPython of Debian's python3 version."
-        )
-    spec = importlib.util.spec_from_file_location("PyKDL", path)
-    if spec is None or spec.loader is None:
-        raise ImportError(f"cannot load PyKDL from {path}")
-    module = importlib.util.module_from_spec(spec)
-    try:
-        spec.loader.exec_module(module)
-    except Exception as exc:
-        raise ImportError(f"cannot load PyKDL from {path}: {type(exc).__name__}: {exc}") from exc
-    sys.modules["PyKDL"] = module
-    return module
-
-
-KDL: Any = load_pykdl()
-
-
-def canonical_quaternion(quaternion: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-    """Unit quaternion (x, y, z, w) with the contract's sign from KDL's ``GetQuaternion()``."""
-    x, y, z, w = (float(c) for c in quaternion)
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    if w < 0.0 or (w == 0.0 and next((c for c in (x, y, z) if c != 0.0), 0.0) < 0.0):
-        x, y, z, w = -x, -y, -z, -w
-    return (x, y, z, w + 0.0)
-
-
-def frame_matrix(frame: Any) -> NDArray[np.float64]:
-    """4x4 homogeneous matrix of a ``PyKDL.Frame``."""
-    m = np.eye(4)
-    rotation, position = frame.M, frame.p
-    for r in range(3):
-        m[r, 0] = rotation[r, 0]
-        m[r, 1] = rotation[r, 1]
-        m[r, 2] = rotation[r, 2]
-        m[r, 3] = position[r]
-    return m
-
-
-def urdfdom_quaternion(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
-    """urdfdom's ``Rotation::setFromRPY`` (then ``normalize()``): the quaternion kdl_parser reads."""
-    phi, the, psi = roll / 2.0, pitch / 2.0, yaw / 2.0
-    sphi, cphi = math.sin(phi), math.cos(phi)
-    sthe, cthe = math.sin(the), math.cos(the)
-    spsi, cpsi = math.sin(psi), math.cos(psi)
-    x = sphi * cthe * cpsi - cphi * sthe * spsi
-    y = cphi * sthe * cpsi + sphi * cthe * spsi
-    z = cphi * cthe * spsi - sphi * sthe * cpsi
-    w = cphi * cthe * cpsi + sphi * sthe * spsi
-    s = math.sqrt(x * x + y * y + z * z + w * w)
-    return (x / s, y / s, z / s, w / s)
-
-
-def segment_of(joint: Joint, urdfdom_origins: bool = False) -> Any:
-    """A ``PyKDL.Segment`` for a URDF joint and its child link, as kdl_parser builds it.
-
-    The origin's rotation is ``Rotation.RPY(rpy)``, or with ``urdfdom_origins``
-    ``Rotation.Quaternion`` of urdfdom's quaternion of ``rpy`` (kdl_parser's path).
-    """
-    rotation = (
-        KDL.Rotation.Quaternion(*urdfdom_quaternion(*joint.rpy))
-        if urdfdom_origins
-        else KDL.Rotation.RPY(*joint.rpy)
-    )
-    origin = KDL.Frame(rotation, KDL.Vector(*joint.xyz))
-    if joint.type in ("revolute", "continuous", "prismatic"):
-        a = unit(joint.axis)  # the contract's axis rule (non-zero: the chain rules checked it)
-        axis = origin.M * KDL.Vector(float(a[0]), float(a[1]), float(a[2]))
-        kind = KDL.Joint.TransAxis if joint.type == "prismatic" else KDL.Joint.RotAxis
-        return KDL.Segment(joint.child, KDL.Joint(joint.name, origin.p, axis, kind), origin)
-    return KDL.Segment(joint.child, KDL.Joint(joint.name, KDL.Joint.Fixed), origin)
 
 
 class _IkSolver:

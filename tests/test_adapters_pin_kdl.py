@@ -346,7 +346,7 @@ def test_pykdl_loads_without_dist_packages_on_sys_path() -> None:
 
 def test_pykdl_missing_is_a_clear_import_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     load("pykdl")
-    import adapters.pykdl_adapter as module
+    import adapters._kdl as module  # the adapter's PyKDL loader
 
     monkeypatch.delitem(sys.modules, "PyKDL")
     monkeypatch.setattr(module, "DEBIAN_DIST_PACKAGES", tmp_path)
