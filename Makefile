@@ -50,7 +50,7 @@ bench-quick: setup
 	$(PY) -m benchmarks.bench_deep --mode quick
 
 lint: setup
-	$(PY) -m ruff check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks
+	$(PY) -m ruff check . && $(PY) -m ruff format --check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks
 
 ## Native coverage: the C++ module built by clang with libFuzzer's edge counters and
 ## AddressSanitizer, run under Atheris' preload (docs/engine.md, "Instrumentation").

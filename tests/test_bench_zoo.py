@@ -48,8 +48,22 @@ def test_time_comparison_margins() -> None:
 
 def test_a_small_benchmark_run(tmp_path: Path) -> None:
     out = tmp_path / "zoo.json"
-    result = bench_zoo.main(["--bugs", "off_by_tolerance", CONTROL.name, "--engines", "full", "uniform",
-                             "--seeds", "1", "--budget", "6", "--out", str(out)])
+    result = bench_zoo.main(
+        [
+            "--bugs",
+            "off_by_tolerance",
+            CONTROL.name,
+            "--engines",
+            "full",
+            "uniform",
+            "--seeds",
+            "1",
+            "--budget",
+            "6",
+            "--out",
+            str(out),
+        ]
+    )
     assert json.loads(out.read_text())["runs"] and out.with_suffix(".png").is_file()
     cells = result["cells"]
     assert cells["off_by_tolerance/full"]["detected"] == 1

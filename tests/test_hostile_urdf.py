@@ -129,7 +129,9 @@ ROWS.update(
         # file names are never formatted by urdfdom, and URL-encoded ones are common
         "url_encoded_mesh_filename": Row(
             "text",
-            link_doc('<visual><geometry><mesh filename="package://arm/meshes/my%20base.stl"/></geometry></visual>'),
+            link_doc(
+                '<visual><geometry><mesh filename="package://arm/meshes/my%20base.stl"/></geometry></visual>'
+            ),
             OK,
         ),
         "printf_in_mesh_filename": Row(

@@ -87,9 +87,10 @@ def test_a_sweep_flags_the_narrow_band_and_finds_nothing_between_correct_targets
     assert found, "a 1e-5-wide band in 400 x 1024 Sobol rows (about 4 expected)"
     assert len(found) <= 400 * CONFIRM
     for row in found:  # the single-call path agrees: each flagged row is a real divergence
-        gap = faulty.forward_kinematics(list(row.values)).position[2] - reference.forward_kinematics(
-            list(row.values)
-        ).position[2]
+        gap = (
+            faulty.forward_kinematics(list(row.values)).position[2]
+            - reference.forward_kinematics(list(row.values)).position[2]
+        )
         assert gap == pytest.approx(deep.SHIFT, abs=1e-9) and row.label == "sweep:sobol"
 
 
@@ -199,9 +200,23 @@ def test_a_campaign_on_a_chain_without_joints_runs_without_space_filling(tmp_pat
 
     root = Path(__file__).resolve().parents[1]
     done = subprocess.run(
-        [sys.executable, str(root / "fuzz_diff.py"), str(tmp_path / "corpus"), "--op", "fk", "--robot",
-         "baxter", f"--artifacts={tmp_path / 'artifacts'}", "-runs=50", "--no-progress"],
-        capture_output=True, text=True, timeout=300, check=False, cwd=root,
+        [
+            sys.executable,
+            str(root / "fuzz_diff.py"),
+            str(tmp_path / "corpus"),
+            "--op",
+            "fk",
+            "--robot",
+            "baxter",
+            f"--artifacts={tmp_path / 'artifacts'}",
+            "-runs=50",
+            "--no-progress",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+        cwd=root,
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert "Traceback" not in done.stderr

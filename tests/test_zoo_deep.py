@@ -116,7 +116,6 @@ def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotMo
 # -- the statistics of benchmarks/bench_deep.py ---------------------------------------------------
 
 
-
 def _run(engine: str, seed: int, at: float | None, bug: str = "narrow_band", op: str = "fk") -> Run:
     return Run(bug, engine, seed, 10.0, at, 1 if at is not None else 0, 100, 10.0, op, 0)
 

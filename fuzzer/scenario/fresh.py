@@ -40,6 +40,7 @@ unknown target: the error path)."""
 INTERESTING_PROBABILITY: Final = 0.5
 """Fresh joint target: chance that one joint takes an engine interesting value."""
 
+
 @dataclass
 class Tables:
     """Per-topic tables derived from the message registry (types, defaults, value contexts)."""

@@ -57,9 +57,7 @@ def folder() -> Path | None:
     return Path(chosen) if chosen else DEFAULT
 
 
-def instrument_functions(
-    functions: Sequence[types.FunctionType], atheris: Any, cache: Path | None
-) -> bool:
+def instrument_functions(functions: Sequence[types.FunctionType], atheris: Any, cache: Path | None) -> bool:
     """Give every function of ``functions`` its Atheris-instrumented code: from ``cache``
     when a file there matches, else with ``atheris.instrument_func`` (and write the file).
 
