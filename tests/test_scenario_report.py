@@ -163,6 +163,7 @@ REJECTED = [
     ("outcomes[0].steps[2].values.trajectory.positions",
      _set("outcomes/0/steps/2/values/trajectory.positions", ["x"])),
     ("outcomes[0].steps[2].code", _set("outcomes/0/steps/2/code", "30")),
+    ("outcomes[0].steps[2].shortened", _set("outcomes/0/steps/2/shortened", ["all"])),  # the writer's note
     ("outcomes[1]", _set("outcomes/1", [])),
     ("comparison.step", _set("comparison/step", 6)),
     ("comparison.step", _set("comparison/step", True)),
