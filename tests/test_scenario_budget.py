@@ -90,3 +90,29 @@ def test_a_divergence_the_re_runs_explain_is_re_run_every_time() -> None:
     for _ in range(2):
         c = ev.evaluate(seed_band_go(0.3), validated=True).comparison
         assert (c.kind, c.unchecked) == (Kind.ILL_CONDITIONED, "")
+
+
+def test_the_re_runs_stop_after_the_divergent_step() -> None:
+    """The nudged and dead-zone re-runs judge only the divergent step's answer, and each
+    scenario runs on a new MoveGroup: the steps after it are not run again, and the verdict
+    is the one without them."""
+    tail = [live("go"), live("joint_target", position=[0.5, 0.5]), live("go"), live("plan")]
+    longer = TestCase("rrosfuzz/Scenario", {"steps": [*far_path().message["steps"], *tail]})
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    lengths: list[int] = []
+    run_both = ev.run_both
+
+    def spy(call, seeds=(None, None), runners=None, nudge=None):  # type: ignore[no-untyped-def]
+        lengths.append(len(call.steps))
+        return run_both(call, seeds, runners, nudge)
+
+    ev.run_both = spy  # type: ignore[method-assign]
+    found = ev.evaluate(longer, validated=True).comparison
+    assert (found.kind, found.field, found.step, found.unchecked) == (
+        Kind.VALUE,
+        "cartesian_path.fraction",
+        0,
+        "",
+    )
+    assert lengths[:2] == [5, 5]  # the input, then the flakiness re-run on new targets: whole
+    assert len(lengths) >= 19 and set(lengths[2:]) == {1}  # every nudge and the dead-zone run: step 0 only

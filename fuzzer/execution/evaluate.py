@@ -326,11 +326,13 @@ class Evaluator:
         10% on one target and completes on the other whatever the nudge. Last, the scenario is
         run once more with KDL's rotation dead zone in the twin (``dead_zone``): if the two
         targets then agree at that step, the documented dead zone is the whole difference,
-        ``known_limitation``."""
+        ``known_limitation``. Every re-run stops after that step: only its answer is judged,
+        and each scenario runs on a new ``MoveGroup``, so the steps after it cannot change it."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
         kind = call.steps[step].kind
+        call = replace(call, steps=call.steps[: step + 1])
         extent = comparison.field in EXTENT_FIELDS  # how far a path got: does that move?
 
         def changed(first: Outcome, second: Outcome, slack: float = 0.0) -> bool:
