@@ -96,8 +96,9 @@ def test_the_re_runs_stop_after_the_divergent_step() -> None:
     """The nudged and dead-zone re-runs judge only the divergent step's answer, and each
     scenario runs on a new MoveGroup: the steps after it are not run again, and the verdict
     is the one without them."""
-    tail = [live("go"), live("joint_target", position=[0.5, 0.5]), live("go"), live("plan")]
-    longer = TestCase("rrosfuzz/Scenario", {"steps": [*far_path().message["steps"], *tail]})
+    steps = seed_band_go(0.305).message["steps"]  # diverges at step 3, a go to a pose goal
+    tail = [live("joint_target", position=[0.5, 0.5]), live("go"), live("plan")]
+    longer = TestCase("rrosfuzz/Scenario", {"steps": [*steps, *tail]})
     ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
     lengths: list[int] = []
     run_both = ev.run_both
@@ -108,11 +109,10 @@ def test_the_re_runs_stop_after_the_divergent_step() -> None:
 
     ev.run_both = spy  # type: ignore[method-assign]
     found = ev.evaluate(longer, validated=True).comparison
-    assert (found.kind, found.field, found.step, found.unchecked) == (
-        Kind.VALUE,
-        "cartesian_path.fraction",
-        0,
-        "",
+    alone = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(
+        seed_band_go(0.305), validated=True
     )
-    assert lengths[:2] == [5, 5]  # the input, then the flakiness re-run on new targets: whole
-    assert len(lengths) >= 19 and set(lengths[2:]) == {1}  # every nudge and the dead-zone run: step 0 only
+    assert (found.kind, found.step, found.unchecked) == (Kind.VALUE, 3, "")
+    assert found == alone.comparison
+    assert lengths[:2] == [7, 7]  # the input, then the flakiness re-run on new targets: whole
+    assert len(lengths) >= 19 and set(lengths[2:]) == {4}  # every nudge and the dead-zone run: to step 3
