@@ -197,3 +197,19 @@ def test_a_campaign_writes_a_long_plan_sidecar_that_replays(tmp_path: Path) -> N
     again = fuzz(str(side.with_suffix("")), "--no-progress")
     assert again.returncode == 1, again.stderr[-2000:]  # replay: exit 1 while it diverges, 2 if unreadable
     assert "still diverges (same signature)" in again.stdout
+
+
+def test_a_sidecar_larger_than_readers_accept_is_not_read(tmp_path: Path) -> None:
+    """Written by an older version, or planted: triage says why it has no bucket of its own,
+    and nothing reads the file (a sparse file of 32 MiB + 1 byte, not valid JSON either)."""
+    from fuzzer.artifacts.store import load_sidecar
+    from fuzzer.triage import pipeline
+
+    crash = tmp_path / ("crash-" + "ab" * 20)
+    crash.write_bytes(b'{"rrosfuzz": 1}')
+    with open(crash.with_name(crash.name + ".json"), "wb") as handle:
+        handle.truncate(MAX_SIDECAR_BYTES + 1)
+    assert load_sidecar(crash) is None
+    (bucket,) = pipeline.collect(tmp_path)
+    assert bucket.signature is None
+    assert f"its sidecar is larger than {MAX_SIDECAR_BYTES} bytes: not read" in bucket.describe()

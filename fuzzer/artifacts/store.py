@@ -29,7 +29,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts.shorten import encode_sidecar
+from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES, encode_sidecar
 
 TMP_PREFIX = ".tmp-"
 CRASH_NAME = re.compile(r"crash-[0-9a-f]{40}")
@@ -115,6 +115,14 @@ def clean_temporaries(directory: Path) -> list[Path]:
 def crash_name(data: bytes) -> str:
     """libFuzzer's naming: ``crash-<sha1 of the input>``."""
     return "crash-" + hashlib.sha1(data).hexdigest()
+
+
+def oversized(path: Path) -> bool:
+    """A file larger than any sidecar a reader accepts (MAX_SIDECAR_BYTES)."""
+    try:
+        return path.stat().st_size > MAX_SIDECAR_BYTES
+    except OSError:
+        return False
 
 
 def sidecar_path(crash: Path) -> Path:
@@ -216,7 +224,7 @@ class ArtifactStore:
         names: dict[str, str] = {}
         sides = [*self.directory.glob("crash-*.json"), *self.directory.glob(f"{TMP_PREFIX}crash-*.json.*")]
         for side in sides:
-            if not side.is_file():  # never open a FIFO or device planted here
+            if not side.is_file() or oversized(side):  # never open a FIFO or device planted here
                 continue
             name = side.name.removeprefix(TMP_PREFIX).split(".json", 1)[0]
             with contextlib.suppress(OSError, ValueError, AttributeError, TypeError):
@@ -282,9 +290,10 @@ class ArtifactStore:
 
 
 def load_sidecar(crash: Path) -> dict[str, Any] | None:
-    """The sidecar of a crash file, if it has a readable one (native crashes have none)."""
+    """The sidecar of a crash file, if it has a readable one (native crashes have none); a
+    sidecar larger than MAX_SIDECAR_BYTES counts as none, and is not read."""
     path = sidecar_path(crash)
-    if not path.is_file():
+    if not path.is_file() or oversized(path):
         return None
     try:
         data = json.loads(path.read_text(encoding="utf-8", errors="replace"))

@@ -140,8 +140,9 @@ def _artifacts(directory: Path) -> list[Path]:
 
 def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
     """The validated sidecar of an artifact (None and why when it has no usable one)."""
+    from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
     from fuzzer.artifacts.sidecar import SidecarError, validate
-    from fuzzer.artifacts.store import sidecar_path
+    from fuzzer.artifacts.store import oversized, sidecar_path
     from fuzzer.input.paths import contained
     from fuzzer.reporting import warn
 
@@ -149,6 +150,8 @@ def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
     if side.is_symlink() and not contained(directory, side):
         warn(f"ignoring {side}: a link to a file outside {directory}")
         return None, "its sidecar links outside the folder"
+    if oversized(side):
+        return None, f"its sidecar is larger than {MAX_SIDECAR_BYTES} bytes: not read"
     sidecar = load_sidecar(path)
     if sidecar is None:
         return None, "no readable sidecar"
