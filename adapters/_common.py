@@ -7,6 +7,8 @@ matrices); every kinematic quantity still comes from the library.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -39,6 +41,17 @@ def matrix_pose(t: Matrix) -> Pose:
     """The contract's pose (position, canonical quaternion) of a 4x4 transform."""
     x, y, z = (float(v) for v in t[:3, 3])
     return Pose((x, y, z), quaternion(t[:3, :3]))
+
+
+def canonical_quaternion(coeffs: Sequence[float]) -> tuple[float, float, float, float]:
+    """Unit quaternion (x, y, z, w) with the contract's sign, from a library's (x, y, z, w)
+    of either sign (KDL's ``GetQuaternion()``, pinocchio's ``coeffs()``)."""
+    x, y, z, w = (float(c) for c in coeffs)
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / n, y / n, z / n, w / n
+    if w < 0.0 or (w == 0.0 and next((c for c in (x, y, z) if c != 0.0), 0.0) < 0.0):
+        x, y, z, w = -x, -y, -z, -w
+    return (x, y, z, w + 0.0)
 
 
 def meets_criterion(reached: Matrix, target: Matrix) -> bool:

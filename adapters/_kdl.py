@@ -62,16 +62,6 @@ def load_pykdl() -> ModuleType:
 KDL: Any = load_pykdl()
 
 
-def canonical_quaternion(quaternion: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-    """Unit quaternion (x, y, z, w) with the contract's sign from KDL's ``GetQuaternion()``."""
-    x, y, z, w = (float(c) for c in quaternion)
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    if w < 0.0 or (w == 0.0 and next((c for c in (x, y, z) if c != 0.0), 0.0) < 0.0):
-        x, y, z, w = -x, -y, -z, -w
-    return (x, y, z, w + 0.0)
-
-
 def frame_matrix(frame: Any) -> NDArray[np.float64]:
     """4x4 homogeneous matrix of a ``PyKDL.Frame``."""
     m = np.eye(4)

@@ -113,7 +113,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 import python_impl
-from adapters._common import RowwiseFkModel
+from adapters._common import RowwiseFkModel, canonical_quaternion
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source
@@ -125,16 +125,6 @@ from robot_api.records import IKResult, IKStatus, JointType, Pose
 Array = NDArray[np.float64]
 
 __all__ = ["MoveGroup", "RobotModel", "api"]
-
-
-def canonical_quaternion(coeffs: Sequence[float]) -> tuple[float, float, float, float]:
-    """Unit quaternion (x, y, z, w) with the contract's sign from pinocchio's ``coeffs()``."""
-    x, y, z, w = (float(c) for c in coeffs)
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    if w < 0.0 or (w == 0.0 and next((c for c in (x, y, z) if c != 0.0), 0.0) < 0.0):
-        x, y, z, w = -x, -y, -z, -w
-    return (x, y, z, w + 0.0)
 
 
 def _pinv_step(jac: Array, twist: Array) -> Array:

@@ -120,8 +120,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 import python_impl
-from adapters._common import RowwiseFkModel
-from adapters._kdl import KDL, canonical_quaternion, frame_matrix, segment_of
+from adapters._common import RowwiseFkModel, canonical_quaternion
+from adapters._kdl import KDL, frame_matrix, segment_of
 from python_impl.angles import normalize_angle
 from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source, load_urdf
