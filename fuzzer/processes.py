@@ -16,8 +16,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
-from fuzzer.artifacts.store import sidecar_path
+from fuzzer.artifacts.store import oversized, sidecar_path
 
 CHILD_ENV = "RROSFUZZ_CHILD"
 DEADLINE_ENV = "RROSFUZZ_DEADLINE"
@@ -82,8 +81,10 @@ documented limitation of a target, and IK seeds where the answer is chaotic (doc
 
 def _sidecar_kind(path: Path) -> str | None:
     """The divergence kind a sidecar records (None when it cannot be read: counted as a finding)."""
+    if oversized(path):
+        return None  # no reader accepts it
     try:
-        data = json.loads(path.read_bytes()[: MAX_SIDECAR_BYTES + 1])
+        data = json.loads(path.read_bytes())
     except (OSError, ValueError):
         return None
     signature = data.get("signature") if isinstance(data, dict) else None
