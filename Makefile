@@ -13,7 +13,7 @@ BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLis
 	constraints.txt \
 	$(MODULES)
 
-.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-quick
+.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-deep-full bench-quick
 
 setup: $(STAMP)
 
@@ -36,8 +36,13 @@ test: setup
 ## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes).
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md
-	$(PY) -m benchmarks.bench_deep --mode full --write-md
+	$(MAKE) bench-deep-full
 	$(PY) -m benchmarks.bench_deep --mode zoo --write-md
+
+## The deep bugs' 60-s part alone. It keeps each finished trial in benchmarks/results/deep-full.jsonl:
+## stopped or killed, the same command goes on with the trials that are missing (--resume).
+bench-deep-full: setup
+	$(PY) -m benchmarks.bench_deep --mode full --write-md $$(test -f benchmarks/results/deep-full.jsonl && echo --resume)
 
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
 ## (28-32 minutes on 2 cores).

@@ -4,6 +4,8 @@
     .venv/bin/python -m benchmarks.bench_deep --mode short --write-md  # 10 trials x 10 s, 5 engines
     .venv/bin/python -m benchmarks.bench_deep --mode zoo --write-md    # the 22 shallow zoo bugs, 10 x 10 s
     .venv/bin/python -m benchmarks.bench_deep --mode quick             # 2 trials x 10 s, two bugs (CI-sized)
+    .venv/bin/python -m benchmarks.bench_deep --mode full --stop-after 120   # two hours of it, then
+    .venv/bin/python -m benchmarks.bench_deep --mode full --resume           # the rest, later
 
 Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of the input
 space), or with ``--mode zoo`` every bug of the shallow zoo (``benchmarks.zoo.ZOO``), runs
@@ -20,6 +22,12 @@ a full-engine trial detects sooner than a baseline trial, ties half; 0.5 = no di
 survival plot (the share of trials that have found the bug over time) goes to
 ``benchmarks/results/deep-<mode>.png``; with ``--write-md`` the table replaces the marked
 section of BENCHMARKS.md (``--mode zoo``: a section of its own, under the zoo's).
+
+Each finished trial is also appended to ``deep-<mode>.jsonl`` in the results folder as it ends
+(``benchmarks.journal``), so a sweep stopped part way (``--stop-after MINUTES``, or killed)
+keeps what it ran: ``--resume`` runs only the missing trials, on the same code (the journal's
+commit, or one that changed only results and Markdown), and ``--from-json deep-<mode>.jsonl``
+tabulates them so far. The journal goes once ``deep-<mode>.json`` holds every trial.
 """
 
 from __future__ import annotations
@@ -32,6 +40,7 @@ import random
 import signal
 import statistics
 import sys
+import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
@@ -39,9 +48,10 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
+from benchmarks import journal
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, run_one
 from benchmarks.zoo import DEEP, ZOO, Bug
-from benchmarks.zoo_tables import replace_section
+from benchmarks.zoo_tables import ROOT, replace_section
 
 ALPHA = 0.05
 MARKS = ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->")
@@ -272,13 +282,38 @@ def main(argv: list[str] | None = None) -> list[Run]:
         "--results", type=Path, default=RESULTS, help="folder for deep-<mode>.json and .png (%(default)s)"
     )
     parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on with the sweep whose finished trials are in --results' deep-<mode>.jsonl "
+        "(same options, same code); only the trials it does not hold run",
+    )
+    parser.add_argument(
+        "--restart",
+        action="store_true",
+        help="start over although deep-<mode>.jsonl holds an unfinished sweep (it is kept as "
+        "deep-<mode>.jsonl.old)",
+    )
+    parser.add_argument(
+        "--stop-after",
+        type=float,
+        default=None,
+        metavar="MINUTES",
+        help="start no trial after this many minutes; those running finish, the journal keeps "
+        "them all, and --resume goes on later",
+    )
+    parser.add_argument(
         "--from-json",
         type=Path,
         default=None,
-        help="tabulate the runs of an earlier deep-<mode>.json instead of running (its bugs, "
-        "engines, trials and budget; --mode names the output files)",
+        help="tabulate the runs of an earlier deep-<mode>.json, or of a journal "
+        "(deep-<mode>.jsonl) so far, instead of running (its bugs, engines, trials and budget; "
+        "--mode names the output files)",
     )
     args = parser.parse_args(argv)
+    if args.resume and args.restart:
+        parser.error("--resume and --restart exclude each other")
+    if args.stop_after is not None and not args.stop_after > 0:
+        parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
     base = MODES[args.mode]
     mode = Mode(
         tuple(args.bugs or base.bugs),
@@ -312,11 +347,40 @@ def main(argv: list[str] | None = None) -> list[Run]:
     # a seeded random order, as FuzzBench does: a change of machine load during the sweep then
     # falls on every engine alike instead of on the engines that happen to run last
     random.Random(0).shuffle(jobs)
+    commit = journal.commit_of(ROOT)
+    sweep = journal.Sweep(args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit)
+    path = args.results / f"deep-{args.mode}.jsonl"
+    try:
+        book, done = journal.open_sweep(path, sweep, ROOT, resume=args.resume, restart=args.restart)
+    except journal.JournalError as exc:
+        parser.error(str(exc))
+    if done:
+        print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
+    order = {(b.name, e, t): i for i, (b, e, t) in enumerate(jobs)}
+    held = {(r.bug, r.engine, r.seed): r for r in done if (r.bug, r.engine, r.seed) in order}
+    deadline = None if args.stop_after is None else time.monotonic() + 60.0 * args.stop_after
+
+    def trial(job: tuple[Bug, str, int]) -> Run | None:
+        if deadline is not None and time.monotonic() >= deadline:
+            return None
+        run = run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True)
+        book.add(run)
+        return run
+
+    todo = [job for job in jobs if (job[0].name, job[1], job[2]) not in held]
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        runs = list(
-            pool.map(lambda job: run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True), jobs)
+        new = [run for run in pool.map(trial, todo) if run is not None]
+    runs = sorted([*held.values(), *new], key=lambda r: order[(r.bug, r.engine, r.seed)])
+    if len(runs) < len(jobs):
+        print(
+            f"stopped after {args.stop_after:g} minutes: {len(runs)} of {len(jobs)} trials done, "
+            f"in {path}; the same command with --resume goes on (--from-json {path} tabulates "
+            f"them so far)"
         )
-    return _report(runs, mode, args, argv, copy=True)
+        return runs
+    _report(runs, mode, args, argv, copy=True)
+    path.unlink()  # deep-<mode>.json holds every trial now
+    return runs
 
 
 def _bug_order(name: str) -> tuple[int, str]:
@@ -326,18 +390,17 @@ def _bug_order(name: str) -> tuple[int, str]:
 
 
 def load_runs(path: Path) -> list[Run]:
-    """The runs of a deep-<mode>.json (fields this version does not know are dropped)."""
-    known = set(Run.__dataclass_fields__)
+    """The runs of a deep-<mode>.json, or those of a journal (``.jsonl``) so far (fields this
+    version does not know are dropped)."""
+    if path.suffix == ".jsonl":
+        runs = journal.read(path)[1]
+        if not runs:
+            raise ValueError("the journal holds no finished trial yet")
+        return runs
     rows = json.loads(path.read_text(encoding="utf-8"))
     if not isinstance(rows, list) or not rows or not all(isinstance(row, dict) for row in rows):
         raise ValueError("expected a non-empty list of runs")
-    runs = []
-    for row in rows:
-        fields = {k: v for k, v in row.items() if k in known}
-        for name in ("replay_misses", "fields"):
-            fields[name] = tuple(fields.get(name, ()))
-        runs.append(Run(**fields))
-    return runs
+    return [journal.run_of(row) for row in rows]
 
 
 def _report(

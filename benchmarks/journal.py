@@ -1,0 +1,226 @@
+"""A journal of a benchmark's finished trials, so a sweep of hours can stop and go on.
+
+``bench_deep``'s full mode takes about six hours on two cores. Without a journal its results
+existed only once every trial had run: a sweep stopped at hour five (a reboot, a session that
+ends) left nothing. Now each finished trial is appended to ``deep-<mode>.jsonl`` in the results
+folder as it ends (one JSON object a line, flushed and fsynced), under a first line that names
+the sweep: its mode's bugs, engines, trials and budget, and the commit that ran it.
+``--resume`` reads the journal, checks that it belongs to this sweep and to the same code, and
+runs only the trials it does not hold; once every trial has run, ``deep-<mode>.json`` is
+written and the journal removed. "The same code": the journal's commit, or a later one that
+changed nothing outside ``benchmarks/results/`` and the Markdown files (a session that commits
+a partial journal and some notes can go on from its own next commit).
+
+The journal is data: it is parsed as JSON, never evaluated. A last line cut short (a process
+killed while writing it) is ignored, and its trial runs again; any other bad line is an error
+that names the file and the line.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import threading
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from benchmarks.bench_zoo import Run
+
+FORMAT = "rrosfuzz bench_deep journal 1"
+"""The header's ``journal`` value."""
+
+
+class JournalError(ValueError):
+    """A journal that cannot be continued; the message names the file and the problem."""
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """What a journal's trials belong to: a mode's runs at one commit.
+
+    Attributes
+    ----------
+    mode : str
+        The ``--mode`` name (it names the files).
+    bugs, engines : tuple of str
+        The mode's bugs and engines, in order.
+    trials : int
+        Trials per (bug, engine).
+    budget : float
+        Seconds per trial.
+    commit : str
+        ``git rev-parse HEAD`` of the tree that runs the trials, ``+dirty`` appended when it has
+        uncommitted changes to tracked files ("unknown" outside a git checkout).
+    """
+
+    mode: str
+    bugs: tuple[str, ...]
+    engines: tuple[str, ...]
+    trials: int
+    budget: float
+    commit: str
+
+    def header(self) -> dict[str, Any]:
+        return {"journal": FORMAT, **asdict(self)}
+
+
+def commit_of(root: Path) -> str:
+    """``root``'s commit, with ``+dirty`` when a tracked file differs from it."""
+    try:
+        head = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True, timeout=30
+        ).stdout.strip()
+        changed = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=30,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return head + ("+dirty" if changed else "")
+
+
+IGNORED = ("benchmarks/results", "*.md")
+"""Paths whose changes do not make a tree's trials differ from the journal's (results, prose)."""
+
+
+def same_code(root: Path, commit: str) -> bool:
+    """Whether ``root``'s working tree has the tracked files of ``commit`` outside ``IGNORED``."""
+    if commit.endswith("+dirty") or commit == "unknown":
+        return False
+    excluded = [f":(exclude){p}" for p in IGNORED]
+    try:
+        diff = subprocess.run(
+            ["git", "diff", "--quiet", commit, "--", ".", *excluded],
+            cwd=root,
+            capture_output=True,
+            timeout=60,
+            check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return diff.returncode == 0
+
+
+def run_of(row: Any) -> Run:
+    """A trial from its JSON object (fields this version does not know are dropped)."""
+    if not isinstance(row, dict):
+        raise TypeError("not an object")
+    fields = {k: v for k, v in row.items() if k in Run.__dataclass_fields__}
+    for name in ("replay_misses", "fields"):
+        fields[name] = tuple(fields.get(name, ()))
+    run = Run(**fields)
+    if not isinstance(run.bug, str) or not isinstance(run.engine, str) or not isinstance(run.seed, int):
+        raise TypeError("bug, engine and seed must be a string, a string and an integer")
+    return run
+
+
+def read(path: Path) -> tuple[dict[str, Any], list[Run]]:
+    """A journal's header and its trials (a last line cut short left out).
+
+    Raises
+    ------
+    JournalError
+        The file cannot be read, its first line is not a journal header, or a line other than
+        the last is not a trial.
+    """
+    try:
+        lines = path.read_text(encoding="utf-8").split("\n")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise JournalError(f"{path}: cannot be read ({exc})") from exc
+    complete = lines[:-1]  # every line a writer finished ends with a newline
+    try:
+        header = json.loads(complete[0]) if complete else None
+    except ValueError:
+        header = None
+    if not isinstance(header, dict) or header.get("journal") != FORMAT:
+        raise JournalError(f"{path}: not a bench_deep journal (its first line is not the header)")
+    runs = []
+    for number, line in enumerate(complete[1:], start=2):
+        try:
+            runs.append(run_of(json.loads(line)))
+        except (ValueError, TypeError) as exc:
+            raise JournalError(f"{path}, line {number}: not a trial ({exc})") from exc
+    return header, runs
+
+
+def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
+    """Raise a :class:`JournalError` naming what differs when ``header`` is not ``sweep``'s,
+    or when ``root`` does not hold the code of the journal's commit (:func:`same_code`)."""
+    mine = json.loads(json.dumps(sweep.header()))  # tuples as lists, as read back
+    for key in ("mode", "bugs", "engines", "trials", "budget"):
+        if header.get(key) != mine[key]:
+            raise JournalError(
+                f"{path}: written for another sweep ({key} {header.get(key)!r}, this run's "
+                f"{mine[key]!r}); run the same options, or --restart"
+            )
+    commit = header.get("commit")
+    if not isinstance(commit, str) or not same_code(root, commit):
+        raise JournalError(
+            f"{path}: written by commit {commit}, and this tree ({sweep.commit}) has other code "
+            f"(a table must come from one engine; a tree with uncommitted changes cannot be "
+            f"checked). Resume from a checkout of that commit (git worktree add DIR COMMIT), or "
+            f"--restart"
+        )
+
+
+class Journal:
+    """Appends finished trials to a journal file, one at a time (thread-safe)."""
+
+    def __init__(self, path: Path, sweep: Sweep, fresh: bool) -> None:
+        self.path = path
+        self._lock = threading.Lock()
+        if fresh:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._write(sweep.header(), "w")
+        else:
+            self._cut_short_line()
+
+    def _cut_short_line(self) -> None:
+        """Drop a last line a killed writer left without its newline, so appends start clean."""
+        data = self.path.read_bytes()
+        if data and not data.endswith(b"\n"):
+            with self.path.open("r+b") as f:
+                f.truncate(data.rfind(b"\n") + 1)
+
+    def _write(self, row: dict[str, Any], how: str) -> None:
+        with self.path.open(how, encoding="utf-8") as f:
+            f.write(json.dumps(row) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+
+    def add(self, run: Run) -> None:
+        with self._lock:
+            self._write(asdict(run), "a")
+
+
+def open_sweep(
+    path: Path, sweep: Sweep, root: Path, *, resume: bool, restart: bool
+) -> tuple[Journal, list[Run]]:
+    """The sweep's journal at ``path`` and the trials it already holds (none unless ``resume``).
+
+    Raises
+    ------
+    JournalError
+        ``path`` holds an unfinished sweep and neither ``resume`` nor ``restart`` is given, or
+        ``resume`` and there is no journal, or it is not this sweep's (:func:`check`).
+    """
+    if path.exists() and not restart:
+        if not resume:
+            raise JournalError(
+                f"{path} holds an unfinished sweep: --resume goes on with it, --restart starts "
+                f"over (keeping it as {path.name}.old)"
+            )
+        header, done = read(path)
+        check(path, header, sweep, root)
+        return Journal(path, sweep, fresh=False), done
+    if resume:
+        raise JournalError(f"nothing to resume: {path} does not exist")
+    if path.exists():
+        path.replace(path.with_name(path.name + ".old"))
+    return Journal(path, sweep, fresh=True), []

@@ -1,0 +1,180 @@
+"""bench_deep's journal: a sweep of hours keeps every finished trial and goes on with --resume."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from benchmarks import bench_deep, journal
+from benchmarks.bench_zoo import Run
+from benchmarks.zoo import Bug
+
+QUICK = ["--mode", "quick", "--trials", "2", "--jobs", "1"]
+"""2 bugs x 2 engines x 2 trials: 8 trials."""
+
+
+class Interrupted(Exception):
+    """Stands for a sweep killed part way (a reboot, a session's end)."""
+
+
+class FakeTrials:
+    """``run_one`` without a process: each trial takes a minute of a fake clock; ``fail_at``
+    interrupts the sweep at that call."""
+
+    def __init__(self, fail_at: int | None = None) -> None:
+        self.calls: list[tuple[str, str, int]] = []
+        self.now = 0.0
+        self.fail_at = fail_at
+
+    def monotonic(self) -> float:
+        return self.now
+
+    def __call__(self, bug: Bug, engine: str, seed: int, budget: float, **_: object) -> Run:
+        if self.fail_at is not None and len(self.calls) == self.fail_at:
+            raise Interrupted
+        self.calls.append((bug.name, engine, seed))
+        self.now += 60.0
+        at = 1.0 + seed if engine == "full" else None
+        return Run(
+            bug.name, engine, seed, budget, at, int(at is not None), 10, 1.0, bug.op, -9, first_input=0.5
+        )
+
+
+@pytest.fixture
+def fake(monkeypatch: pytest.MonkeyPatch) -> FakeTrials:
+    trials = FakeTrials()
+    monkeypatch.setattr(bench_deep, "run_one", trials)
+    monkeypatch.setattr(bench_deep, "time", SimpleNamespace(monotonic=trials.monotonic))
+    # the tree under test may have uncommitted changes: one commit, the same code (the rule
+    # itself: the last test, on a repository of its own)
+    monkeypatch.setattr(journal, "commit_of", lambda root: "c" * 40)
+    monkeypatch.setattr(journal, "same_code", lambda root, commit: commit == "c" * 40)
+    return trials
+
+
+def _sweep(results: Path, *extra: str) -> list[Run]:
+    return bench_deep.main([*QUICK, "--results", str(results), *extra])
+
+
+def test_a_sweep_cut_short_goes_on_with_resume_and_runs_only_what_is_missing(
+    fake: FakeTrials, tmp_path: Path
+) -> None:
+    everything = _sweep(tmp_path / "whole")  # the order and records of an uninterrupted sweep
+    assert len(everything) == 8 and not (tmp_path / "whole" / "deep-quick.jsonl").exists()
+    order = list(fake.calls)
+    fake.calls.clear()
+    fake.fail_at = 3
+    with pytest.raises(Interrupted):
+        _sweep(tmp_path)
+    held = journal.read(tmp_path / "deep-quick.jsonl")[1]
+    assert [(r.bug, r.engine, r.seed) for r in held] == order[:3]  # each trial kept as it ended
+    assert not (tmp_path / "deep-quick.json").exists()
+    fake.calls.clear()
+    fake.fail_at = None
+    runs = _sweep(tmp_path, "--resume")
+    assert fake.calls == order[3:]
+    assert runs == everything  # the same records in the same order as one sweep's
+    assert [journal.run_of(row) for row in json.loads((tmp_path / "deep-quick.json").read_text())] == runs
+    assert not (tmp_path / "deep-quick.jsonl").exists()  # deep-quick.json holds them all
+
+
+def test_stop_after_starts_no_trial_past_its_minutes(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    runs = _sweep(tmp_path, "--stop-after", "2.5")  # trials end at minutes 1, 2, 3
+    assert len(runs) == 3 and len(fake.calls) == 3
+    assert "3 of 8 trials done" in capsys.readouterr().out
+    assert len(journal.read(tmp_path / "deep-quick.jsonl")[1]) == 3
+    # a journal so far is tabulated as a results file, its counts per cell as they are
+    shown = bench_deep.main(["--mode", "quick", "--from-json", str(tmp_path / "deep-quick.jsonl")])
+    assert sorted(shown, key=lambda r: (r.bug, r.engine, r.seed)) == sorted(
+        runs, key=lambda r: (r.bug, r.engine, r.seed)
+    )
+    assert len(_sweep(tmp_path, "--resume")) == 8
+
+
+def test_an_unfinished_journal_is_neither_overwritten_nor_resumed_by_another_sweep(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _sweep(tmp_path, "--stop-after", "1.5")
+    path = tmp_path / "deep-quick.jsonl"
+    kept = path.read_bytes()
+    for extra, says in (
+        ((), "holds an unfinished sweep: --resume"),
+        (("--resume", "--trials", "3"), "written for another sweep (trials 2, this run's 3)"),
+        (("--resume", "--restart"), "exclude each other"),
+        (("--stop-after", "0"), "--stop-after must be a positive number"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            _sweep(tmp_path, *extra)
+        assert exit_info.value.code == 2 and says in capsys.readouterr().err, extra
+        assert path.read_bytes() == kept
+    monkeypatch.setattr(journal, "same_code", lambda root, commit: False)  # the engine changed since
+    with pytest.raises(SystemExit):
+        _sweep(tmp_path, "--resume")
+    assert f"written by commit {'c' * 40}, and this tree" in capsys.readouterr().err
+    assert path.read_bytes() == kept
+    with pytest.raises(SystemExit):
+        _sweep(tmp_path / "elsewhere", "--resume")
+    assert "nothing to resume" in capsys.readouterr().err
+    _sweep(tmp_path, "--restart", "--stop-after", "0.5")
+    assert (tmp_path / "deep-quick.jsonl.old").read_bytes() == kept
+
+
+def test_a_last_line_cut_short_runs_again_and_a_bad_line_is_named(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _sweep(tmp_path, "--stop-after", "2.5")
+    path = tmp_path / "deep-quick.jsonl"
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines[:-1]) + lines[-1][:20])  # killed while writing its third trial
+    assert len(journal.read(path)[1]) == 2
+    fake.calls.clear()
+    assert len(_sweep(tmp_path, "--resume")) == 8 and len(fake.calls) == 6
+    for bad, says in (
+        ('{"journal": "something else"}\n', "not a bench_deep journal"),
+        (lines[0] + "[1, 2]\n" + lines[1], "line 2: not a trial"),
+        (lines[0] + '{"bug": "x"}\n\n', "line 2: not a trial"),
+        ("\x00\xff\n", "not a bench_deep journal"),
+    ):
+        path.write_text(bad)
+        with pytest.raises(SystemExit):
+            _sweep(tmp_path, "--resume")
+        assert says in capsys.readouterr().err, bad
+
+
+def _git(repo: Path, *args: str) -> str:
+    return subprocess.run(
+        ["git", "-c", "user.name=t", "-c", "user.email=t@t", *args],
+        cwd=repo,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+
+
+def test_the_same_code_means_the_commit_or_a_later_one_with_only_results_and_prose(tmp_path: Path) -> None:
+    repo = tmp_path / "repo"
+    (repo / "benchmarks" / "results").mkdir(parents=True)
+    (repo / "engine.py").write_text("A = 1\n")
+    (repo / "benchmarks" / "results" / "r.json").write_text("[]\n")
+    (repo / "NOTES.md").write_text("x\n")
+    _git(repo, "init", "-q")
+    _git(repo, "add", ".")
+    _git(repo, "commit", "-q", "-m", "one")
+    first = journal.commit_of(repo)
+    assert len(first) == 40 and journal.same_code(repo, first)
+    (repo / "benchmarks" / "results" / "r.json").write_text("[1]\n")
+    (repo / "NOTES.md").write_text("y\n")
+    _git(repo, "commit", "-qam", "results and notes")
+    assert journal.same_code(repo, first)  # a session's partial results and notes
+    (repo / "engine.py").write_text("A = 2\n")
+    assert journal.commit_of(repo).endswith("+dirty") and not journal.same_code(repo, first)
+    _git(repo, "commit", "-qam", "engine")
+    assert not journal.same_code(repo, first)
+    assert not journal.same_code(repo, first + "+dirty") and not journal.same_code(repo, "0" * 40)
+    assert journal.commit_of(tmp_path / "nowhere") == "unknown"
