@@ -10,7 +10,7 @@ import pytest
 
 import native
 import python_impl
-from benchmarks import bench_deep
+from benchmarks import bench_deep, deep_stats
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import DEEP, STATEFUL, ZOO, deep
 from robot_api import robots
@@ -121,35 +121,35 @@ def _run(engine: str, seed: int, at: float | None, bug: str = "narrow_band", op:
 
 
 def test_a12_and_censoring() -> None:
-    assert bench_deep.a12([1.0, 2.0], [3.0, 4.0]) == 1.0  # the first always sooner
-    assert bench_deep.a12([3.0], [3.0]) == 0.5
+    assert deep_stats.a12([1.0, 2.0], [3.0, 4.0]) == 1.0  # the first always sooner
+    assert deep_stats.a12([3.0], [3.0]) == 0.5
     runs = [_run("full", 0, 2.0), _run("full", 1, None), _run("full", 2, 50.0)]
-    assert bench_deep.censored(runs, 10.0) == [2.0, 10.0, 10.0]
+    assert deep_stats.censored(runs, 10.0) == [2.0, 10.0, 10.0]
 
 
 def test_compare_verdicts() -> None:
     fast, slow = [1.0 + 0.1 * i for i in range(10)], [8.0 + 0.1 * i for i in range(10)]
-    p, effect, verdict = bench_deep.compare(fast, slow)
+    p, effect, verdict = deep_stats.compare(fast, slow)
     assert p < 0.05 and effect == 1.0 and verdict == "faster"
-    assert bench_deep.compare(slow, fast)[2] == "slower"
-    assert bench_deep.compare([10.0] * 5, [10.0] * 5) == (1.0, 0.5, "tie")
-    assert bench_deep.compare([1.0, 9.0, 2.0], [8.0, 1.5, 3.0])[2] == "tie"
+    assert deep_stats.compare(slow, fast)[2] == "slower"
+    assert deep_stats.compare([10.0] * 5, [10.0] * 5) == (1.0, 0.5, "tie")
+    assert deep_stats.compare([1.0, 9.0, 2.0], [8.0, 1.5, 3.0])[2] == "tie"
 
 
 def test_survival_and_markdown() -> None:
     runs = [_run("full", i, 1.0 + i) for i in range(4)] + [_run("uniform", i, None) for i in range(4)]
-    times, share = bench_deep.survival([r for r in runs if r.engine == "full"], 10.0, points=11)
+    times, share = deep_stats.survival([r for r in runs if r.engine == "full"], 10.0, points=11)
     assert times[0] == 0.0 and times[-1] == 10.0
     assert share[0] == 0.0 and share[-1] == 1.0 and share == sorted(share)
-    mode = bench_deep.Mode(("narrow_band",), 4, 10.0, ("full", "uniform"))
-    text = bench_deep.markdown(runs, mode, "cmd")
+    mode = deep_stats.Mode(("narrow_band",), 4, 10.0, ("full", "uniform"))
+    text = deep_stats.markdown(runs, mode, "cmd")
     row = next(line for line in text.splitlines() if line.startswith("| narrow_band"))
     assert "(4/4)" in row and "- (0/4)" in row and "faster" in row
     assert "tabulated from a results file" in text  # how many ran at once is not known
-    assert "1 run at a time" in bench_deep.markdown(runs, mode, "cmd", jobs=1)
-    assert "2 runs at a time" in bench_deep.markdown(runs, mode, "cmd", jobs=2)
+    assert "1 run at a time" in deep_stats.markdown(runs, mode, "cmd", jobs=1)
+    assert "2 runs at a time" in deep_stats.markdown(runs, mode, "cmd", jobs=2)
     late = [_run("full", 0, 2.0), _run("full", 1, 12.0)]  # the second past the 10-s budget
-    table = bench_deep.markdown(late, mode, "cmd").splitlines()
+    table = deep_stats.markdown(late, mode, "cmd").splitlines()
     row = next(ln for ln in table if ln.startswith("| narrow_band"))
     assert "(1/2)" in row  # a detection after the budget is not one within it
     assert bench_deep.runs_on("scenario", "weights") and not bench_deep.runs_on("scenario", "uniform")
@@ -162,9 +162,9 @@ def test_the_search_table_takes_the_start_up_out() -> None:
     full = [replace(_run("full", i, 2.0 + 0.01 * i), first_input=1.9) for i in range(6)]
     other = [replace(_run("uniform", i, 1.5 + 0.01 * i), first_input=1.0) for i in range(6)]
     assert full[0].search_time == pytest.approx(0.1) and _run("full", 0, None).search_time is None
-    assert bench_deep.censored_search([*full[:1], _run("full", 1, 3.0)], 10.0) == [pytest.approx(0.1), 10.0]
-    mode = bench_deep.Mode(("narrow_band",), 6, 10.0, ("full", "uniform"))
-    text = bench_deep.markdown([*full, *other], mode, "cmd")
+    assert deep_stats.censored_search([*full[:1], _run("full", 1, 3.0)], 10.0) == [pytest.approx(0.1), 10.0]
+    mode = deep_stats.Mode(("narrow_band",), 6, 10.0, ("full", "uniform"))
+    text = deep_stats.markdown([*full, *other], mode, "cmd")
     first, second = (line for line in text.splitlines() if line.startswith("| narrow_band"))
     assert "slower" in first and "faster" in second
     assert "| 1.90 | 1.00 |" in second
@@ -228,11 +228,11 @@ def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp
     runs = [_run(e, i, 1.0 + i, "silent_clamp", "move") for e in mode.engines for i in range(3)]
     runs += [_run(e, i, 2.0 + i, scenario, "scenario") for e in ("full", "libfuzzer") for i in range(3)]
     runs = [replace(r, first_input=0.5, returncode=0) for r in runs]
-    small = bench_deep.Mode(("silent_clamp", scenario), 3, 10.0, mode.engines)
+    small = deep_stats.Mode(("silent_clamp", scenario), 3, 10.0, mode.engines)
     # the header says trials stopped at detection only when some were (an older results file: no)
-    assert "A trial stops" not in bench_deep.markdown(runs, small, "cmd")
+    assert "A trial stops" not in deep_stats.markdown(runs, small, "cmd")
     runs = [replace(r, returncode=-9) for r in runs]
-    text = bench_deep.markdown(runs, small, "cmd")
+    text = deep_stats.markdown(runs, small, "cmd")
     assert "A trial stops at its first detection" in text
     first, second = (line for line in text.splitlines() if line.startswith(f"| {scenario} "))
     cells = first.strip("|").split("|")
@@ -241,5 +241,5 @@ def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp
     assert second.count("n/a") == 6 and "| 0.50 | 0.50 |" in second  # no start-up, no search verdict
     move = next(line for line in text.splitlines() if line.startswith("| silent_clamp "))
     assert "n/a" not in move
-    bench_deep.plot(runs, small, tmp_path / "zoo.png")
+    deep_stats.plot(runs, small, tmp_path / "zoo.png")
     assert (tmp_path / "zoo.png").is_file()
