@@ -37,7 +37,7 @@ test: setup
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md
 	$(MAKE) bench-deep-full
-	$(PY) -m benchmarks.bench_deep --mode zoo --write-md
+	$(PY) -m benchmarks.bench_deep --mode zoo --write-md $$(test -f benchmarks/results/deep-zoo.jsonl && echo --resume)
 
 ## The deep bugs' 60-s part alone. It keeps each finished trial in benchmarks/results/deep-full.jsonl:
 ## stopped or killed, the same command goes on with the trials that are missing (--resume).
@@ -47,12 +47,12 @@ bench-deep-full: setup
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
 ## (28-32 minutes on 2 cores).
 bench-deep: setup
-	$(PY) -m benchmarks.bench_deep --mode short --write-md
+	$(PY) -m benchmarks.bench_deep --mode short --write-md $$(test -f benchmarks/results/deep-short.jsonl && echo --resume)
 
 ## CI-sized: a few zoo bugs, and two deep bugs x 2 engines x 2 trials (tests/test_zoo_deep.py runs the deep part).
 bench-quick: setup
 	$(PY) -m benchmarks.bench_zoo --mode quick
-	$(PY) -m benchmarks.bench_deep --mode quick
+	$(PY) -m benchmarks.bench_deep --mode quick --restart
 
 lint: setup
 	$(PY) -m ruff check . && $(PY) -m ruff format --check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks
