@@ -4,10 +4,10 @@ MuJoCo, PyBullet, Drake, yourdfpy, pytransform3d, Klampt and placo each read
 the URDF with their own parser and compute link frames with their own
 kinematics. Their adapters (``adapters/<lib>_adapter.py``) only differ in how
 they load a document and read one link's frame for a joint vector; everything
-else lives here and is the contract's (``python_impl``): URDF validation and
-errors, chain selection, joint names and order, limits, ``home_values``,
-argument checks, and ``MoveGroup`` (planning in joint space, poses from the
-library's FK).
+else lives here (or in ``adapters._common``) and is the contract's
+(``python_impl``): URDF validation and errors, chain selection, joint names and
+order, limits, ``home_values``, argument checks, and ``MoveGroup`` (planning in
+joint space, poses from the library's FK).
 
 Shared conventions
 ------------------
@@ -38,15 +38,13 @@ import contextlib
 import os
 import re
 import sys
-import types
 from collections.abc import Iterator
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, matrix_pose, urdf_bytes
+from adapters._common import LibraryModel, refuse_mimic_joints, urdf_bytes
 from python_impl.urdf import Urdf, load_urdf
 from robot_api.errors import ErrorCode, InvalidInputError, URDFError
 from robot_api.protocol import JointValues
@@ -105,7 +103,7 @@ def unsupported(library: str, what: str) -> URDFError:
     return URDFError(f"{library}: {what}", ErrorCode.URDF_UNSUPPORTED)
 
 
-class EngineModel(RowwiseFkModel):
+class EngineModel(LibraryModel):
     """A chain loaded from URDF whose link frames come from a third-party library.
 
     Subclasses set ``LIBRARY`` and implement ``_load`` and ``_frames``.
@@ -131,12 +129,9 @@ class EngineModel(RowwiseFkModel):
 
     def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
         super().__init__(urdf, tip_link)
-        if self.mimic_joints:
-            raise unsupported(
-                self.LIBRARY,
-                f"the adapter drives joints by name and has no mimic joints; the chain to "
-                f"'{self.tip_link}' has {', '.join(m.name for m in self.mimic_joints)}",
-            )
+        refuse_mimic_joints(
+            self, f"{self.LIBRARY}: the adapter drives joints by name and has no mimic joints"
+        )
         original = urdf_bytes(urdf)
         data = kinematic_urdf(original)
         try:
@@ -176,14 +171,6 @@ class EngineModel(RowwiseFkModel):
         root, frame = self._frames([float(v) for v in values[: self.dof]], (0, link))
         return relative(root, frame)
 
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        """Pose of link index ``link`` for checked values, by the library's FK."""
-        return matrix_pose(self._matrix(values, link))
-
-    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
-        """The library's transform of link index ``link`` for one row (batch FK)."""
-        return self._matrix(row, link)
-
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None
     ) -> IKResult:
@@ -207,27 +194,3 @@ class EngineModel(RowwiseFkModel):
         raise InvalidInputError(
             f"the {self.LIBRARY} adapter offers forward kinematics only", ErrorCode.UNSUPPORTED_OPERATION
         )
-
-
-def make_api(model_cls: type[EngineModel], module: str) -> types.SimpleNamespace:
-    """The ``api`` namespace of an adapter: its RobotModel and a MoveGroup that accepts only it."""
-
-    class MoveGroup(python_impl.MoveGroup):
-        """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from the library.
-
-        Parameters
-        ----------
-        model : RobotModel
-            A model of this adapter.
-        """
-
-        def __init__(self, model: EngineModel) -> None:
-            if not isinstance(model, model_cls):
-                raise InvalidInputError(
-                    f"model: expected an {module}.RobotModel, got {type(model).__name__}",
-                    ErrorCode.INVALID_ARGUMENT,
-                )
-            super().__init__(model)
-
-    MoveGroup.__module__ = module
-    return types.SimpleNamespace(RobotModel=model_cls, MoveGroup=MoveGroup)

@@ -46,7 +46,8 @@ import numpy as np
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 
-from adapters._engines import EngineModel, Matrix, make_api
+from adapters._common import make_api
+from adapters._engines import EngineModel, Matrix
 from python_impl.urdf import Urdf
 
 

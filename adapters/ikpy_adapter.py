@@ -77,9 +77,7 @@ Known library semantics (left visible on purpose)
 from __future__ import annotations
 
 import io
-import math
 import os
-import types
 import warnings
 from typing import Any
 
@@ -89,19 +87,14 @@ import ikpy.urdf.URDF
 import numpy as np
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, ik_errors, matrix_pose, meets_criterion, urdf_bytes
-from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion_matrix
+from adapters._common import IkAnswer, IkTarget, LibraryModel, make_api, refuse_mimic_joints, urdf_bytes
 from python_impl.urdf import is_path_source, load_urdf
-from robot_api.errors import ErrorCode, InvalidInputError, URDFError
-from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from robot_api.errors import ErrorCode, URDFError
 
 Matrix = NDArray[np.float64]
 
 
-class RobotModel(RowwiseFkModel):
+class RobotModel(LibraryModel):
     """A chain loaded from URDF whose kinematics are IKPy's (see the module docstring).
 
     Parameters
@@ -124,12 +117,7 @@ class RobotModel(RowwiseFkModel):
 
     def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
         super().__init__(urdf, tip_link)
-        if self.mimic_joints:
-            raise URDFError(
-                f"IKPy has no mimic joints; the chain to '{self.tip_link}' has "
-                f"{', '.join(m.name for m in self.mimic_joints)}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
+        refuse_mimic_joints(self, "IKPy has no mimic joints")
         source, is_path = is_path_source(urdf)
         assert isinstance(source, str)
         tree = load_urdf(source, is_path)
@@ -173,69 +161,17 @@ class RobotModel(RowwiseFkModel):
         frames = self._chains[tip].forward_kinematics(self._full(values, tip), full_kinematics=True)
         return np.asarray(frames[link], dtype=np.float64)
 
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        """Pose of link index ``link`` for checked values, by IKPy's FK."""
-        return matrix_pose(self._matrix(values, link))
-
-    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
-        """The library's transform of link index ``link`` for one row (batch FK)."""
-        return self._matrix(row, link)
-
-    def inverse_kinematics(
-        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
-    ) -> IKResult:
-        """Joint values that put ``link`` at ``pose``, by IKPy's ``inverse_kinematics_frame``.
-
-        Parameters
-        ----------
-        pose : Pose or (position, orientation)
-            Target; the quaternion (x, y, z, w) is normalized.
-        seed : sequence of float, shape (dof,), optional
-            Start of the search, clamped into the limits; ``home_values`` by default.
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        IKResult
-            ``SUCCESS`` when IKPy's answer meets the contract's criterion (by IKPy's FK).
-        """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        values = list(q)
-        if nvars > 0:
-            chain = self._chain_to(index)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                full = chain.inverse_kinematics_frame(
-                    target, initial_position=self._full(q, index), orientation_mode="all"
-                )
-            values[:nvars] = np.asarray(full, dtype=np.float64)[self._masks[index]].tolist()
-        for i, lim in enumerate(self.joint_limits[:nvars]):
-            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
-                values[i] = normalize_angle(values[i])
-        reached = self._matrix(values, index)
-        status = IKStatus.SUCCESS if meets_criterion(reached, target) else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *ik_errors(reached, target))
-
-
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from IKPy.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.ikpy_adapter.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
+    def _ik_answer(self, target: IkTarget, q: list[float], index: int, nvars: int) -> IkAnswer:
+        """IKPy's ``inverse_kinematics_frame`` from the seed; no status (the contract's criterion)."""
+        chain = self._chain_to(index)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            full = chain.inverse_kinematics_frame(
+                target.matrix, initial_position=self._full(q, index), orientation_mode="all"
             )
-        super().__init__(model)
+        return np.asarray(full, dtype=np.float64)[self._masks[index]].tolist(), None
 
 
-api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation to plug in: ``--targets native,adapters.ikpy_adapter:api``."""
+MoveGroup = api.MoveGroup

@@ -73,9 +73,6 @@ Known library semantics (left visible on purpose)
 
 from __future__ import annotations
 
-import math
-import os
-import types
 from typing import Any
 
 import kinpy
@@ -83,37 +80,12 @@ import kinpy.urdf_parser_py.xml_reflection.core as _xml_core
 import numpy as np
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, ik_errors, matrix_pose, meets_criterion, urdf_bytes
-from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion_matrix
-from robot_api.errors import ErrorCode, InvalidInputError, URDFError
-from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from adapters._common import IkAnswer, IkTarget, SerialChainModel, make_api
 
 Matrix = NDArray[np.float64]
 
 
-def _quiet(message: str) -> None:
-    """urdf_parser_py's error hook while the adapter loads (its messages are informational)."""
-
-
-def _serial_chain(data: bytes, link: str) -> Any:
-    """kinpy's serial chain from the URDF root to ``link``, with the parser's messages silenced."""
-    hook = _xml_core.on_error
-    _xml_core.on_error = _quiet
-    try:
-        return kinpy.build_serial_chain_from_urdf(data, link)
-    except Exception as exc:  # noqa: BLE001 - whatever kinpy raises, it cannot read this URDF
-        raise URDFError(
-            f"kinpy cannot build the chain to '{link}': {type(exc).__name__}: {exc}",
-            ErrorCode.URDF_UNSUPPORTED,
-        ) from None
-    finally:
-        _xml_core.on_error = hook
-
-
-class RobotModel(RowwiseFkModel):
+class RobotModel(SerialChainModel):
     """A chain loaded from URDF whose kinematics are kinpy's (see the module docstring).
 
     Parameters
@@ -132,35 +104,13 @@ class RobotModel(RowwiseFkModel):
         ``tip_link`` is not a link of the URDF.
     """
 
-    __slots__ = ("_chains", "_data", "_tip")
+    __slots__ = ()
+    _LIBRARY = "kinpy"
+    _NO_MIMIC = "kinpy has no mimic joints"
+    _PARSER = _xml_core
 
-    def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
-        super().__init__(urdf, tip_link)
-        if self.mimic_joints:
-            raise URDFError(
-                f"kinpy has no mimic joints; the chain to '{self.tip_link}' has "
-                f"{', '.join(m.name for m in self.mimic_joints)}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
-        self._data = urdf_bytes(urdf)
-        self._chains: dict[int, Any] = {}
-        self._tip = len(self.link_names) - 1
-        if self._tip == 0:
-            raise URDFError(
-                "kinpy cannot build a serial chain that ends at its root", ErrorCode.URDF_UNSUPPORTED
-            )
-        chain = self._chain_to(self._tip)
-        names = tuple(chain.get_joint_parameter_names())
-        if names != self.joint_names:
-            raise URDFError(
-                f"kinpy's chain has the variables {names}, the contract {self.joint_names}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
-
-    def _chain_to(self, index: int) -> Any:
-        if index not in self._chains:
-            self._chains[index] = _serial_chain(self._data, self.link_names[index])
-        return self._chains[index]
+    def _build_chain(self, data: bytes, link: str) -> Any:
+        return kinpy.build_serial_chain_from_urdf(data, link)
 
     def _matrix(self, values: list[float] | NDArray[np.float64], link: int) -> Matrix:
         frames = self._chains[self._tip].forward_kinematics(
@@ -168,66 +118,14 @@ class RobotModel(RowwiseFkModel):
         )
         return np.asarray(frames[self.link_names[link]].matrix(), dtype=np.float64)
 
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        """Pose of link index ``link`` for checked values, by kinpy's FK."""
-        return matrix_pose(self._matrix(values, link))
-
-    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
-        """The library's transform of link index ``link`` for one row (batch FK)."""
-        return self._matrix(row, link)
-
-    def inverse_kinematics(
-        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
-    ) -> IKResult:
-        """Joint values that put ``link`` at ``pose``, by kinpy's ``inverse_kinematics``.
-
-        Parameters
-        ----------
-        pose : Pose or (position, orientation)
-            Target; the quaternion (x, y, z, w) is normalized.
-        seed : sequence of float, shape (dof,), optional
-            Start of the search, clamped into the limits; ``home_values`` by default.
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        IKResult
-            ``SUCCESS`` when kinpy's answer meets the contract's criterion (by kinpy's FK).
-        """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        values = list(q)
-        if nvars > 0:
-            x, y, z, w = orientation
-            goal = kinpy.Transform(rot=[w, x, y, z], pos=np.array(position))
-            answer = self._chain_to(index).inverse_kinematics(goal, np.array(q[:nvars]))
-            values[:nvars] = np.asarray(answer, dtype=np.float64).tolist()
-        for i, lim in enumerate(self.joint_limits[:nvars]):
-            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
-                values[i] = normalize_angle(values[i])
-        reached = self._matrix(values, index)
-        status = IKStatus.SUCCESS if meets_criterion(reached, target) else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *ik_errors(reached, target))
+    def _ik_answer(self, target: IkTarget, q: list[float], index: int, nvars: int) -> IkAnswer:
+        """kinpy's ``inverse_kinematics`` (BFGS) from the seed; no status (the contract's criterion)."""
+        x, y, z, w = target.orientation
+        goal = kinpy.Transform(rot=[w, x, y, z], pos=np.array(target.position))
+        answer = self._chain_to(index).inverse_kinematics(goal, np.array(q[:nvars]))
+        return np.asarray(answer, dtype=np.float64).tolist(), None
 
 
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from kinpy.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.kinpy_adapter.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
-            )
-        super().__init__(model)
-
-
-api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation to plug in: ``--targets native,adapters.kinpy_adapter:api``."""
+MoveGroup = api.MoveGroup

@@ -46,7 +46,8 @@ from typing import Any
 import klampt
 import numpy as np
 
-from adapters._engines import EngineModel, Matrix, make_api, quiet_stdio, unsupported
+from adapters._common import make_api
+from adapters._engines import EngineModel, Matrix, quiet_stdio, unsupported
 
 
 class RobotModel(EngineModel):

@@ -49,7 +49,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from adapters._engines import EngineModel, Matrix, make_api, unsupported
+from adapters._common import make_api
+from adapters._engines import EngineModel, Matrix, unsupported
 
 
 def _warn(message: str) -> None:

@@ -105,22 +105,19 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, canonical_quaternion
+from adapters._common import LibraryModel, canonical_quaternion, ik_result, make_api
 from python_impl.angles import normalize_angle
-from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS, IK_PINV_EPS
-from robot_api.errors import ErrorCode, InvalidInputError, URDFError
+from robot_api.errors import ErrorCode, URDFError
 from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from robot_api.records import IKResult, JointType, Pose
 
 Array = NDArray[np.float64]
 
@@ -145,7 +142,7 @@ def _is_small(twist: Array) -> bool:
     return all(x <= IK_EPS and x + IK_EPS >= 0.0 for x in twist.tolist())
 
 
-class RobotModel(RowwiseFkModel):
+class RobotModel(LibraryModel):
     """A kinematic chain from URDF whose kinematics are pinocchio's.
 
     Chain, variables, limits and argument checks follow the contract through
@@ -239,7 +236,7 @@ class RobotModel(RowwiseFkModel):
                 q[idx] = v
         return q
 
-    def _transform(self, values: Sequence[float] | Array, link: int) -> Array:
+    def _matrix(self, values: Sequence[float] | Array, link: int) -> Array:
         """4x4 pose of link index ``link`` in the root link's frame, by pinocchio."""
         if link == 0:
             return np.eye(4)
@@ -272,13 +269,9 @@ class RobotModel(RowwiseFkModel):
 
     def pose_of(self, values: list[float], link: int) -> Pose:
         """Pose of link index ``link`` for checked values (pinocchio's FK)."""
-        t = self._transform(values, link)
+        t = self._matrix(values, link)
         x, y, z = t[:3, 3].tolist()
         return Pose((x, y, z), canonical_quaternion(pin.Quaternion(t[:3, :3]).coeffs()))
-
-    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
-        """The library's transform of link index ``link`` for one row (batch FK)."""
-        return self._transform(row, link)
 
     def inverse_kinematics(
         self, pose: Pose, seed: JointValues | None = None, link: str | None = None
@@ -309,13 +302,13 @@ class RobotModel(RowwiseFkModel):
         converged = False
         if nvars == 0:
             converged = _is_small(
-                self._error_twist(self._transform(values, index), target_rotation, target_position)
+                self._error_twist(self._matrix(values, index), target_rotation, target_position)
             )
         else:
             lower = np.array([lim.lower for lim in limits[:nvars]])
             upper = np.array([lim.upper for lim in limits[:nvars]])
             for _ in range(IK_MAX_ITERATIONS):
-                twist = self._error_twist(self._transform(values, index), target_rotation, target_position)
+                twist = self._error_twist(self._matrix(values, index), target_rotation, target_position)
                 if _is_small(twist):
                     converged = True
                     break
@@ -325,34 +318,9 @@ class RobotModel(RowwiseFkModel):
         for i, lim in enumerate(limits[:nvars]):
             if lim.type == JointType.CONTINUOUS:
                 result[i] = normalize_angle(result[i])
-        reached = self._transform(result, index)
-        with np.errstate(all="ignore"):
-            d = reached[:3, 3] - target_position
-            position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
-        orientation_error = rotation_angle(reached[:3, :3].T @ target_rotation)
-        status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(result), position_error, orientation_error)
+        return ik_result(converged, result, self._matrix(result, index), target_position, target_rotation)
 
 
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's ``MoveGroupCommander`` over a simulated arm (python_impl's semantics).
-
-    Poses (``get_current_pose``) come from pinocchio through the model.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.pinocchio_adapter.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
-            )
-        super().__init__(model)
-
-
-api = SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation object for ``--targets adapters.pinocchio_adapter:api``."""
+MoveGroup = api.MoveGroup

@@ -55,7 +55,6 @@ Known library semantics (left visible on purpose)
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 import weakref
@@ -63,13 +62,11 @@ from typing import Any
 
 import numpy as np
 
-from adapters._common import ik_errors, matrix_pose, meets_criterion
-from adapters._engines import EngineModel, Matrix, make_api, quiet_stdio, unsupported
-from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion_matrix
+from adapters._common import IkAnswer, IkTarget, LibraryModel, make_api, matrix_pose
+from adapters._engines import EngineModel, Matrix, quiet_stdio, unsupported
 from python_impl.urdf import Urdf
 from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from robot_api.records import IKResult, Pose
 
 with quiet_stdio():  # "pybullet build time: ..." on import
     import pybullet
@@ -170,30 +167,26 @@ class RobotModel(EngineModel):
         IKResult
             ``SUCCESS`` when PyBullet's answer meets the contract's criterion (by PyBullet's FK).
         """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        values = list(q)
-        if nvars > 0 and self._links[index] >= 0:
-            root = self._frames(values, (0,))[0]  # also puts the seed into PyBullet's joint state
-            world = root @ target
-            goal = matrix_pose(world)
-            answer = pybullet.calculateInverseKinematics(
-                self._lib,
-                self._links[index],
-                goal.position,
-                goal.orientation,
-                maxNumIterations=IK_ITERATIONS,
-                residualThreshold=1e-12,
-                physicsClientId=self._client,
-            )
-            for i in range(nvars):
-                values[i] = float(answer[self._dofs[i]])
-        for i, lim in enumerate(self.joint_limits[:nvars]):
-            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
-                values[i] = normalize_angle(values[i])
-        reached = self._matrix(values, index)
-        status = IKStatus.SUCCESS if meets_criterion(reached, target) else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *ik_errors(reached, target))
+        # the shared IK wrapper, past EngineModel's FK-only refusal
+        return LibraryModel.inverse_kinematics(self, pose, seed, link)
+
+    def _ik_answer(self, target: IkTarget, q: list[float], index: int, nvars: int) -> IkAnswer:
+        """PyBullet's answer from the seed's joint state, to the target in its world; no status."""
+        if self._links[index] < 0:
+            return q[:nvars], None
+        root = self._frames(q, (0,))[0]  # also puts the seed into PyBullet's joint state
+        world = root @ target.matrix
+        goal = matrix_pose(world)
+        answer = pybullet.calculateInverseKinematics(
+            self._lib,
+            self._links[index],
+            goal.position,
+            goal.orientation,
+            maxNumIterations=IK_ITERATIONS,
+            residualThreshold=1e-12,
+            physicsClientId=self._client,
+        )
+        return [float(answer[self._dofs[i]]) for i in range(nvars)], None
 
 
 IK_ITERATIONS = 200

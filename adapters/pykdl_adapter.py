@@ -111,7 +111,6 @@ FK return code          ``JntToCart``: 0, else -4 (size     a non-zero code is a
 
 from __future__ import annotations
 
-import math
 import os
 from types import SimpleNamespace
 from typing import Any, ClassVar
@@ -119,16 +118,13 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, canonical_quaternion
+from adapters._common import LibraryModel, canonical_quaternion, ik_result, make_api
 from adapters._kdl import KDL, frame_matrix, segment_of
 from python_impl.angles import normalize_angle
-from python_impl.transforms import rotation_angle
 from python_impl.urdf import is_path_source, load_urdf
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS, IK_PINV_EPS
-from robot_api.errors import ErrorCode, InvalidInputError
 from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from robot_api.records import IKResult, JointType, Pose
 
 __all__ = ["KdlParserRobotModel", "MoveGroup", "RobotModel", "api", "kdl_parser_api"]
 
@@ -159,7 +155,7 @@ class _IkSolver:
         )
 
 
-class RobotModel(RowwiseFkModel):
+class RobotModel(LibraryModel):
     """A kinematic chain from URDF whose kinematics are KDL's, through PyKDL.
 
     Chain, variables, limits and argument checks follow the contract through
@@ -237,9 +233,9 @@ class RobotModel(RowwiseFkModel):
         p = frame.p
         return Pose((float(p[0]), float(p[1]), float(p[2])), canonical_quaternion(frame.M.GetQuaternion()))
 
-    def _row_matrix(self, row: NDArray[np.float64], link: int) -> NDArray[np.float64]:
-        """The library's transform of link index ``link`` for one row (batch FK)."""
-        return frame_matrix(self._frame(row.tolist(), link))
+    def _matrix(self, values: Any, link: int) -> NDArray[np.float64]:
+        """The transform (4, 4) of link index ``link`` for checked values (KDL's FK)."""
+        return frame_matrix(self._frame(values, link))
 
     def _ik_solver(self, link: int, nvars: int) -> _IkSolver:
         if link not in self._ik_solvers:
@@ -285,34 +281,14 @@ class RobotModel(RowwiseFkModel):
             for j in range(nvars):
                 v = float(q_out[j])
                 q[j] = normalize_angle(v) if limits[j].type == JointType.CONTINUOUS else v
-        reached = frame_matrix(self._frame(q, index))
+        reached = self._matrix(q, index)
         goal = frame_matrix(target)
-        with np.errstate(all="ignore"):
-            d = reached[:3, 3] - goal[:3, 3]
-            position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
-        orientation_error = rotation_angle(reached[:3, :3].T @ goal[:3, :3])
-        status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(q), position_error, orientation_error)
+        return ik_result(converged, q, reached, goal[:3, 3], goal[:3, :3])
 
 
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's ``MoveGroupCommander`` over a simulated arm (python_impl's semantics).
-
-    Poses (``get_current_pose``) come from KDL through the model.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.pykdl_adapter.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
-            )
-        super().__init__(model)
+api = make_api(RobotModel, __name__)
+"""The implementation object for ``--targets adapters.pykdl_adapter:api``."""
+MoveGroup = api.MoveGroup
 
 
 class KdlParserRobotModel(RobotModel):
@@ -326,9 +302,6 @@ class KdlParserRobotModel(RobotModel):
 
     _URDFDOM_ORIGINS: ClassVar[bool] = True
 
-
-api = SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
-"""The implementation object for ``--targets adapters.pykdl_adapter:api``."""
 
 kdl_parser_api = SimpleNamespace(RobotModel=KdlParserRobotModel, MoveGroup=MoveGroup)
 """Variant with kdl_parser's origins: ``--targets adapters.pykdl_adapter:kdl_parser_api``."""

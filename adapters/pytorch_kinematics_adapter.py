@@ -82,9 +82,6 @@ Known library semantics (left visible on purpose)
 
 from __future__ import annotations
 
-import math
-import os
-import types
 from typing import Any
 
 import numpy as np
@@ -93,40 +90,15 @@ import pytorch_kinematics.urdf_parser_py.xml_reflection.core as _xml_core
 import torch
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import ik_errors, matrix_pose, meets_criterion, urdf_bytes
-from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion_matrix
+from adapters._common import IkAnswer, IkTarget, SerialChainModel, make_api
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS
-from robot_api.errors import ErrorCode, InvalidInputError, URDFError
-from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
 
 Matrix = NDArray[np.float64]
 
 DTYPE = torch.float64
 
 
-def _quiet(message: str) -> None:
-    """urdf_parser_py's error hook while the adapter loads (its messages are informational)."""
-
-
-def _serial_chain(data: bytes, link: str) -> Any:
-    """The library's float64 serial chain from the URDF root to ``link``, parser messages silenced."""
-    hook = _xml_core.on_error
-    _xml_core.on_error = _quiet
-    try:
-        return pk.build_serial_chain_from_urdf(data, link).to(dtype=DTYPE)
-    except Exception as exc:  # noqa: BLE001 - whatever it raises, it cannot read this URDF
-        raise URDFError(
-            f"pytorch-kinematics cannot build the chain to '{link}': {type(exc).__name__}: {exc}",
-            ErrorCode.URDF_UNSUPPORTED,
-        ) from None
-    finally:
-        _xml_core.on_error = hook
-
-
-class RobotModel(python_impl.RobotModel):
+class RobotModel(SerialChainModel):
     """A chain loaded from URDF whose kinematics are pytorch-kinematics' (see the module docstring).
 
     Parameters
@@ -145,39 +117,16 @@ class RobotModel(python_impl.RobotModel):
         ``tip_link`` is not a link of the URDF.
     """
 
-    __slots__ = ("_chains", "_data", "_tip")
+    __slots__ = ()
+    _LIBRARY = "pytorch-kinematics"
+    _NO_MIMIC = "pytorch-kinematics ignores mimic joints"
+    _PARSER = _xml_core
 
-    def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
-        super().__init__(urdf, tip_link)
-        if self.mimic_joints:
-            raise URDFError(
-                f"pytorch-kinematics ignores mimic joints; the chain to '{self.tip_link}' has "
-                f"{', '.join(m.name for m in self.mimic_joints)}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
-        self._data = urdf_bytes(urdf)
-        self._chains: dict[int, Any] = {}
-        self._tip = len(self.link_names) - 1
-        if self._tip == 0:
-            raise URDFError(
-                "pytorch-kinematics cannot build a serial chain that ends at its root",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
-        chain = self._chain_to(self._tip)
-        names = tuple(chain.get_joint_parameter_names())
-        if names != self.joint_names:
-            raise URDFError(
-                f"pytorch-kinematics' chain has the variables {names}, the contract {self.joint_names}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
-
-    def _chain_to(self, index: int) -> Any:
-        if index not in self._chains:
-            self._chains[index] = _serial_chain(self._data, self.link_names[index])
-        return self._chains[index]
+    def _build_chain(self, data: bytes, link: str) -> Any:
+        return pk.build_serial_chain_from_urdf(data, link).to(dtype=DTYPE)
 
     def _matrices(self, q: NDArray[np.float64], link: int) -> Matrix:
-        """FK of link index ``link`` for q of shape (N, dof), N >= 1: shape (N, 4, 4)."""
+        """FK of link index ``link`` for q of shape (N, dof), N >= 1: shape (N, 4, 4), in one batch."""
         with torch.no_grad():
             frames = self._chains[self._tip].forward_kinematics(
                 torch.as_tensor(q, dtype=DTYPE), end_only=False
@@ -191,95 +140,19 @@ class RobotModel(python_impl.RobotModel):
         out: Matrix = self._matrices(q, link)[0]
         return out
 
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        """Pose of link index ``link`` for checked values, by this library's FK."""
-        return matrix_pose(self._matrix(values, link))
-
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (the library's batched FK).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        if q.shape[0] == 0:
-            return np.zeros((0, 4, 4))
-        return self._matrices(q, index)
-
-    def inverse_kinematics(
-        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
-    ) -> IKResult:
-        """Joint values that put ``link`` at ``pose``, by the library's ``PseudoInverseIK``.
-
-        Parameters
-        ----------
-        pose : Pose or (position, orientation)
-            Target; the quaternion (x, y, z, w) is normalized.
-        seed : sequence of float, shape (dof,), optional
-            Start of the search, clamped into the limits; ``home_values`` by default.
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        IKResult
-            ``SUCCESS`` when the library reports convergence.
-        """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        values = list(q)
-        converged = False
-        if nvars > 0:
-            solver = pk.PseudoInverseIK(
-                self._chain_to(index),
-                retry_configs=torch.tensor([q[:nvars]], dtype=DTYPE),
-                pos_tolerance=IK_EPS,
-                rot_tolerance=IK_EPS,
-                max_iterations=IK_MAX_ITERATIONS,
-            )
-            solution = solver.solve(pk.Transform3d(matrix=torch.tensor(target, dtype=DTYPE), dtype=DTYPE))
-            values[:nvars] = solution.solutions[0, 0].tolist()
-            converged = bool(solution.converged_any[0])
-        for i, lim in enumerate(self.joint_limits[:nvars]):
-            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
-                values[i] = normalize_angle(values[i])
-        reached = self._matrix(values, index)
-        if nvars == 0:
-            converged = meets_criterion(reached, target)
-        status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *ik_errors(reached, target))
+    def _ik_answer(self, target: IkTarget, q: list[float], index: int, nvars: int) -> IkAnswer:
+        """The library's ``PseudoInverseIK`` from the seed only; its ``converged_any`` is the status."""
+        solver = pk.PseudoInverseIK(
+            self._chain_to(index),
+            retry_configs=torch.tensor([q[:nvars]], dtype=DTYPE),
+            pos_tolerance=IK_EPS,
+            rot_tolerance=IK_EPS,
+            max_iterations=IK_MAX_ITERATIONS,
+        )
+        solution = solver.solve(pk.Transform3d(matrix=torch.tensor(target.matrix, dtype=DTYPE), dtype=DTYPE))
+        return solution.solutions[0, 0].tolist(), bool(solution.converged_any[0])
 
 
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from pytorch-kinematics.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                "model: expected an adapters.pytorch_kinematics_adapter.RobotModel, "
-                f"got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
-            )
-        super().__init__(model)
-
-
-api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation to plug in: ``--targets native,adapters.pytorch_kinematics_adapter:api``."""
+MoveGroup = api.MoveGroup

@@ -38,7 +38,8 @@ from typing import Any
 import numpy as np
 from pytransform3d.urdf import UrdfTransformManager
 
-from adapters._engines import EngineModel, Matrix, make_api
+from adapters._common import make_api
+from adapters._engines import EngineModel, Matrix
 
 
 class RobotModel(EngineModel):

@@ -47,14 +47,12 @@ import os
 import threading
 import time
 from dataclasses import dataclass, field
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-import python_impl
-from adapters._common import RowwiseFkModel, urdf_bytes
+from adapters._common import LibraryModel, make_api, urdf_bytes
 from robot_api.errors import ErrorCode, InvalidInputError
 from robot_api.protocol import JointValues
 from robot_api.records import IKResult, Pose
@@ -208,7 +206,7 @@ def state_publisher(urdf: str) -> StatePublisher:
         return publisher
 
 
-class RobotModel(RowwiseFkModel):
+class RobotModel(LibraryModel):
     """A kinematic chain from URDF whose FK is robot_state_publisher's, looked up through tf2.
 
     Parameters
@@ -269,25 +267,6 @@ class RobotModel(RowwiseFkModel):
         )
 
 
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's ``MoveGroupCommander`` over a simulated arm (python_impl's semantics).
-
-    ``get_current_pose`` comes from robot_state_publisher and tf2 through the model.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.ros_tf.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
-            )
-        super().__init__(model)
-
-
-api = SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation object for ``--targets adapters.ros_tf:api`` (alias ``ros_tf``)."""
+MoveGroup = api.MoveGroup

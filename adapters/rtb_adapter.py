@@ -93,9 +93,7 @@ Known library semantics (left visible on purpose)
 from __future__ import annotations
 
 import io
-import math
 import os
-import types
 import warnings
 import xml.etree.ElementTree as ET
 from typing import Any
@@ -106,14 +104,9 @@ import roboticstoolbox as rtb
 from numpy.typing import NDArray
 from roboticstoolbox.models.URDF.URDFRobot import URDF_file
 
-import python_impl
-from adapters._common import ik_errors, matrix_pose, meets_criterion, urdf_bytes
-from python_impl.angles import normalize_angle
-from python_impl.transforms import homogeneous, quaternion_matrix
+from adapters._common import IkAnswer, IkTarget, LibraryModel, make_api, refuse_mimic_joints, urdf_bytes
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS
-from robot_api.errors import ErrorCode, InvalidInputError, URDFError
-from robot_api.protocol import JointValues
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from robot_api.errors import ErrorCode, URDFError
 
 Matrix = NDArray[np.float64]
 
@@ -133,7 +126,7 @@ def _kinematic_document(data: bytes) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
-class RobotModel(python_impl.RobotModel):
+class RobotModel(LibraryModel):
     """A chain loaded from URDF whose kinematics are the Robotics Toolbox's (see the module docstring).
 
     Parameters
@@ -156,12 +149,7 @@ class RobotModel(python_impl.RobotModel):
 
     def __init__(self, urdf: str | os.PathLike[str], tip_link: str | None = None) -> None:
         super().__init__(urdf, tip_link)
-        if self.mimic_joints:
-            raise URDFError(
-                f"the Robotics Toolbox ignores mimic joints; the chain to '{self.tip_link}' has "
-                f"{', '.join(m.name for m in self.mimic_joints)}",
-                ErrorCode.URDF_UNSUPPORTED,
-            )
+        refuse_mimic_joints(self, "the Robotics Toolbox ignores mimic joints")
         document = _kinematic_document(urdf_bytes(urdf))
         try:
             with warnings.catch_warnings():
@@ -190,99 +178,29 @@ class RobotModel(python_impl.RobotModel):
         ]  # a list: see "zero joints" in the module docstring
         return np.asarray(self._ets[link].eval(q), dtype=np.float64)
 
-    def pose_of(self, values: list[float], link: int) -> Pose:
-        """Pose of link index ``link`` for checked values, by the toolbox's FK."""
-        return matrix_pose(self._matrix(values, link))
-
-    def forward_kinematics_batch(
-        self, joint_values: NDArray[np.float64], link: str | None = None
-    ) -> NDArray[np.float64]:
-        """Poses of a link for many configurations (the toolbox's FK on the whole batch).
-
-        Parameters
-        ----------
-        joint_values : ndarray, shape (N, dof), or list of N rows
-            Joint values (rad, m).
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        ndarray, shape (N, 4, 4)
-            Homogeneous transforms in the root frame.
-        """
-        q = self._batch_input(joint_values)
-        index = self.link_index(link)
-        if q.shape[0] == 0:
-            return np.zeros((0, 4, 4))
-        nvars = self._nvars[index]
+    def _matrices(self, q: NDArray[np.float64], link: int) -> Matrix:
+        """FK of link index ``link`` for q of shape (N, dof), N >= 1: the toolbox's FK on the whole batch."""
+        nvars = self._nvars[link]
         if nvars == 1:  # an (N, 1) batch is misread as one configuration: see the module docstring
-            return np.array([self._matrix(row, index) for row in q], dtype=np.float64).reshape(-1, 4, 4)
-        out = np.asarray(self._ets[index].eval(q[:, :nvars]), dtype=np.float64)
+            return np.array([self._matrix(row, link) for row in q], dtype=np.float64).reshape(-1, 4, 4)
+        out = np.asarray(self._ets[link].eval(q[:, :nvars]), dtype=np.float64)
         return out.reshape(q.shape[0], 4, 4)
 
-    def inverse_kinematics(
-        self, pose: Pose, seed: JointValues | None = None, link: str | None = None
-    ) -> IKResult:
-        """Joint values that put ``link`` at ``pose``, by the toolbox's ``ik_LM``.
-
-        Parameters
-        ----------
-        pose : Pose or (position, orientation)
-            Target; the quaternion (x, y, z, w) is normalized.
-        seed : sequence of float, shape (dof,), optional
-            Start of the search, clamped into the limits; ``home_values`` by default.
-        link : str, optional
-            A link of the chain; the tip by default.
-
-        Returns
-        -------
-        IKResult
-            ``SUCCESS`` when the toolbox reports success.
-        """
-        position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
-        target = homogeneous(quaternion_matrix(*orientation), (position[0], position[1], position[2]))
-        values = list(q)
-        if nvars > 0:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                solution = self._ets[index].ik_LM(
-                    target,
-                    q0=np.array(q[:nvars]),
-                    ilimit=IK_MAX_ITERATIONS,
-                    slimit=1,
-                    tol=RTB_TOL,
-                    joint_limits=True,
-                )
-            values[:nvars] = np.asarray(solution.q, dtype=np.float64).tolist()
-            converged = bool(solution.success)
-        for i, lim in enumerate(self.joint_limits[:nvars]):
-            if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
-                values[i] = normalize_angle(values[i])
-        reached = self._matrix(values, index)
-        if nvars == 0:
-            converged = meets_criterion(reached, target)
-        status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
-        return IKResult(status, tuple(values), *ik_errors(reached, target))
-
-
-class MoveGroup(python_impl.MoveGroup):
-    """moveit_commander's MoveGroupCommander over a simulated arm whose poses come from the toolbox.
-
-    Parameters
-    ----------
-    model : RobotModel
-        A model of this adapter.
-    """
-
-    def __init__(self, model: RobotModel) -> None:
-        if not isinstance(model, RobotModel):
-            raise InvalidInputError(
-                f"model: expected an adapters.rtb_adapter.RobotModel, got {type(model).__name__}",
-                ErrorCode.INVALID_ARGUMENT,
+    def _ik_answer(self, target: IkTarget, q: list[float], index: int, nvars: int) -> IkAnswer:
+        """The toolbox's ``ik_LM``, one search from the seed; its ``success`` is the status."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            solution = self._ets[index].ik_LM(
+                target.matrix,
+                q0=np.array(q[:nvars]),
+                ilimit=IK_MAX_ITERATIONS,
+                slimit=1,
+                tol=RTB_TOL,
+                joint_limits=True,
             )
-        super().__init__(model)
+        return np.asarray(solution.q, dtype=np.float64).tolist(), bool(solution.success)
 
 
-api = types.SimpleNamespace(RobotModel=RobotModel, MoveGroup=MoveGroup)
+api = make_api(RobotModel, __name__)
 """The implementation to plug in: ``--targets native,adapters.rtb_adapter:api``."""
+MoveGroup = api.MoveGroup
