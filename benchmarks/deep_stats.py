@@ -71,6 +71,16 @@ def survival(runs: list[Run], budget: float, points: int = 200) -> tuple[list[fl
     return times, share
 
 
+def _head(mode: Mode, engine: str, baseline: str) -> list[str]:
+    """A table's header rows: a cell per engine, then one per baseline."""
+    cells = [f"{engine}{e}" for e in mode.engines] + [f"{baseline}{e}" for e in mode.engines[1:]]
+    return ["| bug | " + " | ".join(cells) + " |", "|---|" + "---|" * len(cells)]
+
+
+def _by_engine(runs: list[Run], bug: str, mode: Mode) -> dict[str, list[Run]]:
+    return {e: [r for r in runs if r.bug == bug and r.engine == e] for e in mode.engines}
+
+
 def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> str:
     """The tables; ``jobs``: runs at a time (None: tabulated from a results file, whose runs
     the text around the table must describe)."""
@@ -91,15 +101,10 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
         f"without detection counted as the budget; A12: Vargha-Delaney (full engine sooner; 0.5 = "
         f"no difference); verdict at p < {ALPHA}.",
         "",
-        "| bug | "
-        + " | ".join(mode.engines)
-        + " | "
-        + " | ".join(f"vs {e}" for e in mode.engines[1:])
-        + " |",
-        "|---|" + "---|" * (2 * len(mode.engines) - 1),
+        *_head(mode, "", "vs "),
     ]
     for bug in mode.bugs:
-        by_engine = {e: [r for r in runs if r.bug == bug and r.engine == e] for e in mode.engines}
+        by_engine = _by_engine(runs, bug, mode)
         cells = []
         for engine in mode.engines:
             mine = by_engine[engine]
@@ -144,15 +149,10 @@ def search_table(runs: list[Run], mode: Mode) -> list[str]:
         "input (imports, seeds, instrumentation), then the same test on the time from that first "
         "input to the first detection (a trial without detection counted as the budget).",
         "",
-        "| bug | "
-        + " | ".join(f"start-up {e}" for e in mode.engines)
-        + " | "
-        + " | ".join(f"search vs {e}" for e in mode.engines[1:])
-        + " |",
-        "|---|" + "---|" * (2 * len(mode.engines) - 1),
+        *_head(mode, "start-up ", "search vs "),
     ]
     for bug in mode.bugs:
-        by_engine = {e: [r for r in runs if r.bug == bug and r.engine == e] for e in mode.engines}
+        by_engine = _by_engine(runs, bug, mode)
         cells = []
         for engine in mode.engines:
             start = _median([r.first_input for r in by_engine[engine] if r.first_input is not None])
