@@ -192,8 +192,11 @@ def main(argv: list[str] | None = None) -> list[Run]:
         return run
 
     todo = [job for job in jobs if (job[0].name, job[1], job[2]) not in held]
-    with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        new = [run for run in pool.map(trial, todo) if run is not None]
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            new = [run for run in pool.map(trial, todo) if run is not None]
+    finally:
+        book.close()
     runs = sorted([*held.values(), *new], key=lambda r: order[(r.bug, r.engine, r.seed)])
     if len(runs) < len(jobs):
         print(

@@ -11,6 +11,10 @@ written and the journal removed. "The same code": the journal's commit, or a lat
 changed nothing outside ``benchmarks/results/`` and the Markdown files (a session that commits
 a partial journal and some notes can go on from its own next commit).
 
+One sweep writes a journal at a time: it holds an exclusive lock on ``deep-<mode>.jsonl.lock``
+while it runs, and a second one started on the same results folder stops with an error
+instead of running the same trials again into the same file.
+
 The journal is data: it is parsed as JSON, never evaluated. A last line cut short (a process
 killed while writing it) is ignored, and its trial runs again; any other bad line is an error
 that names the file and the line.
@@ -18,6 +22,7 @@ that names the file and the line.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import subprocess
@@ -169,11 +174,28 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
         )
 
 
-class Journal:
-    """Appends finished trials to a journal file, one at a time (thread-safe)."""
+def _hold(path: Path) -> int:
+    """An open descriptor of ``path``'s lock file, locked exclusively (``flock``)."""
+    lock = path.with_name(path.name + ".lock")
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise JournalError(
+            f"{path}: another bench_deep is running this sweep now (it holds {lock.name})"
+        ) from None
+    return fd
 
-    def __init__(self, path: Path, sweep: Sweep, fresh: bool) -> None:
+
+class Journal:
+    """Appends finished trials to a journal file, one at a time (thread-safe), under the
+    sweep's lock (:meth:`close` lets it go)."""
+
+    def __init__(self, path: Path, sweep: Sweep, fresh: bool, lock: int) -> None:
         self.path = path
+        self._held = lock
         self._lock = threading.Lock()
         if fresh:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -198,6 +220,13 @@ class Journal:
         with self._lock:
             self._write(asdict(run), "a")
 
+    def close(self) -> None:
+        """Let the sweep's lock go (and its file)."""
+        if self._held >= 0:
+            self.path.with_name(self.path.name + ".lock").unlink(missing_ok=True)
+            os.close(self._held)
+            self._held = -1
+
 
 def open_sweep(
     path: Path, sweep: Sweep, root: Path, *, resume: bool, restart: bool
@@ -210,17 +239,23 @@ def open_sweep(
         ``path`` holds an unfinished sweep and neither ``resume`` nor ``restart`` is given, or
         ``resume`` and there is no journal, or it is not this sweep's (:func:`check`).
     """
-    if path.exists() and not restart:
-        if not resume:
-            raise JournalError(
-                f"{path} holds an unfinished sweep: --resume goes on with it, --restart starts "
-                f"over (keeping it as {path.name}.old)"
-            )
-        header, done = read(path)
-        check(path, header, sweep, root)
-        return Journal(path, sweep, fresh=False), done
-    if resume:
-        raise JournalError(f"nothing to resume: {path} does not exist")
-    if path.exists():
-        path.replace(path.with_name(path.name + ".old"))
-    return Journal(path, sweep, fresh=True), []
+    lock = _hold(path)
+    try:
+        if path.exists() and not restart:
+            if not resume:
+                raise JournalError(
+                    f"{path} holds an unfinished sweep: --resume goes on with it, --restart starts "
+                    f"over (keeping it as {path.name}.old)"
+                )
+            header, done = read(path)
+            check(path, header, sweep, root)
+            return Journal(path, sweep, False, lock), done
+        if resume:
+            raise JournalError(f"nothing to resume: {path} does not exist")
+        if path.exists():
+            path.replace(path.with_name(path.name + ".old"))
+        return Journal(path, sweep, True, lock), []
+    except BaseException:
+        path.with_name(path.name + ".lock").unlink(missing_ok=True)
+        os.close(lock)
+        raise

@@ -178,3 +178,29 @@ def test_the_same_code_means_the_commit_or_a_later_one_with_only_results_and_pro
     assert not journal.same_code(repo, first)
     assert not journal.same_code(repo, first + "+dirty") and not journal.same_code(repo, "0" * 40)
     assert journal.commit_of(tmp_path / "nowhere") == "unknown"
+
+
+def test_one_sweep_at_a_time_writes_a_journal(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A second sweep on the same results folder, while the first runs, stops with an error
+    instead of running the same trials into the same file; the first one's lock goes with it."""
+    seen: list[str] = []
+
+    def second_sweep_meanwhile(bug: Bug, engine: str, seed: int, budget: float, **_: object) -> Run:
+        if not seen:
+            with pytest.raises(SystemExit):
+                _sweep(tmp_path, "--resume")
+            seen.append(capsys.readouterr().err)
+        return fake(bug, engine, seed, budget)
+
+    bench_deep.run_one = second_sweep_meanwhile  # type: ignore[assignment]  # restored by the fixture
+    assert len(_sweep(tmp_path)) == 8 and len(seen) == 1
+    assert "another bench_deep is running this sweep now" in seen[0]
+    assert not (tmp_path / "deep-quick.jsonl.lock").exists() and not (tmp_path / "deep-quick.jsonl").exists()
+    # a refused start (another sweep's journal, no --resume) leaves no lock behind either
+    _sweep(tmp_path, "--stop-after", "0.5")
+    with pytest.raises(SystemExit):
+        _sweep(tmp_path)
+    assert not (tmp_path / "deep-quick.jsonl.lock").exists()
+    assert len(_sweep(tmp_path, "--resume")) == 8
