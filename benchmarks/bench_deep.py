@@ -182,7 +182,8 @@ def main(argv: list[str] | None = None) -> list[Run]:
         print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
     order = {(b.name, e, t): i for i, (b, e, t) in enumerate(jobs)}
     held = {(r.bug, r.engine, r.seed): r for r in done if (r.bug, r.engine, r.seed) in order}
-    deadline = None if args.stop_after is None else time.monotonic() + 60.0 * args.stop_after
+    began = time.monotonic()
+    deadline = None if args.stop_after is None else began + 60.0 * args.stop_after
 
     def trial(job: tuple[Bug, str, int]) -> Run | None:
         if deadline is not None and time.monotonic() >= deadline:
@@ -199,10 +200,14 @@ def main(argv: list[str] | None = None) -> list[Run]:
         book.close()
     runs = sorted([*held.values(), *new], key=lambda r: order[(r.bug, r.engine, r.seed)])
     if len(runs) < len(jobs):
+        # the pace of this run's trials (wall time, --jobs at a time) for the ones left, which
+        # come in the same seeded random order: a rough figure, misses cost the whole budget
+        left = len(jobs) - len(runs)
+        pace = (time.monotonic() - began) / max(1, len(new))
         print(
             f"stopped after {args.stop_after:g} minutes: {len(runs)} of {len(jobs)} trials done, "
-            f"in {path}; the same command with --resume goes on (--from-json {path} tabulates "
-            f"them so far)"
+            f"in {path}; the same command with --resume goes on (about {left * pace / 3600:.1f} "
+            f"hours at this run's pace; --from-json {path} tabulates them so far)"
         )
         return runs
     _report(runs, mode, args, argv, copy=True)

@@ -87,7 +87,8 @@ def test_stop_after_starts_no_trial_past_its_minutes(
 ) -> None:
     runs = _sweep(tmp_path, "--stop-after", "2.5")  # trials end at minutes 1, 2, 3
     assert len(runs) == 3 and len(fake.calls) == 3
-    assert "3 of 8 trials done" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "3 of 8 trials done" in said and "about 0.1 hours at this run's pace" in said  # 5 x 60 s
     assert len(journal.read(tmp_path / "deep-quick.jsonl")[1]) == 3
     # a journal so far is tabulated as a results file, its counts per cell as they are
     shown = bench_deep.main(["--mode", "quick", "--from-json", str(tmp_path / "deep-quick.jsonl")])
