@@ -112,17 +112,37 @@ def same_code(root: Path, commit: str) -> bool:
     return diff.returncode == 0
 
 
+_KINDS: dict[str, tuple[type, ...]] = {
+    **dict.fromkeys(("bug", "engine", "op"), (str,)),
+    **dict.fromkeys(("seed", "signatures", "executions", "returncode", "divergences"), (int,)),
+    **dict.fromkeys(("replayed", "replay_same"), (int,)),
+    **dict.fromkeys(("budget", "elapsed"), (int, float)),
+    **dict.fromkeys(("detected_at", "first_input"), (int, float, type(None))),
+}
+"""The JSON types each field of a trial may have."""
+
+
 def run_of(row: Any) -> Run:
-    """A trial from its JSON object (fields this version does not know are dropped)."""
+    """A trial from its JSON object (fields this version does not know are dropped).
+
+    Raises
+    ------
+    TypeError
+        ``row`` is not an object, lacks a field, or a field has the wrong type (named).
+    """
     if not isinstance(row, dict):
         raise TypeError("not an object")
     fields = {k: v for k, v in row.items() if k in Run.__dataclass_fields__}
+    for name, kinds in _KINDS.items():
+        if name in fields and (isinstance(fields[name], bool) or not isinstance(fields[name], kinds)):
+            names = " or ".join("null" if k is type(None) else k.__name__ for k in kinds)
+            raise TypeError(f"{name}: {fields[name]!r} is not {names}")
     for name in ("replay_misses", "fields"):
-        fields[name] = tuple(fields.get(name, ()))
-    run = Run(**fields)
-    if not isinstance(run.bug, str) or not isinstance(run.engine, str) or not isinstance(run.seed, int):
-        raise TypeError("bug, engine and seed must be a string, a string and an integer")
-    return run
+        value = fields.get(name, ())
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            raise TypeError(f"{name}: not a list of strings")
+        fields[name] = tuple(value)
+    return Run(**fields)
 
 
 def read(path: Path) -> tuple[dict[str, Any], list[Run]]:

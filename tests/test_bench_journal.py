@@ -126,6 +126,11 @@ def test_an_unfinished_journal_is_neither_overwritten_nor_resumed_by_another_swe
     assert (tmp_path / "deep-quick.jsonl.old").read_bytes() == kept
 
 
+def _changed(line: str, **changes: object) -> str:
+    """A journal line with some fields of its trial changed."""
+    return json.dumps({**json.loads(line), **changes}) + "\n"
+
+
 def test_a_last_line_cut_short_runs_again_and_a_bad_line_is_named(
     fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -140,6 +145,9 @@ def test_a_last_line_cut_short_runs_again_and_a_bad_line_is_named(
         ('{"journal": "something else"}\n', "not a bench_deep journal"),
         (lines[0] + "[1, 2]\n" + lines[1], "line 2: not a trial"),
         (lines[0] + '{"bug": "x"}\n\n', "line 2: not a trial"),
+        (lines[0] + _changed(lines[1], detected_at="soon"), "'soon' is not int or float or null"),
+        (lines[0] + _changed(lines[1], seed=True), "seed: True is not int"),
+        (lines[0] + _changed(lines[1], fields=[1]), "fields: not a list of strings"),
         ("\x00\xff\n", "not a bench_deep journal"),
     ):
         path.write_text(bad)
