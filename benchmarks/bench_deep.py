@@ -42,8 +42,8 @@ from dataclasses import asdict
 from pathlib import Path
 
 from benchmarks import journal
-from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, SCENARIO_ENGINES, Run, run_one
-from benchmarks.deep_stats import Mode, markdown, plot
+from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, Run, run_one
+from benchmarks.deep_stats import Mode, markdown, plot, runs_on
 from benchmarks.zoo import DEEP, ZOO, Bug
 from benchmarks.zoo_tables import ROOT, replace_section
 
@@ -84,11 +84,6 @@ detection). full: 10 trials x 60 s, the old engine (``weights``) too (about 6 ho
 before trials stopped at their first detection; not run since). zoo: the 22 shallow zoo bugs
 (``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x 10 s; the 8 of the scenario op
 under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on 2 cores."""
-
-
-def runs_on(op: str, engine: str) -> bool:
-    """The baselines of ``benchmarks.baselines`` have no scenario op (``weights`` has)."""
-    return op != "scenario" or engine in (*SCENARIO_ENGINES, "weights")
 
 
 def main(argv: list[str] | None = None) -> list[Run]:
@@ -148,6 +143,12 @@ def main(argv: list[str] | None = None) -> list[Run]:
     if mode.engines[0] != "full":
         parser.error("the first engine must be 'full' (the one compared against the others)")
     if args.from_json is not None:
+        partial = args.from_json.suffix == ".jsonl"
+        if partial and args.write_md:
+            parser.error(
+                f"{args.from_json}: a journal so far is no finished table: "
+                f"--write-md takes a deep-<mode>.json"
+            )
         try:
             runs = load_runs(args.from_json)
             mode = Mode(
@@ -160,7 +161,10 @@ def main(argv: list[str] | None = None) -> list[Run]:
             parser.error(f"{args.from_json}: not a bench_deep results file ({exc})")
         if mode.engines[0] != "full":
             parser.error(f"{args.from_json}: no runs of the full engine")
-        return _report(runs, mode, args, argv, copy=False)
+        so_far = (
+            f"A sweep in progress: the {len(runs)} trials its journal holds so far (a cell counts its own). "
+        )
+        return _report(runs, mode, args, argv, copy=False, note=so_far if partial else "")
     jobs = [
         (BUGS[b], e, t)
         for b in mode.bugs
@@ -236,16 +240,16 @@ def load_runs(path: Path) -> list[Run]:
 
 
 def _report(
-    runs: list[Run], mode: Mode, args: argparse.Namespace, argv: list[str] | None, copy: bool
+    runs: list[Run], mode: Mode, args: argparse.Namespace, argv: list[str] | None, copy: bool, note: str = ""
 ) -> list[Run]:
-    """Write deep-<mode>.json (unless tabulating one) and .png, print the tables, and with
-    --write-md put them into BENCHMARKS.md."""
+    """Write deep-<mode>.json (unless tabulating one) and .png, print the tables (after
+    ``note``), and with --write-md put them into BENCHMARKS.md."""
     args.results.mkdir(parents=True, exist_ok=True)
     if copy:
         (args.results / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
     plot(runs, mode, args.results / f"deep-{args.mode}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
-    text = markdown(runs, mode, cmd.strip(), args.jobs if copy else None)
+    text = note + markdown(runs, mode, cmd.strip(), args.jobs if copy else None)
     print(text)
     if args.write_md:
         picture = f"\n\n![survival](benchmarks/results/deep-{args.mode}.png)"

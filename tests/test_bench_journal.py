@@ -9,7 +9,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from benchmarks import bench_deep, journal
+from benchmarks import bench_deep, deep_stats, journal
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import Bug
 
@@ -92,6 +92,10 @@ def test_stop_after_starts_no_trial_past_its_minutes(
     assert len(journal.read(tmp_path / "deep-quick.jsonl")[1]) == 3
     # a journal so far is tabulated as a results file, its counts per cell as they are
     shown = bench_deep.main(["--mode", "quick", "--from-json", str(tmp_path / "deep-quick.jsonl")])
+    assert "A sweep in progress: the 3 trials its journal holds so far" in capsys.readouterr().out
+    with pytest.raises(SystemExit):  # a partial table does not replace BENCHMARKS.md's
+        bench_deep.main(["--from-json", str(tmp_path / "deep-quick.jsonl"), "--write-md"])
+    assert "a journal so far is no finished table" in capsys.readouterr().err
     assert sorted(shown, key=lambda r: (r.bug, r.engine, r.seed)) == sorted(
         runs, key=lambda r: (r.bug, r.engine, r.seed)
     )
@@ -213,3 +217,23 @@ def test_one_sweep_at_a_time_writes_a_journal(
         _sweep(tmp_path)
     assert not (tmp_path / "deep-quick.jsonl.lock").exists()
     assert len(_sweep(tmp_path, "--resume")) == 8
+
+
+def test_a_journal_so_far_is_tabulated_with_its_gaps_named(tmp_path: Path) -> None:
+    """A partial sweep may hold a bug's baseline trials and none of the full engine's yet, or
+    the other way round: the cells say so instead of the statistics dividing by zero."""
+    mode = deep_stats.Mode(("narrow_band", "ik_seed_band"), 3, 60.0, ("full", "uniform", "libfuzzer"))
+    runs = [Run("narrow_band", "uniform", i, 60.0, 1.0 + i, 1, 10, 1.0, "fk", -9) for i in range(3)]
+    runs += [Run("ik_seed_band", "full", i, 60.0, None, 0, 10, 60.0, "scenario", 0) for i in range(2)]
+    text = deep_stats.markdown(runs, mode, "cmd")
+    first = next(line for line in text.splitlines() if line.startswith("| narrow_band "))
+    assert [c.strip() for c in first.strip("|").split("|")][1:] == [
+        "n/a (no trials yet)",
+        "2.0 (3/3)",
+        "n/a (no trials yet)",
+        "n/a",
+        "n/a",
+    ]
+    second = next(line for line in text.splitlines() if line.startswith("| ik_seed_band "))
+    assert "n/a (no scenario op)" in second and "n/a (no trials yet)" in second
+    deep_stats.plot(runs, mode, tmp_path / "partial.png")
