@@ -80,10 +80,11 @@ MODES = {
 }
 """quick: CI-sized (about a minute on 2 cores). short: every deep bug against the baselines the
 goal names, 10 trials x 10 s (32 minutes on 2 cores; 55 before trials stopped at their first
-detection). full: 10 trials x 60 s, the old engine (``weights``) too (about 6 hours on 2 cores
-before trials stopped at their first detection; not run since). zoo: the 22 shallow zoo bugs
-(``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x 10 s; the 8 of the scenario op
-under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on 2 cores."""
+detection). full: 10 trials x 60 s, the old engine (``weights``) too: 690 trials, about 2.7
+hours on 2 cores (4.2 trials a minute over the first 495, run in pieces with the journal).
+zoo: the 22 shallow zoo bugs (``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x
+10 s; the 8 of the scenario op under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on
+2 cores."""
 
 
 def main(argv: list[str] | None = None) -> list[Run]:
