@@ -91,10 +91,12 @@ def test_stop_after_starts_no_trial_past_its_minutes(
     assert "3 of 8 trials done" in said and "about 0.1 hours at this run's pace" in said  # 5 x 60 s
     assert len(journal.read(tmp_path / "deep-quick.jsonl")[1]) == 3
     # a journal so far is tabulated as a results file, its counts per cell as they are
-    shown = bench_deep.main(["--mode", "quick", "--from-json", str(tmp_path / "deep-quick.jsonl")])
+    journal_so_far = str(tmp_path / "deep-quick.jsonl")
+    elsewhere = ["--results", str(tmp_path / "t")]  # not the repository's benchmarks/results
+    shown = bench_deep.main(["--mode", "quick", "--from-json", journal_so_far, *elsewhere])
     assert "A sweep in progress: the 3 trials its journal holds so far" in capsys.readouterr().out
     with pytest.raises(SystemExit):  # a partial table does not replace BENCHMARKS.md's
-        bench_deep.main(["--from-json", str(tmp_path / "deep-quick.jsonl"), "--write-md"])
+        bench_deep.main(["--from-json", journal_so_far, "--write-md", *elsewhere])
     assert "a journal so far is no finished table" in capsys.readouterr().err
     assert sorted(shown, key=lambda r: (r.bug, r.engine, r.seed)) == sorted(
         runs, key=lambda r: (r.bug, r.engine, r.seed)
