@@ -194,9 +194,14 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
         )
 
 
+def _lock_of(path: Path) -> Path:
+    """The lock file of the journal at ``path``."""
+    return path.with_name(path.name + ".lock")
+
+
 def _hold(path: Path) -> int:
     """An open descriptor of ``path``'s lock file, locked exclusively (``flock``)."""
-    lock = path.with_name(path.name + ".lock")
+    lock = _lock_of(path)
     lock.parent.mkdir(parents=True, exist_ok=True)
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
@@ -243,7 +248,7 @@ class Journal:
     def close(self) -> None:
         """Let the sweep's lock go (and its file)."""
         if self._held >= 0:
-            self.path.with_name(self.path.name + ".lock").unlink(missing_ok=True)
+            _lock_of(self.path).unlink(missing_ok=True)
             os.close(self._held)
             self._held = -1
 
@@ -276,6 +281,6 @@ def open_sweep(
             path.replace(path.with_name(path.name + ".old"))
         return Journal(path, sweep, True, lock), []
     except BaseException:
-        path.with_name(path.name + ".lock").unlink(missing_ok=True)
+        _lock_of(path).unlink(missing_ok=True)
         os.close(lock)
         raise
