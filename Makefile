@@ -33,9 +33,10 @@ test: setup
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
 ## then every deep bug x 6 engines x 10 trials x 60 s (about 3 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes).
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes). Each step keeps
+## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup
-	$(PY) -m benchmarks.bench_zoo --mode full --write-md
+	$(PY) -m benchmarks.bench_zoo --mode full --write-md $$(test -f benchmarks/results/zoo-full.jsonl && echo --resume)
 	$(MAKE) bench-deep-full
 	$(PY) -m benchmarks.bench_deep --mode zoo --write-md $$(test -f benchmarks/results/deep-zoo.jsonl && echo --resume)
 
@@ -51,7 +52,7 @@ bench-deep: setup
 
 ## CI-sized: a few zoo bugs, and two deep bugs x 2 engines x 2 trials (tests/test_zoo_deep.py runs the deep part).
 bench-quick: setup
-	$(PY) -m benchmarks.bench_zoo --mode quick
+	$(PY) -m benchmarks.bench_zoo --mode quick --restart
 	$(PY) -m benchmarks.bench_deep --mode quick --restart
 
 lint: setup

@@ -36,8 +36,6 @@ import argparse
 import json
 import random
 import sys
-import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 from pathlib import Path
 
@@ -185,35 +183,14 @@ def main(argv: list[str] | None = None) -> list[Run]:
         parser.error(str(exc))
     if done:
         print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
-    order = {(b.name, e, t): i for i, (b, e, t) in enumerate(jobs)}
-    held = {(r.bug, r.engine, r.seed): r for r in done if (r.bug, r.engine, r.seed) in order}
-    began = time.monotonic()
-    deadline = None if args.stop_after is None else began + 60.0 * args.stop_after
 
-    def trial(job: tuple[Bug, str, int]) -> Run | None:
-        if deadline is not None and time.monotonic() >= deadline:
-            return None
-        run = run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True)
-        book.add(run)
-        return run
+    def trial(job: journal.Job) -> Run:
+        return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True)
 
-    todo = [job for job in jobs if (job[0].name, job[1], job[2]) not in held]
-    try:
-        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-            new = [run for run in pool.map(trial, todo) if run is not None]
-    finally:
-        book.close()
-    runs = sorted([*held.values(), *new], key=lambda r: order[(r.bug, r.engine, r.seed)])
-    if len(runs) < len(jobs):
-        # the pace of this run's trials (wall time, --jobs at a time) for the ones left, which
-        # come in the same seeded random order: a rough figure, misses cost the whole budget
-        left = len(jobs) - len(runs)
-        pace = (time.monotonic() - began) / max(1, len(new))
-        print(
-            f"stopped after {args.stop_after:g} minutes: {len(runs)} of {len(jobs)} trials done, "
-            f"in {path}; the same command with --resume goes on (about {left * pace / 3600:.1f} "
-            f"hours at this run's pace; --from-json {path} tabulates them so far)"
-        )
+    progress = journal.run_sweep(book, jobs, done, trial, args.jobs, args.stop_after)
+    runs = progress.runs
+    if not progress.complete:
+        print(progress.stopped(path, args.stop_after))
         return runs
     _report(runs, mode, args, argv, copy=True)
     path.unlink()  # deep-<mode>.json holds every trial now

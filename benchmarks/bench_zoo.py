@@ -25,6 +25,11 @@ A zoo bug runs with its own op (``--op scenario`` for the stateful ones, which o
 the full and libFuzzer engines run: the baselines have no scenario op). ``--mode ops``
 runs each stateful bug under both ``--op move`` and ``--op scenario`` (full engine) and
 writes the section "Which ops detect the stateful bugs".
+
+Each finished run is also appended to a journal beside the results file (``zoo-<mode>.jsonl``,
+``benchmarks.journal``), and the runs go in a seeded random order: a sweep stopped part way
+(``--stop-after MINUTES``, or killed) keeps what it ran, and ``--resume`` runs only the missing
+ones, on the same code. The journal goes once ``zoo-<mode>.json`` holds every run.
 """
 
 from __future__ import annotations
@@ -38,11 +43,11 @@ import subprocess
 import sys
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from benchmarks import journal
 from benchmarks.trials import NOT_DETECTIONS, run_until_detection
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from benchmarks.zoo_tables import (
@@ -324,6 +329,25 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--replay", action="store_true", help="replay each full-engine run's crash files in a new process"
     )
     parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on with the sweep whose finished runs are in the journal beside --out "
+        "(zoo-<mode>.jsonl; same options, same code); only the runs it does not hold run",
+    )
+    parser.add_argument(
+        "--restart",
+        action="store_true",
+        help="start over although the journal holds an unfinished sweep (kept as .jsonl.old)",
+    )
+    parser.add_argument(
+        "--stop-after",
+        type=float,
+        default=None,
+        metavar="MINUTES",
+        help="start no run after this many minutes; those running finish, the journal keeps "
+        "them all, and --resume goes on later",
+    )
+    parser.add_argument(
         "--keep-failures",
         type=Path,
         default=None,
@@ -331,6 +355,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "(default: control-failures/ next to --out)",
     )
     args = parser.parse_args(argv)
+    if args.resume and args.restart:
+        parser.error("--resume and --restart exclude each other")
+    if args.stop_after is not None and not args.stop_after > 0:
+        parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
     if args.render is not None:
         saved: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
         text = markdown(saved)
@@ -350,11 +378,26 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     jobs = plan_jobs(bugs, engines, seeds, mode.ops)
     out = args.out or RESULTS / f"zoo-{args.mode}.json"
     keep = args.keep_failures or out.parent / "control-failures"
+    path = out.with_suffix(".jsonl")
+    sweep = journal.Sweep(
+        args.mode, bugs, engines, seeds, budget, journal.commit_of(ROOT), "bench_zoo", mode.ops, replay
+    )
+    try:
+        book, done = journal.open_sweep(path, sweep, ROOT, resume=args.resume, restart=args.restart)
+    except journal.JournalError as exc:
+        parser.error(str(exc))
+    if done:
+        print(f"resuming {path}: {len(done)} of {len(jobs)} runs done")
     load_before = _load()
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        runs = list(
-            pool.map(lambda job: run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep), jobs)
-        )
+
+    def trial(job: journal.Job) -> Run:
+        return run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep)
+
+    progress = journal.run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle=True)
+    runs = progress.runs
+    if not progress.complete:
+        print(progress.stopped(path, args.stop_after))
+        return {"runs": [asdict(r) for r in runs], "complete": False}
     result = {
         "mode": args.mode,
         "bugs": list(bugs),
@@ -372,6 +415,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     }
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=1), encoding="utf-8")
+    path.unlink()  # the results file holds every run now
     plot(result, out.with_suffix(".png"))
     text = markdown(result)
     print(text)

@@ -1,19 +1,21 @@
 """A journal of a benchmark's finished trials, so a sweep of hours can stop and go on.
 
-``bench_deep``'s full mode takes about six hours on two cores. Without a journal its results
-existed only once every trial had run: a sweep stopped at hour five (a reboot, a session that
-ends) left nothing. Now each finished trial is appended to ``deep-<mode>.jsonl`` in the results
-folder as it ends (one JSON object a line, flushed and fsynced), under a first line that names
-the sweep: its mode's bugs, engines, trials and budget, and the commit that ran it.
-``--resume`` reads the journal, checks that it belongs to this sweep and to the same code, and
-runs only the trials it does not hold; once every trial has run, ``deep-<mode>.json`` is
-written and the journal removed. "The same code": the journal's commit, or a later one that
-changed nothing outside ``benchmarks/results/`` and the Markdown files (a session that commits
-a partial journal and some notes can go on from its own next commit).
+``bench_deep``'s full mode takes about 2.7 hours on two cores, ``bench_zoo``'s about two.
+Without a journal their results existed only once every trial had run: a sweep stopped at hour
+two (a reboot, a session that ends) left nothing. Now each finished trial is appended to
+``<results>.jsonl`` beside the results file (``deep-<mode>.jsonl``, ``zoo-<mode>.jsonl``) as it
+ends (one JSON object a line, flushed and fsynced), under a first line that names the sweep:
+its tool and mode, bugs, engines, trials and budget (and ``bench_zoo``'s ops and replay), and
+the commit that ran it. ``--resume`` reads the journal, checks that it belongs to this sweep and
+to the same code, and runs only the trials it does not hold (:func:`run_sweep`); once every
+trial has run, the results file is written and the journal removed. "The same code": the
+journal's commit, or a later one that changed nothing outside ``benchmarks/results/`` and the
+Markdown files (a session that commits a partial journal and some notes can go on from its own
+next commit).
 
-One sweep writes a journal at a time: it holds an exclusive lock on ``deep-<mode>.jsonl.lock``
-while it runs, and a second one started on the same results folder stops with an error
-instead of running the same trials again into the same file.
+One sweep writes a journal at a time: it holds an exclusive lock on ``<journal>.lock`` while it
+runs, and a second one started on the same results folder stops with an error instead of running
+the same trials again into the same file.
 
 The journal is data: it is parsed as JSON, never evaluated. A last line cut short (a process
 killed while writing it) is ignored, and its trial runs again; any other bad line is an error
@@ -25,16 +27,30 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import random
 import subprocess
 import threading
-from dataclasses import asdict, dataclass
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import MISSING, asdict, dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from benchmarks.bench_zoo import Run
+if TYPE_CHECKING:  # bench_zoo imports this module
+    from benchmarks.bench_zoo import Run
+    from benchmarks.zoo import Bug
 
-FORMAT = "rrosfuzz bench_deep journal 1"
-"""The header's ``journal`` value."""
+    Job = tuple[Bug, str, int]
+    """A trial: (bug, engine, seed)."""
+
+
+def format_of(tool: str) -> str:
+    """The header's ``journal`` value of ``tool``'s journals."""
+    return f"rrosfuzz {tool} journal 1"
+
+
+FORMAT = format_of("bench_deep")
 
 
 class JournalError(ValueError):
@@ -58,6 +74,12 @@ class Sweep:
     commit : str
         ``git rev-parse HEAD`` of the tree that runs the trials, ``+dirty`` appended when it has
         uncommitted changes to tracked files ("unknown" outside a git checkout).
+    tool : str
+        The benchmark (``bench_deep``, ``bench_zoo``): it names the header's format.
+    ops : tuple of str
+        ``bench_zoo``'s ops that every bug runs under (its ``ops`` mode), or none.
+    replay : bool
+        ``bench_zoo``'s replay of crash files, part of each trial's record.
     """
 
     mode: str
@@ -66,9 +88,18 @@ class Sweep:
     trials: int
     budget: float
     commit: str
+    tool: str = "bench_deep"
+    ops: tuple[str, ...] = ()
+    replay: bool = False
 
     def header(self) -> dict[str, Any]:
-        return {"journal": FORMAT, **asdict(self)}
+        row = asdict(self)
+        return {"journal": format_of(row.pop("tool")), **row}
+
+
+SAME_SWEEP = ("mode", "bugs", "engines", "trials", "budget", "ops", "replay")
+"""The header's keys that must equal this run's for ``--resume``."""
+_DEFAULTS = {f.name: f.default for f in fields(Sweep) if f.default is not MISSING}
 
 
 def commit_of(root: Path) -> str:
@@ -130,6 +161,8 @@ def run_of(row: Any) -> Run:
     TypeError
         ``row`` is not an object, lacks a field, or a field has the wrong type (named).
     """
+    from benchmarks.bench_zoo import Run
+
     if not isinstance(row, dict):
         raise TypeError("not an object")
     fields = {k: v for k, v in row.items() if k in Run.__dataclass_fields__}
@@ -145,7 +178,7 @@ def run_of(row: Any) -> Run:
     return Run(**fields)
 
 
-def read(path: Path) -> tuple[dict[str, Any], list[Run]]:
+def read(path: Path, tool: str = "bench_deep") -> tuple[dict[str, Any], list[Run]]:
     """A journal's header and its trials (a last line cut short left out).
 
     Raises
@@ -163,8 +196,8 @@ def read(path: Path) -> tuple[dict[str, Any], list[Run]]:
         header = json.loads(complete[0]) if complete else None
     except ValueError:
         header = None
-    if not isinstance(header, dict) or header.get("journal") != FORMAT:
-        raise JournalError(f"{path}: not a bench_deep journal (its first line is not the header)")
+    if not isinstance(header, dict) or header.get("journal") != format_of(tool):
+        raise JournalError(f"{path}: not a {tool} journal (its first line is not the header)")
     runs = []
     for number, line in enumerate(complete[1:], start=2):
         try:
@@ -178,10 +211,11 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
     """Raise a :class:`JournalError` naming what differs when ``header`` is not ``sweep``'s,
     or when ``root`` does not hold the code of the journal's commit (:func:`same_code`)."""
     mine = json.loads(json.dumps(sweep.header()))  # tuples as lists, as read back
-    for key in ("mode", "bugs", "engines", "trials", "budget"):
-        if header.get(key) != mine[key]:
+    for key in SAME_SWEEP:
+        theirs = header.get(key, json.loads(json.dumps(_DEFAULTS.get(key))))  # older journals: none
+        if theirs != mine[key]:
             raise JournalError(
-                f"{path}: written for another sweep ({key} {header.get(key)!r}, this run's "
+                f"{path}: written for another sweep ({key} {theirs!r}, this run's "
                 f"{mine[key]!r}); run the same options, or --restart"
             )
     commit = header.get("commit")
@@ -199,7 +233,7 @@ def _lock_of(path: Path) -> Path:
     return path.with_name(path.name + ".lock")
 
 
-def _hold(path: Path) -> int:
+def _hold(path: Path, tool: str) -> int:
     """An open descriptor of ``path``'s lock file, locked exclusively (``flock``)."""
     lock = _lock_of(path)
     lock.parent.mkdir(parents=True, exist_ok=True)
@@ -209,7 +243,7 @@ def _hold(path: Path) -> int:
     except OSError:
         os.close(fd)
         raise JournalError(
-            f"{path}: another bench_deep is running this sweep now (it holds {lock.name})"
+            f"{path}: another {tool} is running this sweep now (it holds {lock.name})"
         ) from None
     return fd
 
@@ -264,7 +298,7 @@ def open_sweep(
         ``path`` holds an unfinished sweep and neither ``resume`` nor ``restart`` is given, or
         ``resume`` and there is no journal, or it is not this sweep's (:func:`check`).
     """
-    lock = _hold(path)
+    lock = _hold(path, sweep.tool)
     try:
         if path.exists() and not restart:
             if not resume:
@@ -272,7 +306,7 @@ def open_sweep(
                     f"{path} holds an unfinished sweep: --resume goes on with it, --restart starts "
                     f"over (keeping it as {path.name}.old)"
                 )
-            header, done = read(path)
+            header, done = read(path, sweep.tool)
             check(path, header, sweep, root)
             return Journal(path, sweep, False, lock), done
         if resume:
@@ -284,3 +318,88 @@ def open_sweep(
         _lock_of(path).unlink(missing_ok=True)
         os.close(lock)
         raise
+
+
+def key_of(job: Job) -> tuple[str, str, str, int]:
+    """A trial's identity: (bug, op, engine, seed)."""
+    bug, engine, seed = job
+    return bug.name, bug.op, engine, seed
+
+
+def run_key(run: Run) -> tuple[str, str, str, int]:
+    """The identity (:func:`key_of`) of a trial's record."""
+    return run.bug, run.op, run.engine, run.seed
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a sweep holds after one run of :func:`run_sweep`.
+
+    Attributes
+    ----------
+    runs : list of Run
+        The journal's trials and this run's, in the order of the sweep's jobs.
+    total : int
+        The sweep's trials.
+    pace : float
+        Wall seconds per trial of this run (trials at a time included).
+    """
+
+    runs: list[Run]
+    total: int
+    pace: float
+
+    @property
+    def complete(self) -> bool:
+        return len(self.runs) == self.total
+
+    def stopped(self, path: Path, minutes: float | None) -> str:
+        """What to say when the sweep stopped with trials left (``--stop-after``)."""
+        # misses cost the whole budget and come in a seeded random order: a rough figure
+        left = self.total - len(self.runs)
+        return (
+            f"stopped after {minutes:g} minutes: {len(self.runs)} of {self.total} trials done, "
+            f"in {path}; the same command with --resume goes on (about {left * self.pace / 3600:.1f} "
+            f"hours at this run's pace; --from-json {path} tabulates them so far)"
+        )
+
+
+def run_sweep(
+    book: Journal,
+    jobs: Sequence[Job],
+    done: Sequence[Run],
+    trial: Callable[[Job], Run],
+    workers: int,
+    stop_after: float | None = None,
+    shuffle: bool = False,
+) -> Progress:
+    """Run the ``jobs`` that ``done`` (the journal's trials) does not hold, ``workers`` at a
+    time, appending each to ``book`` as it ends; start none after ``stop_after`` minutes.
+
+    ``shuffle`` runs them in a seeded random order (as FuzzBench does: a change of machine load
+    during the sweep then falls on every engine alike instead of on those that happen to run
+    last); the records come back in the jobs' order either way. Closes ``book``.
+    """
+    order = {key_of(job): i for i, job in enumerate(jobs)}
+    held = {run_key(r): r for r in done if run_key(r) in order}
+    todo = list(jobs)
+    if shuffle:  # the whole sweep's order, so that a resumed sweep goes on in it
+        random.Random(0).shuffle(todo)
+    todo = [job for job in todo if key_of(job) not in held]
+    began = time.monotonic()
+    deadline = None if stop_after is None else began + 60.0 * stop_after
+
+    def one(job: Job) -> Run | None:
+        if deadline is not None and time.monotonic() >= deadline:
+            return None
+        run = trial(job)
+        book.add(run)
+        return run
+
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+            new = [run for run in pool.map(one, todo) if run is not None]
+    finally:
+        book.close()
+    runs = sorted([*held.values(), *new], key=lambda r: order[run_key(r)])
+    return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)))

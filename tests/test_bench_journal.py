@@ -9,9 +9,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from benchmarks import bench_deep, deep_stats, journal
+from benchmarks import bench_deep, bench_zoo, deep_stats, journal
 from benchmarks.bench_zoo import Run
-from benchmarks.zoo import Bug
+from benchmarks.zoo import CONTROL, Bug
 
 QUICK = ["--mode", "quick", "--trials", "2", "--jobs", "1"]
 """2 bugs x 2 engines x 2 trials: 8 trials."""
@@ -33,7 +33,7 @@ class FakeTrials:
     def monotonic(self) -> float:
         return self.now
 
-    def __call__(self, bug: Bug, engine: str, seed: int, budget: float, **_: object) -> Run:
+    def __call__(self, bug: Bug, engine: str, seed: int, budget: float, *_: object, **__: object) -> Run:
         if self.fail_at is not None and len(self.calls) == self.fail_at:
             raise Interrupted
         self.calls.append((bug.name, engine, seed))
@@ -48,7 +48,7 @@ class FakeTrials:
 def fake(monkeypatch: pytest.MonkeyPatch) -> FakeTrials:
     trials = FakeTrials()
     monkeypatch.setattr(bench_deep, "run_one", trials)
-    monkeypatch.setattr(bench_deep, "time", SimpleNamespace(monotonic=trials.monotonic))
+    monkeypatch.setattr(journal, "time", SimpleNamespace(monotonic=trials.monotonic))
     # the tree under test may have uncommitted changes: one commit, the same code (the rule
     # itself: the last test, on a repository of its own)
     monkeypatch.setattr(journal, "commit_of", lambda root: "c" * 40)
@@ -239,3 +239,46 @@ def test_a_journal_so_far_is_tabulated_with_its_gaps_named(tmp_path: Path) -> No
     second = next(line for line in text.splitlines() if line.startswith("| ik_seed_band "))
     assert "n/a (no scenario op)" in second and "n/a (no trials yet)" in second
     deep_stats.plot(runs, mode, tmp_path / "partial.png")
+
+
+def test_bench_zoo_keeps_a_journal_too_and_runs_in_a_seeded_random_order(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``make bench``'s first step (about two hours in full mode) goes on where it stopped as
+    the deep one does; its runs go in a seeded random order and come back in the plan's."""
+    monkeypatch.setattr(bench_zoo, "run_one", fake)
+    sweep = ["--bugs", "off_by_tolerance", CONTROL.name, "--engines", "full", "uniform", "--seeds", "2"]
+    sweep += ["--jobs", "1", "--budget", "5"]
+    whole = bench_zoo.main([*sweep, "--out", str(tmp_path / "whole" / "zoo.json")])
+    plan = [
+        (b.name, e, s)
+        for b, e, s in bench_zoo.plan_jobs(("off_by_tolerance", CONTROL.name), ("full", "uniform"), 2)
+    ]
+    assert [(r["bug"], r["engine"], r["seed"]) for r in whole["runs"]] == plan and len(plan) == 8
+    order = list(fake.calls)
+    assert sorted(order) == sorted(plan) and order != plan  # run in another order than the plan's
+    assert not (tmp_path / "whole" / "zoo.jsonl").exists()  # zoo.json holds them all
+    out = ["--out", str(tmp_path / "zoo.json")]
+    fake.calls.clear()
+    part = bench_zoo.main([*sweep, *out, "--stop-after", "2.5"])
+    assert part == {"runs": part["runs"], "complete": False} and fake.calls == order[:3]
+    assert "3 of 8 trials done" in capsys.readouterr().out and not (tmp_path / "zoo.json").exists()
+    kept = (tmp_path / "zoo.jsonl").read_bytes()
+    for extra, says in (
+        ((), "holds an unfinished sweep: --resume"),
+        (("--resume", "--replay"), "written for another sweep (replay False, this run's True)"),
+        (("--resume", "--seeds", "3"), "written for another sweep (trials 2, this run's 3)"),
+    ):
+        with pytest.raises(SystemExit):
+            bench_zoo.main([*sweep, *out, *extra])
+        assert says in capsys.readouterr().err, extra
+        assert (tmp_path / "zoo.jsonl").read_bytes() == kept
+    (tmp_path / "deep").mkdir()
+    (tmp_path / "deep" / "deep-quick.jsonl").write_bytes(kept)
+    with pytest.raises(SystemExit):  # another tool's journal is not taken for this one's
+        bench_deep.main([*QUICK, "--results", str(tmp_path / "deep"), "--resume"])
+    assert "not a bench_deep journal" in capsys.readouterr().err
+    fake.calls.clear()
+    done = bench_zoo.main([*sweep, *out, "--resume"])
+    assert fake.calls == order[3:] and done["runs"] == whole["runs"] and done["cells"] == whole["cells"]
+    assert not (tmp_path / "zoo.jsonl").exists() and not (tmp_path / "zoo.jsonl.lock").exists()
