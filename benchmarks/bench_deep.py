@@ -39,7 +39,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from benchmarks import journal
+from benchmarks import journal, sweeps
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, Run, run_one
 from benchmarks.deep_stats import Mode, markdown, plot, runs_on
 from benchmarks.zoo import DEEP, ZOO, Bug
@@ -177,20 +177,13 @@ def main(argv: list[str] | None = None) -> list[Run]:
     commit = journal.commit_of(ROOT)
     sweep = journal.Sweep(args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit)
     path = args.results / f"deep-{args.mode}.jsonl"
-    try:
-        book, done = journal.open_sweep(path, sweep, ROOT, resume=args.resume, restart=args.restart)
-    except journal.JournalError as exc:
-        parser.error(str(exc))
-    if done:
-        print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
 
-    def trial(job: journal.Job) -> Run:
+    def trial(job: sweeps.Job) -> Run:
         return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True)
 
-    progress = journal.run_sweep(book, jobs, done, trial, args.jobs, args.stop_after)
+    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial)
     runs = progress.runs
     if not progress.complete:
-        print(progress.stopped(path, args.stop_after))
         return runs
     _report(runs, mode, args, argv, copy=True)
     path.unlink()  # deep-<mode>.json holds every trial now

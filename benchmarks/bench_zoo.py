@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from benchmarks import journal
+from benchmarks import journal, sweeps
 from benchmarks.trials import NOT_DETECTIONS, run_until_detection
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from benchmarks.zoo_tables import (
@@ -382,21 +382,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     sweep = journal.Sweep(
         args.mode, bugs, engines, seeds, budget, journal.commit_of(ROOT), "bench_zoo", mode.ops, replay
     )
-    try:
-        book, done = journal.open_sweep(path, sweep, ROOT, resume=args.resume, restart=args.restart)
-    except journal.JournalError as exc:
-        parser.error(str(exc))
-    if done:
-        print(f"resuming {path}: {len(done)} of {len(jobs)} runs done")
     load_before = _load()
 
-    def trial(job: journal.Job) -> Run:
+    def trial(job: sweeps.Job) -> Run:
         return run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep)
 
-    progress = journal.run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle=True)
+    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial, shuffle=True)
     runs = progress.runs
     if not progress.complete:
-        print(progress.stopped(path, args.stop_after))
         return {"runs": [asdict(r) for r in runs], "complete": False}
     result = {
         "mode": args.mode,

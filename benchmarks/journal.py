@@ -7,7 +7,7 @@ two (a reboot, a session that ends) left nothing. Now each finished trial is app
 ends (one JSON object a line, flushed and fsynced), under a first line that names the sweep:
 its tool and mode, bugs, engines, trials and budget (and ``bench_zoo``'s ops and replay), and
 the commit that ran it. ``--resume`` reads the journal, checks that it belongs to this sweep and
-to the same code, and runs only the trials it does not hold (:func:`run_sweep`); once every
+to the same code, and runs only the trials it does not hold (``benchmarks.sweeps``); once every
 trial has run, the results file is written and the journal removed. "The same code": the
 journal's commit, or a later one that changed nothing outside ``benchmarks/results/`` and the
 Markdown files (a session that commits a partial journal and some notes can go on from its own
@@ -27,22 +27,14 @@ from __future__ import annotations
 import fcntl
 import json
 import os
-import random
 import subprocess
 import threading
-import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import MISSING, asdict, dataclass, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # bench_zoo imports this module
     from benchmarks.bench_zoo import Run
-    from benchmarks.zoo import Bug
-
-    Job = tuple[Bug, str, int]
-    """A trial: (bug, engine, seed)."""
 
 
 def format_of(tool: str) -> str:
@@ -318,88 +310,3 @@ def open_sweep(
         _lock_of(path).unlink(missing_ok=True)
         os.close(lock)
         raise
-
-
-def key_of(job: Job) -> tuple[str, str, str, int]:
-    """A trial's identity: (bug, op, engine, seed)."""
-    bug, engine, seed = job
-    return bug.name, bug.op, engine, seed
-
-
-def run_key(run: Run) -> tuple[str, str, str, int]:
-    """The identity (:func:`key_of`) of a trial's record."""
-    return run.bug, run.op, run.engine, run.seed
-
-
-@dataclass(frozen=True)
-class Progress:
-    """What a sweep holds after one run of :func:`run_sweep`.
-
-    Attributes
-    ----------
-    runs : list of Run
-        The journal's trials and this run's, in the order of the sweep's jobs.
-    total : int
-        The sweep's trials.
-    pace : float
-        Wall seconds per trial of this run (trials at a time included).
-    """
-
-    runs: list[Run]
-    total: int
-    pace: float
-
-    @property
-    def complete(self) -> bool:
-        return len(self.runs) == self.total
-
-    def stopped(self, path: Path, minutes: float | None) -> str:
-        """What to say when the sweep stopped with trials left (``--stop-after``)."""
-        # misses cost the whole budget and come in a seeded random order: a rough figure
-        left = self.total - len(self.runs)
-        return (
-            f"stopped after {minutes:g} minutes: {len(self.runs)} of {self.total} trials done, "
-            f"in {path}; the same command with --resume goes on (about {left * self.pace / 3600:.1f} "
-            f"hours at this run's pace; --from-json {path} tabulates them so far)"
-        )
-
-
-def run_sweep(
-    book: Journal,
-    jobs: Sequence[Job],
-    done: Sequence[Run],
-    trial: Callable[[Job], Run],
-    workers: int,
-    stop_after: float | None = None,
-    shuffle: bool = False,
-) -> Progress:
-    """Run the ``jobs`` that ``done`` (the journal's trials) does not hold, ``workers`` at a
-    time, appending each to ``book`` as it ends; start none after ``stop_after`` minutes.
-
-    ``shuffle`` runs them in a seeded random order (as FuzzBench does: a change of machine load
-    during the sweep then falls on every engine alike instead of on those that happen to run
-    last); the records come back in the jobs' order either way. Closes ``book``.
-    """
-    order = {key_of(job): i for i, job in enumerate(jobs)}
-    held = {run_key(r): r for r in done if run_key(r) in order}
-    todo = list(jobs)
-    if shuffle:  # the whole sweep's order, so that a resumed sweep goes on in it
-        random.Random(0).shuffle(todo)
-    todo = [job for job in todo if key_of(job) not in held]
-    began = time.monotonic()
-    deadline = None if stop_after is None else began + 60.0 * stop_after
-
-    def one(job: Job) -> Run | None:
-        if deadline is not None and time.monotonic() >= deadline:
-            return None
-        run = trial(job)
-        book.add(run)
-        return run
-
-    try:
-        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            new = [run for run in pool.map(one, todo) if run is not None]
-    finally:
-        book.close()
-    runs = sorted([*held.values(), *new], key=lambda r: order[run_key(r)])
-    return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)))

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from benchmarks import bench_deep, bench_zoo, deep_stats, journal
+from benchmarks import bench_deep, bench_zoo, deep_stats, journal, sweeps
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import CONTROL, Bug
 
@@ -48,7 +48,7 @@ class FakeTrials:
 def fake(monkeypatch: pytest.MonkeyPatch) -> FakeTrials:
     trials = FakeTrials()
     monkeypatch.setattr(bench_deep, "run_one", trials)
-    monkeypatch.setattr(journal, "time", SimpleNamespace(monotonic=trials.monotonic))
+    monkeypatch.setattr(sweeps, "time", SimpleNamespace(monotonic=trials.monotonic))
     # the tree under test may have uncommitted changes: one commit, the same code (the rule
     # itself: the last test, on a repository of its own)
     monkeypatch.setattr(journal, "commit_of", lambda root: "c" * 40)
