@@ -21,7 +21,8 @@ never detects counts as the budget: censored) and the Vargha-Delaney A12 (the pr
 a full-engine trial detects sooner than a baseline trial, ties half; 0.5 = no difference). A
 survival plot (the share of trials that have found the bug over time) goes to
 ``benchmarks/results/deep-<mode>.png``; with ``--write-md`` the table replaces the marked
-section of BENCHMARKS.md (``--mode zoo``: a section of its own, under the zoo's).
+section of BENCHMARKS.md (``--mode zoo`` and ``--mode full``: sections of their own, so that
+``make bench-deep``'s 10-s table and ``make bench``'s 60-s one stand side by side).
 
 Each finished trial is also appended to ``deep-<mode>.jsonl`` in the results folder as it ends
 (``benchmarks.journal``), so a sweep stopped part way (``--stop-after MINUTES``, or killed)
@@ -51,7 +52,11 @@ SECTIONS = {
     "zoo": (
         ("<!-- bench_deep_zoo:begin -->", "<!-- bench_deep_zoo:end -->"),
         "### The zoo with FuzzBench statistics (issue 11)",
-    )
+    ),
+    "full": (
+        ("<!-- bench_deep_full:begin -->", "<!-- bench_deep_full:end -->"),
+        "### The deep bugs in 60-s trials (`make bench`)",
+    ),
 }
 """Modes with a BENCHMARKS.md section of their own: (marks, title); the others use MARKS, TITLE."""
 BUGS: dict[str, Bug] = {b.name: b for b in (*DEEP, *ZOO)}

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import math
 import signal
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import pytest
 
@@ -243,3 +244,25 @@ def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp
     assert "n/a" not in move
     deep_stats.plot(runs, small, tmp_path / "zoo.png")
     assert (tmp_path / "zoo.png").is_file()
+
+
+def test_the_full_and_short_tables_have_sections_of_their_own(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``make bench``'s 60-s table (``--mode full``) does not replace ``make bench-deep``'s
+    10-s one (``--mode short``): each mode writes between its own marks."""
+    written: list[tuple[str, str]] = []
+
+    def replace_section(text: str, marks: tuple[str, str], title: str) -> None:
+        written.append(marks)
+
+    monkeypatch.setattr(bench_deep, "replace_section", replace_section)
+    source = tmp_path / "runs.json"
+    runs = [_run(e, i, 1.0 + i, "narrow_band", "fk") for e in ("full", "uniform") for i in range(3)]
+    source.write_text(json.dumps([asdict(r) for r in runs]))
+    for mode in ("full", "short"):
+        bench_deep.main(
+            ["--mode", mode, "--from-json", str(source), "--write-md", *("--results", str(tmp_path))]
+        )
+    assert written == [
+        ("<!-- bench_deep_full:begin -->", "<!-- bench_deep_full:end -->"),
+        ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->"),
+    ]
