@@ -183,8 +183,8 @@ def main(argv: list[str] | None = None) -> list[Run]:
     sweep = journal.Sweep(args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit)
     path = args.results / f"deep-{args.mode}.jsonl"
 
-    def trial(job: sweeps.Job) -> Run:
-        return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True)
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True, cpu=cpu)
 
     progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial)
     runs = progress.runs

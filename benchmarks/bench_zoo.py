@@ -200,6 +200,7 @@ def run_one(
     *,
     stop_at_detection: bool = False,
     keep_failures: Path | None = None,
+    cpu: int | None = None,
 ) -> Run:
     """Run one trial of ``engine`` against ``bug`` in a fresh folder and read its logs.
 
@@ -225,6 +226,10 @@ def run_one(
         this module's tables (signatures, throughput) do not. The harness logs its first
         snapshot right after its first input, so a trial stops soon after its detection.
 
+    cpu
+        Run the trial, and every process it starts, on this CPU only (``taskset``; a sweep
+        gives each trial running at a time its own, ``benchmarks.sweeps.cores``); None: any.
+
     Returns
     -------
     Run
@@ -233,7 +238,7 @@ def run_one(
     with tempfile.TemporaryDirectory(prefix="rrosfuzz-bench-") as tmp:
         workdir = Path(tmp)
         artifacts = workdir / "artifacts"
-        cmd = command(bug, engine, seed, budget, workdir)
+        cmd = sweeps.pinned(command(bug, engine, seed, budget, workdir), cpu)
         started = time.time()
         if stop_at_detection:
             returncode = run_until_detection(cmd, artifacts, budget + 180, ROOT)
@@ -384,8 +389,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     load_before = _load()
 
-    def trial(job: sweeps.Job) -> Run:
-        return run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep)
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        return run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep, cpu=cpu)
 
     progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial, shuffle=True)
     runs = progress.runs

@@ -1,11 +1,20 @@
 """A benchmark's sweep of trials through its journal (``benchmarks.journal``): the trials the
 journal does not hold yet, some at a time, each appended as it ends, none started past
-``--stop-after``; shared by ``bench_zoo`` and ``bench_deep``."""
+``--stop-after``; shared by ``bench_zoo`` and ``bench_deep``.
+
+Each trial running at a time gets a CPU of its own (``cores``), as FuzzBench gives each
+trial its own: two trials on two cores otherwise share both, and a trial's second process
+(the full engine's dry-run child, which runs beside the campaign when the process sees two
+CPUs) takes its time from the other trial.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
+import queue
 import random
+import shutil
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -21,6 +30,23 @@ if TYPE_CHECKING:  # bench_zoo imports this module
 
 Job = tuple[Bug, str, int]
 """A trial: (bug, engine, seed)."""
+
+Trial = Callable[[Job, "int | None"], "Run"]
+"""Runs a trial pinned to the CPU given (None: not pinned), returns its record."""
+
+
+def cores(workers: int) -> list[int] | None:
+    """The CPUs to pin ``workers`` concurrent trials to, one each (this process's, in order),
+    or None when there are fewer than ``workers`` of them or no ``taskset`` to pin with."""
+    available = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    if workers > len(available) or shutil.which("taskset") is None:
+        return None
+    return available[:workers]
+
+
+def pinned(cmd: list[str], cpu: int | None) -> list[str]:
+    """``cmd`` run on CPU ``cpu`` only, it and every process it starts (``taskset``)."""
+    return cmd if cpu is None else ["taskset", "--cpu-list", str(cpu), *cmd]
 
 
 def key_of(job: Job) -> tuple[str, str, str, int]:
@@ -71,13 +97,14 @@ def run_sweep(
     book: Journal,
     jobs: Sequence[Job],
     done: Sequence[Run],
-    trial: Callable[[Job], Run],
+    trial: Trial,
     workers: int,
     stop_after: float | None = None,
     shuffle: bool = False,
 ) -> Progress:
     """Run the ``jobs`` that ``done`` (the journal's trials) does not hold, ``workers`` at a
-    time, appending each to ``book`` as it ends; start none after ``stop_after`` minutes.
+    time, each on a CPU no other running trial has (:func:`cores`; unpinned when there are
+    too few), appending each to ``book`` as it ends; start none after ``stop_after`` minutes.
 
     ``shuffle`` runs them in a seeded random order (as FuzzBench does: a change of machine load
     during the sweep then falls on every engine alike instead of on those that happen to run
@@ -92,10 +119,21 @@ def run_sweep(
     began = time.monotonic()
     deadline = None if stop_after is None else began + 60.0 * stop_after
 
+    free: queue.SimpleQueue[int | None] = queue.SimpleQueue()
+    width = max(1, workers)
+    pinned_to = cores(width)
+    pins: list[int | None] = [None] * width if pinned_to is None else [*pinned_to]
+    for cpu in pins:
+        free.put(cpu)
+
     def one(job: Job) -> Run | None:
         if deadline is not None and time.monotonic() >= deadline:
             return None
-        run = trial(job)
+        cpu = free.get()  # one per worker: never empty when a worker asks
+        try:
+            run = trial(job, cpu)
+        finally:
+            free.put(cpu)
         book.add(run)
         return run
 
@@ -115,7 +153,7 @@ def sweep_in_journal(
     sweep: Sweep,
     root: Path,
     jobs: Sequence[Job],
-    trial: Callable[[Job], Run],
+    trial: Trial,
     shuffle: bool = False,
 ) -> Progress:
     """A benchmark's sweep through its journal at ``path`` with its command line's ``--resume``,

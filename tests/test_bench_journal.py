@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import subprocess
+import sys
+import time
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -282,3 +286,44 @@ def test_bench_zoo_keeps_a_journal_too_and_runs_in_a_seeded_random_order(
     done = bench_zoo.main([*sweep, *out, "--resume"])
     assert fake.calls == order[3:] and done["runs"] == whole["runs"] and done["cells"] == whole["cells"]
     assert not (tmp_path / "zoo.jsonl").exists() and not (tmp_path / "zoo.jsonl.lock").exists()
+
+
+def test_each_trial_running_at_a_time_has_a_cpu_of_its_own(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two trials at a time on two cores: each pinned to its own (as FuzzBench gives each trial
+    its own), so that neither takes the other's time; unpinned when there are too few CPUs."""
+    monkeypatch.setattr(sweeps, "cores", lambda workers: [5, 7][:workers])
+    seen: list[tuple[int | None, float, float]] = []
+
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        began = time.monotonic()
+        time.sleep(0.05)
+        seen.append((cpu, began, time.monotonic()))
+        bug, engine, seed = job
+        return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
+
+    bug = bench_deep.BUGS["narrow_band"]
+    jobs = [(bug, engine, seed) for engine in ("full", "uniform") for seed in range(4)]
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full", "uniform"), 4, 1.0, "c" * 40)
+    book, _ = journal.open_sweep(tmp_path / "j.jsonl", sweep, tmp_path, resume=False, restart=False)
+    progress = sweeps.run_sweep(book, jobs, [], trial, workers=2)
+    assert progress.complete and {cpu for cpu, _, _ in seen} == {5, 7}
+    for i, (cpu, began, ended) in enumerate(seen):
+        for other, b, e in seen[i + 1 :]:
+            assert cpu != other or e <= began or ended <= b, "two trials ran on one CPU at once"
+    mine = sorted(os.sched_getaffinity(0))
+    monkeypatch.undo()
+    assert sweeps.cores(len(mine) + 1) is None  # more trials at a time than CPUs: none pinned
+    if shutil.which("taskset") is not None:
+        assert sweeps.cores(1) == mine[:1]
+        shown = subprocess.run(
+            sweeps.pinned(
+                [sys.executable, "-c", "import os; print(sorted(os.sched_getaffinity(0)))"], mine[-1]
+            ),
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        assert shown.strip() == str([mine[-1]])
+    assert sweeps.pinned(["x"], None) == ["x"]
