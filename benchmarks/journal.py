@@ -95,13 +95,14 @@ _DEFAULTS = {f.name: f.default for f in fields(Sweep) if f.default is not MISSIN
 
 
 def commit_of(root: Path) -> str:
-    """``root``'s commit, with ``+dirty`` when a tracked file differs from it."""
+    """``root``'s commit, with ``+dirty`` when a tracked file outside ``IGNORED`` differs from
+    it (the results a sweep writes, such as ``make bench``'s earlier steps', do not count)."""
     try:
         head = subprocess.run(
             ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True, timeout=30
         ).stdout.strip()
         changed = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", ".", *_EXCLUDED],
             cwd=root,
             capture_output=True,
             text=True,
@@ -115,16 +116,16 @@ def commit_of(root: Path) -> str:
 
 IGNORED = ("benchmarks/results", "*.md")
 """Paths whose changes do not make a tree's trials differ from the journal's (results, prose)."""
+_EXCLUDED = tuple(f":(exclude){p}" for p in IGNORED)
 
 
 def same_code(root: Path, commit: str) -> bool:
     """Whether ``root``'s working tree has the tracked files of ``commit`` outside ``IGNORED``."""
     if commit.endswith("+dirty") or commit == "unknown":
         return False
-    excluded = [f":(exclude){p}" for p in IGNORED]
     try:
         diff = subprocess.run(
-            ["git", "diff", "--quiet", commit, "--", ".", *excluded],
+            ["git", "diff", "--quiet", commit, "--", ".", *_EXCLUDED],
             cwd=root,
             capture_output=True,
             timeout=60,

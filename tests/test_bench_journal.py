@@ -191,6 +191,9 @@ def test_the_same_code_means_the_commit_or_a_later_one_with_only_results_and_pro
     (repo / "NOTES.md").write_text("y\n")
     _git(repo, "commit", "-qam", "results and notes")
     assert journal.same_code(repo, first)  # a session's partial results and notes
+    # results a sweep writes into the tree (make bench's earlier steps) leave it clean
+    (repo / "benchmarks" / "results" / "r.json").write_text("[2]\n")
+    assert not journal.commit_of(repo).endswith("+dirty")
     (repo / "engine.py").write_text("A = 2\n")
     assert journal.commit_of(repo).endswith("+dirty") and not journal.same_code(repo, first)
     _git(repo, "commit", "-qam", "engine")
