@@ -104,26 +104,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
     parser.add_argument(
         "--results", type=Path, default=RESULTS, help="folder for deep-<mode>.json and .png (%(default)s)"
     )
-    parser.add_argument(
-        "--resume",
-        action="store_true",
-        help="go on with the sweep whose finished trials are in --results' deep-<mode>.jsonl "
-        "(same options, same code); only the trials it does not hold run",
-    )
-    parser.add_argument(
-        "--restart",
-        action="store_true",
-        help="start over although deep-<mode>.jsonl holds an unfinished sweep (it is kept as "
-        "deep-<mode>.jsonl.old)",
-    )
-    parser.add_argument(
-        "--stop-after",
-        type=float,
-        default=None,
-        metavar="MINUTES",
-        help="start no trial after this many minutes; those running finish, the journal keeps "
-        "them all, and --resume goes on later",
-    )
+    sweeps.add_arguments(parser, "--results' deep-<mode>.jsonl")
     parser.add_argument(
         "--from-json",
         type=Path,
@@ -133,10 +114,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
         "--mode names the output files)",
     )
     args = parser.parse_args(argv)
-    if args.resume and args.restart:
-        parser.error("--resume and --restart exclude each other")
-    if args.stop_after is not None and not args.stop_after > 0:
-        parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
+    sweeps.check_arguments(parser, args)
     base = MODES[args.mode]
     mode = Mode(
         tuple(args.bugs or base.bugs),
@@ -186,7 +164,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
     def trial(job: sweeps.Job, cpu: int | None) -> Run:
         return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True, cpu=cpu)
 
-    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial)
+    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial, "--from-json")
     runs = progress.runs
     if not progress.complete:
         return runs

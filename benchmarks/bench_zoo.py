@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from benchmarks import journal, sweeps
+from benchmarks import journal, sweeps, trials
 from benchmarks.trials import NOT_DETECTIONS, run_until_detection
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from benchmarks.zoo_tables import (
@@ -161,36 +161,6 @@ def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> l
     ]
 
 
-def replay_fidelity(bug: Bug, artifacts: Path) -> tuple[int, int, tuple[str, ...]]:
-    """Replay every crash file of a run in one new process: (files, same signature, misses)."""
-    crashes = sorted(
-        p for p in artifacts.glob("crash-*") if p.suffix != ".json" and Path(f"{p}.json").is_file()
-    )
-    if not crashes:
-        return 0, 0, ()
-    done = subprocess.run(
-        [sys.executable, str(ROOT / "fuzz_diff.py"), *map(str, crashes), f"--targets=native,{bug.target}"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-        env=dict(os.environ, PYTHONPATH=str(ROOT)),
-    )
-    same, misses = 0, []
-    for path in crashes:
-        line = next(
-            (ln for ln in done.stdout.splitlines() if ln.startswith(f"{path}:")),
-            f"no verdict (exit {done.returncode}: {done.stderr.strip()[-300:]})",
-        )
-        if "still diverges (same signature)" in line:
-            same += 1
-        else:
-            kind = json.loads(path.with_name(path.name + ".json").read_text())["signature"]["kind"]
-            misses.append(f"{kind}: {line.removeprefix(f'{path}: ')}")
-    return len(crashes), same, tuple(misses)
-
-
 def run_one(
     bug: Bug,
     engine: str,
@@ -210,7 +180,7 @@ def run_one(
         What ``command`` runs (``budget``: seconds; the trial is killed, and
         ``subprocess.TimeoutExpired`` raised, 180 s past it).
     replay
-        Replay the full engine's crash files in a new process (``replay_fidelity``).
+        Replay the full engine's crash files in a new process (``benchmarks.trials.replay_fidelity``).
     keep_failures
         A control run that reports a divergence (a false positive) copies its artifacts
         (crash files, sidecars, logs) to ``keep_failures/<bug>-<engine>-seed<seed>/`` before
@@ -261,7 +231,7 @@ def run_one(
         started_search = min(starts) - started if starts else None
         executions = sum(int(r.get("execs", 0)) for r in last.values())
         elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
-        fidelity = replay_fidelity(bug, artifacts) if replay and engine == "full" else (0, 0, ())
+        fidelity = trials.replay_fidelity(bug, artifacts, ROOT) if replay and engine == "full" else (0, 0, ())
         if keep_failures is not None and bug.is_control and hits and artifacts.is_dir():
             name = "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{bug.name}-{engine}-seed{seed}")
             shutil.copytree(artifacts, keep_failures / name, dirs_exist_ok=True)
@@ -278,20 +248,9 @@ def run_one(
         returncode,
         len(hits),
         *fidelity,
-        found_fields(hits),
+        trials.found_fields(hits),
         started_search,
     )
-
-
-def found_fields(hits: list[dict[str, Any]]) -> tuple[str, ...]:
-    """``kind field: largest difference unit`` per (kind, field) of the logged divergences."""
-    largest: dict[tuple[str, str], tuple[float, str]] = {}
-    for r in hits:
-        key = (str(r.get("kind")), str(r.get("field")))
-        diff = float(r.get("difference") or 0.0)
-        if key not in largest or diff > largest[key][0]:
-            largest[key] = (diff, str(r.get("unit") or ""))
-    return tuple(f"{k} {f}: {d:.2g} {u}".rstrip() for (k, f), (d, u) in sorted(largest.items()))
 
 
 def plan_jobs(
@@ -308,6 +267,53 @@ def plan_jobs(
         and (bug.op != "scenario" or e in SCENARIO_ENGINES)
         for s in range(1, seeds + 1)
     ]
+
+
+def result_of(sweep: journal.Sweep, runs: list[Run]) -> dict[str, Any]:
+    """A sweep's runs and their cells, as the results file keeps them (without how and where
+    they ran: jobs, cpus, machine, command, load)."""
+    bugs, engines = sweep.bugs, sweep.engines
+    return {
+        "mode": sweep.mode,
+        "bugs": list(bugs),
+        "engines": list(engines),
+        "seeds": sweep.trials,
+        "budget": sweep.budget,
+        "runs": [asdict(r) for r in runs],
+        "cells": summarize_ops(runs, bugs, sweep.ops) if sweep.ops else summarize(runs, engines, bugs),
+        "ops": list(sweep.ops),
+    }
+
+
+def render(parser: argparse.ArgumentParser, path: Path, write_md: bool) -> dict[str, Any]:
+    """Print the tables of a saved result (``zoo-<mode>.json``), or of a journal's runs so far
+    (``zoo-<mode>.jsonl``; not for BENCHMARKS.md), and with ``write_md`` put a saved result's
+    into BENCHMARKS.md. A file that is neither is the parser's error."""
+    note = ""
+    if path.suffix == ".jsonl" and write_md:
+        parser.error(f"{path}: a journal so far is no finished table: --write-md takes a zoo-<mode>.json")
+    try:
+        if path.suffix == ".jsonl":
+            header, runs = journal.read(path, "bench_zoo")
+            sweep = journal.sweep_of(header, "bench_zoo")
+            unknown = sorted({b for b in [*sweep.bugs, *(r.bug for r in runs)] if b not in BY_NAME})
+            if unknown:
+                raise ValueError(f"unknown bugs {unknown}")
+            jobs = plan_jobs(sweep.bugs, sweep.engines, sweep.trials, sweep.ops)
+            plan = {sweeps.key_of(job): i for i, job in enumerate(jobs)}
+            runs.sort(key=lambda r: plan.get(sweeps.run_key(r), len(plan)))  # the plan's order
+            saved = {**result_of(sweep, runs), "jobs": "?", "cpus": "?", "machine": "not recorded"}
+            saved["command"] = f"python -m benchmarks.bench_zoo --mode {sweep.mode} (commit {sweep.commit})"
+            note = f"A sweep in progress: {len(runs)} of its {len(plan)} runs so far.\n\n"
+        else:
+            saved = json.loads(path.read_text(encoding="utf-8"))
+        text = note + markdown(saved)
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        parser.error(f"{path}: not a bench_zoo result or journal ({type(exc).__name__}: {exc})")
+    print(text)
+    if write_md:
+        write_markdown(text, mode=str(saved.get("mode", "full")))
+    return saved
 
 
 def _load() -> str:
@@ -328,30 +334,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
     parser.add_argument(
-        "--render", type=Path, default=None, help="only render a saved result (JSON) as markdown, run nothing"
+        "--render",
+        type=Path,
+        default=None,
+        help="only render a saved result (zoo-<mode>.json), or a journal's runs so far "
+        "(zoo-<mode>.jsonl), as markdown; run nothing",
     )
     parser.add_argument(
         "--replay", action="store_true", help="replay each full-engine run's crash files in a new process"
     )
-    parser.add_argument(
-        "--resume",
-        action="store_true",
-        help="go on with the sweep whose finished runs are in the journal beside --out "
-        "(zoo-<mode>.jsonl; same options, same code); only the runs it does not hold run",
-    )
-    parser.add_argument(
-        "--restart",
-        action="store_true",
-        help="start over although the journal holds an unfinished sweep (kept as .jsonl.old)",
-    )
-    parser.add_argument(
-        "--stop-after",
-        type=float,
-        default=None,
-        metavar="MINUTES",
-        help="start no run after this many minutes; those running finish, the journal keeps "
-        "them all, and --resume goes on later",
-    )
+    sweeps.add_arguments(parser, "the journal beside --out (zoo-<mode>.jsonl)")
     parser.add_argument(
         "--keep-failures",
         type=Path,
@@ -360,17 +352,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "(default: control-failures/ next to --out)",
     )
     args = parser.parse_args(argv)
-    if args.resume and args.restart:
-        parser.error("--resume and --restart exclude each other")
-    if args.stop_after is not None and not args.stop_after > 0:
-        parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
+    sweeps.check_arguments(parser, args)
     if args.render is not None:
-        saved: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
-        text = markdown(saved)
-        print(text)
-        if args.write_md:
-            write_markdown(text, mode=str(saved.get("mode", "full")))
-        return saved
+        return render(parser, args.render, args.write_md)
     mode = MODES[args.mode]
     bugs = tuple(args.bugs or mode.bugs)
     unknown = [b for b in bugs if b not in BY_NAME]
@@ -392,23 +376,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     def trial(job: sweeps.Job, cpu: int | None) -> Run:
         return run_one(job[0], job[1], job[2], budget, replay, keep_failures=keep, cpu=cpu)
 
-    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial, shuffle=True)
+    progress = sweeps.sweep_in_journal(parser, args, path, sweep, ROOT, jobs, trial, "--render", shuffle=True)
     runs = progress.runs
     if not progress.complete:
         return {"runs": [asdict(r) for r in runs], "complete": False}
     result = {
-        "mode": args.mode,
-        "bugs": list(bugs),
-        "engines": list(engines),
-        "seeds": seeds,
-        "budget": budget,
+        **result_of(sweep, runs),
         "jobs": args.jobs,
         "cpus": os.cpu_count(),
         "machine": platform.machine(),
         "command": "python -m benchmarks.bench_zoo " + " ".join(argv if argv is not None else sys.argv[1:]),
-        "runs": [asdict(r) for r in runs],
-        "cells": summarize_ops(runs, bugs, mode.ops) if mode.ops else summarize(runs, engines, bugs),
-        "ops": list(mode.ops),
         "load": f"{load_before} / {_load()}",
     }
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -89,9 +89,39 @@ class Sweep:
         return {"journal": format_of(row.pop("tool")), **row}
 
 
+def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
+    """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``
+    and ``replay`` are their defaults.
+
+    Raises
+    ------
+    JournalError
+        A field is missing or has the wrong type (named).
+    """
+    kinds: dict[str, Any] = {
+        "mode": str,
+        "trials": int,
+        "budget": (int, float),
+        "commit": str,
+        "replay": bool,
+    }
+    values = {**_DEFAULTS, **{k: v for k, v in header.items() if k in _FIELDS}}
+    for name in ("mode", "bugs", "engines", "trials", "budget", "commit", "ops", "replay"):
+        value = values.get(name)
+        if name in ("bugs", "engines", "ops"):
+            good = isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value)
+        else:
+            good = isinstance(value, kinds[name]) and (name == "replay" or not isinstance(value, bool))
+        if not good:
+            raise JournalError(f"the header's {name} is missing or not what it should be: {value!r}")
+    tuples = {k: tuple(values[k]) for k in ("bugs", "engines", "ops")}
+    return Sweep(**{**values, **tuples, "budget": float(values["budget"]), "tool": tool})
+
+
 SAME_SWEEP = ("mode", "bugs", "engines", "trials", "budget", "ops", "replay")
 """The header's keys that must equal this run's for ``--resume``."""
 _DEFAULTS = {f.name: f.default for f in fields(Sweep) if f.default is not MISSING}
+_FIELDS = {f.name for f in fields(Sweep)} - {"tool"}
 
 
 def commit_of(root: Path) -> str:

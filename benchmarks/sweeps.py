@@ -82,15 +82,48 @@ class Progress:
     def complete(self) -> bool:
         return len(self.runs) == self.total
 
-    def stopped(self, path: Path, minutes: float | None) -> str:
-        """What to say when the sweep stopped with trials left (``--stop-after``)."""
+    def stopped(self, path: Path, minutes: float | None, tabulate: str) -> str:
+        """What to say when the sweep stopped with trials left (``--stop-after``); ``tabulate``
+        is the tool's option that tabulates a journal so far."""
         # misses cost the whole budget and come in a seeded random order: a rough figure
         left = self.total - len(self.runs)
         return (
             f"stopped after {minutes:g} minutes: {len(self.runs)} of {self.total} trials done, "
             f"in {path}; the same command with --resume goes on (about {left * self.pace / 3600:.1f} "
-            f"hours at this run's pace; --from-json {path} tabulates them so far)"
+            f"hours at this run's pace; {tabulate} {path} tabulates them so far)"
         )
+
+
+def add_arguments(parser: argparse.ArgumentParser, where: str) -> None:
+    """A sweep's journal options: ``--resume``, ``--restart``, ``--stop-after`` (``where``: the
+    journal's file, as the help names it); :func:`check_arguments` checks them."""
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help=f"go on with the sweep whose finished trials are in {where} (same options, same "
+        "code); only the trials it does not hold run",
+    )
+    parser.add_argument(
+        "--restart",
+        action="store_true",
+        help=f"start over although {where} holds an unfinished sweep (it is kept as .jsonl.old)",
+    )
+    parser.add_argument(
+        "--stop-after",
+        type=float,
+        default=None,
+        metavar="MINUTES",
+        help="start no trial after this many minutes; those running finish, the journal keeps "
+        "them all, and --resume goes on later",
+    )
+
+
+def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """The parser's error for journal options (:func:`add_arguments`) that cannot go together."""
+    if args.resume and args.restart:
+        parser.error("--resume and --restart exclude each other")
+    if args.stop_after is not None and not args.stop_after > 0:
+        parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
 
 
 def run_sweep(
@@ -154,13 +187,14 @@ def sweep_in_journal(
     root: Path,
     jobs: Sequence[Job],
     trial: Trial,
+    tabulate: str,
     shuffle: bool = False,
 ) -> Progress:
     """A benchmark's sweep through its journal at ``path`` with its command line's ``--resume``,
     ``--restart``, ``--jobs`` and ``--stop-after`` (:func:`open_sweep` on the tree at ``root``,
     :func:`run_sweep`):
     a journal it cannot continue is the parser's error; a sweep that stops with trials left
-    says how to go on."""
+    says how to go on, and how to tabulate them so far (``tabulate``: the tool's option)."""
     try:
         book, done = open_sweep(path, sweep, root, resume=args.resume, restart=args.restart)
     except JournalError as exc:
@@ -169,5 +203,5 @@ def sweep_in_journal(
         print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
     progress = run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle)
     if not progress.complete:
-        print(progress.stopped(path, args.stop_after))
+        print(progress.stopped(path, args.stop_after, tabulate))
     return progress

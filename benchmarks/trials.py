@@ -1,7 +1,10 @@
-"""Running one benchmark trial until its first detection (``bench_zoo.run_one``'s
-``stop_at_detection``): the trial's process group is killed once its logs show a detection and
-the snapshot that records its first input. The time to first detection is the engine's own
-timestamp in its divergence log, so stopping, and how long the kill takes, do not change it."""
+"""Running one benchmark trial and reading what it found (``bench_zoo.run_one``).
+
+``run_until_detection`` runs it until its first detection (``stop_at_detection``): the trial's
+process group is killed once its logs show a detection and the snapshot that records its first
+input. The time to first detection is the engine's own timestamp in its divergence log, so
+stopping, and how long the kill takes, do not change it. ``found_fields`` sums up its logged
+divergences; ``replay_fidelity`` replays its crash files in a new process."""
 
 from __future__ import annotations
 
@@ -10,11 +13,13 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from benchmarks.zoo import Bug
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS
 
 NOT_DETECTIONS = {"ill_conditioned", "known_limitation", "flaky"}
@@ -140,3 +145,45 @@ def run_until_detection(cmd: list[str], artifacts: Path, timeout: float, cwd: Pa
         if process.returncode is None:  # timed out, or interrupted
             _kill_group(process)
             process.wait()
+
+
+def found_fields(hits: list[dict[str, Any]]) -> tuple[str, ...]:
+    """``kind field: largest difference unit`` per (kind, field) of the logged divergences."""
+    largest: dict[tuple[str, str], tuple[float, str]] = {}
+    for r in hits:
+        key = (str(r.get("kind")), str(r.get("field")))
+        diff = float(r.get("difference") or 0.0)
+        if key not in largest or diff > largest[key][0]:
+            largest[key] = (diff, str(r.get("unit") or ""))
+    return tuple(f"{k} {f}: {d:.2g} {u}".rstrip() for (k, f), (d, u) in sorted(largest.items()))
+
+
+def replay_fidelity(bug: Bug, artifacts: Path, root: Path) -> tuple[int, int, tuple[str, ...]]:
+    """Replay every crash file of a run in one new process, in the tree at ``root``: (files,
+    same signature, misses)."""
+    crashes = sorted(
+        p for p in artifacts.glob("crash-*") if p.suffix != ".json" and Path(f"{p}.json").is_file()
+    )
+    if not crashes:
+        return 0, 0, ()
+    done = subprocess.run(
+        [sys.executable, str(root / "fuzz_diff.py"), *map(str, crashes), f"--targets=native,{bug.target}"],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        env=dict(os.environ, PYTHONPATH=str(root)),
+    )
+    same, misses = 0, []
+    for path in crashes:
+        line = next(
+            (ln for ln in done.stdout.splitlines() if ln.startswith(f"{path}:")),
+            f"no verdict (exit {done.returncode}: {done.stderr.strip()[-300:]})",
+        )
+        if "still diverges (same signature)" in line:
+            same += 1
+        else:
+            kind = json.loads(path.with_name(path.name + ".json").read_text())["signature"]["kind"]
+            misses.append(f"{kind}: {line.removeprefix(f'{path}: ')}")
+    return len(crashes), same, tuple(misses)

@@ -93,6 +93,7 @@ def test_stop_after_starts_no_trial_past_its_minutes(
     assert len(runs) == 3 and len(fake.calls) == 3
     said = capsys.readouterr().out
     assert "3 of 8 trials done" in said and "about 0.1 hours at this run's pace" in said  # 5 x 60 s
+    assert f"--from-json {tmp_path / 'deep-quick.jsonl'} tabulates them so far" in said
     assert len(journal.read(tmp_path / "deep-quick.jsonl")[1]) == 3
     # a journal so far is tabulated as a results file, its counts per cell as they are
     journal_so_far = str(tmp_path / "deep-quick.jsonl")
@@ -269,8 +270,43 @@ def test_bench_zoo_keeps_a_journal_too_and_runs_in_a_seeded_random_order(
     fake.calls.clear()
     part = bench_zoo.main([*sweep, *out, "--stop-after", "2.5"])
     assert part == {"runs": part["runs"], "complete": False} and fake.calls == order[:3]
-    assert "3 of 8 trials done" in capsys.readouterr().out and not (tmp_path / "zoo.json").exists()
+    said = capsys.readouterr().out
+    assert "3 of 8 trials done" in said and not (tmp_path / "zoo.json").exists()
+    # the stop names bench_zoo's own way to tabulate a journal so far, and it does
+    assert f"--render {tmp_path / 'zoo.jsonl'} tabulates them so far" in said
+    shown = bench_zoo.main(["--render", str(tmp_path / "zoo.jsonl")])
+    assert shown["runs"] == part["runs"]
+    said = capsys.readouterr().out
+    assert (
+        said.startswith("A sweep in progress: 3 of its 8 runs so far")
+        and "| off_by_tolerance | move |" in said
+    )
+    for extra, says in (
+        (("--write-md",), "a journal so far is no finished table"),  # BENCHMARKS.md keeps its table
+    ):
+        with pytest.raises(SystemExit):
+            bench_zoo.main(["--render", str(tmp_path / "zoo.jsonl"), *extra])
+        assert says in capsys.readouterr().err
     kept = (tmp_path / "zoo.jsonl").read_bytes()
+    header = json.loads(kept.split(b"\n")[0])
+    for name, text, says in (
+        ("no-header.jsonl", kept.split(b"\n", 1)[1], "not a bench_zoo journal"),
+        ("bad-engines.jsonl", kept.replace(b'"engines": [', b'"engines": [1, ', 1), "the header's engines"),
+        (
+            "unknown.jsonl",
+            kept.replace(b'"off_by_tolerance"', b'"no_such_bug"', 1),
+            "unknown bugs ['no_such_bug']",
+        ),
+        ("garbage.json", b"\xff[", "not a bench_zoo result or journal"),
+        ("missing.json", None, "not a bench_zoo result or journal"),
+    ):
+        if text is not None:
+            (tmp_path / name).write_bytes(text)
+        with pytest.raises(SystemExit):  # a clear error naming the file, not a traceback
+            bench_zoo.main(["--render", str(tmp_path / name)])
+        err = capsys.readouterr().err
+        assert says in err and name in err, (name, err)
+    assert header["engines"] == ["full", "uniform"]
     for extra, says in (
         ((), "holds an unfinished sweep: --resume"),
         (("--resume", "--replay"), "written for another sweep (replay False, this run's True)"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import signal
 import sys
@@ -44,6 +45,36 @@ def test_time_comparison_margins() -> None:
     assert zoo_tables.compare_times(1.6, 1.7) == "tie"  # within 0.25 s
     assert zoo_tables.compare_times(2.0, 6.0) == "faster"
     assert zoo_tables.compare_times(9.0, 3.0) == "slower"
+
+
+def test_a_baseline_gets_no_verdict_on_a_bug_it_did_not_run() -> None:
+    """The baselines have no scenario op: a scenario bug is no win of the full engine over
+    them (before, the missing cell counted as a baseline that never detected: "faster")."""
+    runs = [
+        bench_zoo.Run(bug, engine, 1, 10.0, 1.0, 1, 10, 10.0, BY_NAME[bug].op, 0)
+        for bug, engines in (
+            ("start_state_home", ("full", "libfuzzer")),
+            ("off_by_tolerance", ("full", "paper")),
+        )
+        for engine in engines
+    ]
+    engines, bugs = ("full", "libfuzzer", "paper"), ("start_state_home", "off_by_tolerance")
+    result = {
+        "mode": "test",
+        "engines": list(engines),
+        "bugs": list(bugs),
+        "seeds": 1,
+        "budget": 10.0,
+        "jobs": 1,
+        "cpus": 2,
+        "machine": "x",
+        "command": "c",
+        "runs": [dataclasses.asdict(r) for r in runs],
+        "cells": zoo_tables.summarize(runs, engines, bugs),
+    }
+    text = zoo_tables.markdown(result)
+    assert "- vs libfuzzer, 1 bugs: 0 faster, 1 tie, 0 slower" in text
+    assert "- vs paper, 1 bugs: 0 faster, 1 tie, 0 slower" in text
 
 
 def test_a_small_benchmark_run(tmp_path: Path) -> None:
