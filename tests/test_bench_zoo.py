@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import signal
 import sys
@@ -12,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import native
-from benchmarks import bench_zoo, trials, zoo_tables
+from benchmarks import bench_zoo, journal, trials, zoo_tables
 from benchmarks.zoo import BY_NAME, CONTROL, ZOO
 from fuzzer.execution.targets import load_target
 
@@ -59,19 +58,8 @@ def test_a_baseline_gets_no_verdict_on_a_bug_it_did_not_run() -> None:
         for engine in engines
     ]
     engines, bugs = ("full", "libfuzzer", "paper"), ("start_state_home", "off_by_tolerance")
-    result = {
-        "mode": "test",
-        "engines": list(engines),
-        "bugs": list(bugs),
-        "seeds": 1,
-        "budget": 10.0,
-        "jobs": 1,
-        "cpus": 2,
-        "machine": "x",
-        "command": "c",
-        "runs": [dataclasses.asdict(r) for r in runs],
-        "cells": zoo_tables.summarize(runs, engines, bugs),
-    }
+    sweep = journal.Sweep("test", bugs, engines, 1, 10.0, "c" * 40, "bench_zoo")
+    result = {**bench_zoo.result_of(sweep, runs), "jobs": 1, "cpus": 2, "machine": "x", "command": "c"}
     text = zoo_tables.markdown(result)
     assert "- vs libfuzzer, 1 bugs: 0 faster, 1 tie, 0 slower" in text
     assert "- vs paper, 1 bugs: 0 faster, 1 tie, 0 slower" in text
