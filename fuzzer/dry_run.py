@@ -44,6 +44,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.corpus import (
     aligned_cases,
     boundary_cases,
+    literal_cases,
     orientation_cases,
     reach_cases,
     space_filling_count,
@@ -98,6 +99,15 @@ kinematics code branches; ``fuzzer.generation.spacefill.Aligned``) of the first 
 one input each (about 0.1 ms for ``fk``, 0.5 ms for ``move``). On the default robot 10% of them
 show ``rpy_gimbal_band`` (a gimbal-lock branch of a roll-pitch-yaw conversion), which no
 uniform configuration of 2,000 did."""
+
+LITERALS = 16
+"""Configurations with joints at the numbers the Python targets compare against
+(``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates after
+its boundary probes, before the rest of its uniform configurations. With them `per_joint_band`
+(a band 2e-5 wide starting at a module constant) was found 3.2 times sooner (1.76 against
+0.54 s from process start, 10 trials, p = 0.00018), no zoo bug's search significantly longer
+but `ik_status_misread`'s, by 12 ms (p = 0.045); placed first, before the probes, they cost
+the boundary bugs 30-50 ms (BENCHMARKS.md, sixth session of 2026-11-26, item 6)."""
 
 UNIFORM = {"move": 128}
 """Uniform random configurations the dry run evaluates in all, one input each, per op, ``EARLY``
@@ -199,7 +209,8 @@ class Stages:
     The first starts before the Hypothesis seeds exist (making 32 costs the campaign 75-95 ms):
     a pose campaign's orientation and reach probes, the first ``EARLY`` uniform sweeps (``fk``)
     or ``LEAD`` configurations (``move``), ``ALIGNED`` aligned configurations, the boundary
-    probes, then the rest of ``EARLY``'s configurations.
+    probes, ``LITERALS`` configurations at the targets' compared numbers, then the rest of
+    ``EARLY``'s configurations.
     The second starts once they exist: the seeds, then the rest of the uniform work
     (``SWEEPS``, ``UNIFORM``). On one CPU the campaign waits for each child before it goes on
     (``launch``); on two, the children run while the campaign starts up.
@@ -228,6 +239,7 @@ class Stages:
     make_harness: MakeHarness
     children: list[DryRun] = field(default_factory=list)
     _first_count: int = 0
+    _literal_at: int = 0
 
     def _base(self) -> list[TestCase]:
         """The message a sweep's rows go into: the zero message of the campaign's type."""
@@ -249,8 +261,19 @@ class Stages:
         )
         reach = reach_cases(session, self.seed + SWEEP_SEED, wanted + len(probes) + count + len(aligned))
         cases = orientation + reach + uniform[:LEAD] + aligned + probes + uniform[LEAD:]
+        self._literal_at = len(cases) - len(uniform[LEAD:])  # where literal_cases go (first)
         self._first_count = len(cases)
         return cases
+
+    def literal_cases(self) -> list[TestCase]:
+        """The first ``LITERALS`` configurations with joints at the numbers the Python targets
+        compare against (``corpus.literal_cases``), numbered after the second stage's inputs.
+        The first stage makes them in its child, once its boundary probes have run: reading the
+        targets' source takes 5-16 ms, which the campaign's start-up would otherwise wait for."""
+        op = self.session.config.op
+        rest = UNIFORM.get(op, 0) - min(EARLY.get(op, 0), UNIFORM.get(op, 0))
+        first = self.wanted + self._first_count + rest  # after second_cases' numbers
+        return literal_cases(self.session, LITERALS, first)
 
     def second_cases(self, seeds: list[TestCase]) -> list[TestCase]:
         """The second stage's inputs (besides its sweeps): the seeds, then the rest of the
@@ -267,7 +290,9 @@ class Stages:
 
         def work() -> None:
             made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED)
-            evaluate(self.make_harness(self._base(), made), cases, before=early)
+            harness, at = self.make_harness(self._base(), made), self._literal_at
+            evaluate(harness, cases[:at], before=early)
+            evaluate(harness, self.literal_cases() + cases[at:])  # made here: off the start-up
 
         self._launch(work)
 

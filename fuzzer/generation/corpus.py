@@ -168,6 +168,22 @@ def aligned_cases(session: Session, n: int, seed: int, first: int = 0) -> list[T
     return configuration_cases(session, [stream.next() for _ in range(n)], ALIGNED, first)
 
 
+def literal_cases(session: Session, n: int, first: int = 0) -> list[TestCase]:
+    """``configuration_cases`` of up to ``n`` configurations with joints at the numbers the
+    Python targets compare against (``fuzzer.generation.literals``; their modules' source is
+    parsed, never run), lineage ``spacefill:literal``."""
+    from fuzzer.execution.targets import module_of
+    from fuzzer.generation.literals import literal_configurations, module_numbers
+    from fuzzer.selection.state import LITERAL
+
+    if n <= 0 or not session.reference.joint_limits:
+        return []
+    modules = [module_of(spec) for spec in session.config.targets if spec != "native"]
+    facts = session.facts()
+    configurations = literal_configurations(module_numbers(modules), facts.lower, facts.upper, n)
+    return configuration_cases(session, configurations, LITERAL, first)
+
+
 def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
     """The orientation probes of a pose-target campaign (``ik``): the pose FK gives at the robot's
     home configuration (where an IK seeded there converges at once), its quaternion scaled to each

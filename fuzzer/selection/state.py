@@ -26,6 +26,10 @@ the ``spacefill`` arm made it."""
 UNIFORM = f"{SPACEFILL}:uniform"
 """The lineage name of a dry run's uniform random configuration (``corpus.uniform_cases``)."""
 
+LITERAL = f"{SPACEFILL}:literal"
+"""The lineage name of a dry run's configuration with a joint at a number a target compares
+against (``corpus.literal_cases``)."""
+
 
 ALIGNED = "aligned"
 """The arm (and lineage name) of a fresh aligned configuration: every joint at a multiple of

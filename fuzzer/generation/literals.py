@@ -1,0 +1,112 @@
+"""Numbers the Python targets compare against, read from their source: AFL++'s autodictionary
+and libFuzzer's ``-dict``, for floats. The source is parsed (``ast``), never run.
+
+``compared_numbers`` collects the numeric operands of every comparison (``4.0 <= v < 4.05``:
+4.0 and 4.05), a module-level name bound to a number standing for it (``LOW <= v``, with
+``LOW = 0.86131``); ``literal_configurations`` puts them into joint configurations inside the
+limits. The full engine's dry run evaluates the first ``fuzzer.dry_run.LITERALS`` of them
+(``fuzzer.generation.corpus.literal_cases``). Only each target's own module is read (the
+module of its spec, ``benchmarks.zoo.deep`` for ``benchmarks.zoo.deep:wrap_past_pi``), not
+its submodules or what it imports.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import sys
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+
+def _number(node: ast.AST, names: dict[str, float]) -> float | None:
+    """The finite number ``node`` stands for: a literal, a negated one, or a module-level name."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = _number(node.operand, names)
+        return None if value is None else (-value if isinstance(node.op, ast.USub) else value)
+    if isinstance(node, ast.Name):
+        return names.get(node.id)
+    if (
+        isinstance(node, ast.Constant)
+        and isinstance(node.value, (int, float))
+        and not isinstance(node.value, bool)
+    ):
+        value = float(node.value)
+        return value if math.isfinite(value) else None
+    return None
+
+
+def _module_names(tree: ast.Module) -> dict[str, float]:
+    """Module-level ``NAME = number`` and ``A, B = number, number`` bindings."""
+    names: dict[str, float] = {}
+    for stmt in tree.body:
+        if not isinstance(stmt, ast.Assign):
+            continue
+        for target in stmt.targets:
+            pairs: list[tuple[ast.AST, ast.AST]] = [(target, stmt.value)]
+            if isinstance(target, ast.Tuple) and isinstance(stmt.value, ast.Tuple):
+                pairs = list(zip(target.elts, stmt.value.elts, strict=False))
+            for name, value in pairs:
+                number = _number(value, {})
+                if isinstance(name, ast.Name) and number is not None:
+                    names[name.id] = number
+    return names
+
+
+def compared_numbers(source: str) -> list[float]:
+    """The numbers compared against in Python ``source``, in the order met (none when it does
+    not parse)."""
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError):
+        return []
+    names = _module_names(tree)
+    found: dict[float, None] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            for operand in (node.left, *node.comparators):
+                value = _number(operand, names)
+                if value is not None:
+                    found.setdefault(value, None)
+    return list(found)
+
+
+def module_numbers(modules: Iterable[str]) -> list[float]:
+    """``compared_numbers`` of the source files of the loaded ``modules`` (a module not loaded,
+    or not from a ``.py`` file, has none)."""
+    found: dict[float, None] = {}
+    for name in modules:
+        module = sys.modules.get(name)
+        path = getattr(module, "__file__", None)
+        if not isinstance(path, str) or not path.endswith(".py"):
+            continue
+        try:
+            source = Path(path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            continue
+        for value in compared_numbers(source):
+            found.setdefault(value, None)
+    return list(found)
+
+
+def literal_configurations(
+    numbers: Sequence[float], lower: Sequence[float], upper: Sequence[float], limit: int
+) -> list[tuple[float, ...]]:
+    """Configurations with joints at the ``numbers``: first one per number, every joint whose
+    limits hold it at it (the others in the middle of the joint box, 0 when unlimited), then
+    one per (number, joint); 0 is left out (the aligned configurations have it); at most
+    ``limit``, numbers in order."""
+    middle = tuple(
+        0.0 if not (math.isfinite(lo) and math.isfinite(hi)) else (lo + hi) / 2
+        for lo, hi in zip(lower, upper, strict=True)
+    )
+    values = [v for v in numbers if v != 0.0]
+    inside = [[j for j, (lo, hi) in enumerate(zip(lower, upper, strict=True)) if lo < v < hi] for v in values]
+    out: list[tuple[float, ...]] = []
+    for value, joints in zip(values, inside, strict=True):
+        if joints:
+            out.append(tuple(value if j in joints else m for j, m in enumerate(middle)))
+    for value, joints in zip(values, inside, strict=True):
+        if len(joints) > 1:
+            out += [(*middle[:j], value, *middle[j + 1 :]) for j in joints]
+    return out[: max(0, limit)]

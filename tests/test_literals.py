@@ -1,0 +1,94 @@
+"""The numbers the Python targets compare against, read from their source (fuzzer.generation.literals)."""
+
+from __future__ import annotations
+
+import math
+import sys
+import types
+
+from fuzzer.generation.literals import (
+    compared_numbers,
+    literal_configurations,
+    module_numbers,
+)
+
+SOURCE = """
+LOW, HIGH = 0.86131, 0.86133
+LIMIT = -2.5
+FLAG = True
+
+def f(v, q):
+    if 4.0 <= v < 4.05 and q[0] > LIMIT:
+        return [x + 1 if LOW <= x < HIGH else x for x in q]
+    if v == -1e-3 or v is True or v < float("inf") or v != "a":
+        return 7.5  # not compared: no number
+    return v > UNKNOWN
+"""
+
+
+def test_the_compared_numbers_are_the_literals_and_module_constants_of_comparisons() -> None:
+    numbers = compared_numbers(SOURCE)
+    assert sorted(numbers) == sorted([4.0, 4.05, -2.5, 0.86131, 0.86133, -1e-3])
+    assert 7.5 not in numbers and 1.0 not in numbers  # an assignment or a sum is not a comparison
+
+
+def test_a_source_that_does_not_parse_has_none_and_is_never_run() -> None:
+    assert compared_numbers("def (:\n") == []
+    assert compared_numbers("import os\nos.remove('/nonexistent') if 1 < 2 else None\n") == [1.0, 2.0]
+
+
+def test_module_numbers_read_loaded_python_modules_only() -> None:
+    assert module_numbers(["no.such.module", "math"]) == []  # not loaded / not a .py file
+    name = "fuzzer_test_literals_module"
+    module = types.ModuleType(name)
+    sys.modules[name] = module
+    try:
+        module.__file__ = "/nonexistent/module.py"
+        assert module_numbers([name]) == []  # unreadable: none, no error
+    finally:
+        del sys.modules[name]
+
+
+def test_configurations_put_each_number_on_every_joint_that_holds_it_then_one_joint_at_a_time() -> None:
+    lower, upper = [-6.0, -6.0, -1.0], [6.0, 6.0, 3.0]
+    made = literal_configurations([0.0, 4.0, 1.5, 9.0], lower, upper, 64)
+    middle = (0.0, 0.0, 1.0)
+    assert made[0] == (4.0, 4.0, middle[2])  # joint 2's limits do not hold 4.0
+    assert made[1] == (1.5, 1.5, 1.5)
+    assert made[2:] == [(4.0, 0.0, 1.0), (0.0, 4.0, 1.0), (1.5, 0.0, 1.0), (0.0, 1.5, 1.0), (0.0, 0.0, 1.5)]
+    assert all(lo <= v <= hi for q in made for v, lo, hi in zip(q, lower, upper, strict=True))
+    unlimited = literal_configurations([2.0], [-math.inf], [math.inf], 64)
+    assert unlimited == [(2.0,)]
+    many = literal_configurations([0.1 * k for k in range(1, 200)], [-30.0] * 6, [30.0] * 6, 16)
+    assert many == [(0.1 * k,) * 6 for k in range(1, 17)]  # every joint at a number first
+
+
+def test_the_dry_run_puts_a_targets_numbers_after_its_boundary_probes() -> None:
+    """``per_joint_band``'s band starts at a module constant of ``benchmarks/zoo/deep.py``."""
+    from benchmarks.zoo.deep import CORRECTED_FROM
+    from fuzzer import dry_run
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.selection.state import BOUNDARY, LITERAL, UNIFORM
+
+    session = Session.open(RunConfig(op="move", targets=("native", "benchmarks.zoo.deep:per_joint_band")))
+    stages = dry_run.Stages(session, "rrosfuzz", 1, 8, 0, lambda *_: None)  # type: ignore[arg-type]
+    first = stages.first_cases()
+    at = stages._literal_at
+    assert first[at - 1].lineage == (BOUNDARY,) and all(c.lineage == (UNIFORM,) for c in first[at:])
+    literal = stages.literal_cases()
+    assert 0 < len(literal) <= dry_run.LITERALS and all(c.lineage == (LITERAL,) for c in literal)
+    numbers = [c.sequence for c in [*first, *stages.second_cases([]), *literal]]
+    assert len(set(numbers)) == len(numbers)  # numbered after every other input
+    assert any(CORRECTED_FROM in _values(c.message) for c in literal)  # a joint in the band
+    default = dry_run.Stages(Session.open(RunConfig(op="move")), "rrosfuzz", 1, 8, 0, lambda *_: None)  # type: ignore[arg-type]
+    default.first_cases()
+    assert default.literal_cases() == []  # the twin's package module compares against no number
+
+
+def _values(message: object) -> list[float]:
+    """Every float of a message (nested dicts and lists)."""
+    if isinstance(message, dict):
+        return [v for x in message.values() for v in _values(x)]
+    if isinstance(message, list):
+        return [v for x in message for v in _values(x)]
+    return [message] if isinstance(message, float) else []
