@@ -18,7 +18,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import boundary_cases
 from fuzzer.generation.sweep import CONFIRM, ROWS
-from fuzzer.selection.state import ALIGNED, BOUNDARY, SPACEFILL
+from fuzzer.selection.state import ALIGNED, BOUNDARY, LITERAL, SPACEFILL
 from tests.support import ROOT, fuzz, python
 
 ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
@@ -82,8 +82,15 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     early = dry_run.EARLY["fk"]
     # every sweep flags rows of a fault every input shows; CONFIRM of them go to the single call
     ran = last[first]["executed_by_strategy"]
-    assert ran == {SWEPT: early * CONFIRM, ALIGNED: dry_run.ALIGNED["fk"], BOUNDARY: ran[BOUNDARY]}
+    assert ran == {
+        SWEPT: early * CONFIRM,
+        ALIGNED: dry_run.ALIGNED["fk"],
+        BOUNDARY: ran[BOUNDARY],
+        LITERAL: ran[LITERAL],
+    }
     assert ran[BOUNDARY] > 0, "the boundary probes"
+    # benchmarks/zoo/bugs.py compares against 3.0 and 1.0: the zoo arm's joints that hold them
+    assert 0 < ran[LITERAL] <= dry_run.LITERALS, "configurations at the target's compared numbers"
     assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: (dry_run.SWEEPS - early) * CONFIRM}
     assert [last[pid]["sweep"]["compared"] for pid in (first, second)] == [
         early * ROWS,
