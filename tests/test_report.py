@@ -432,17 +432,19 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return artifacts, write_report(artifacts, trust=True)  # its sidecars name the tests' plugin targets
 
 
-def _dry_run(robot: str) -> int:
-    """The inputs a move campaign's dry run evaluates on ``robot`` besides its 32 seeds (both
-    stages: uniform and aligned configurations, boundary probes)."""
+def _dry_run(robot: str, target: str) -> int:
+    """The inputs a move campaign's dry run evaluates on ``robot`` against ``target`` besides
+    its 32 seeds (both stages: uniform and aligned configurations, boundary probes, and the
+    configurations at the numbers the target's module compares against)."""
     from fuzzer import dry_run
     from fuzzer.execution.session import RunConfig, Session
 
     def no_harness(*_: object) -> Any:
         raise AssertionError("counting the inputs makes no harness")
 
-    stages = dry_run.Stages(Session.open(RunConfig(robot=robot)), "rrosfuzz", 1, 32, 0, no_harness)
-    return len(stages.first_cases()) + len(stages.second_cases([]))
+    session = Session.open(RunConfig(robot=robot, targets=("native", target)))
+    stages = dry_run.Stages(session, "rrosfuzz", 1, 32, 0, no_harness)
+    return len(stages.first_cases()) + len(stages.second_cases([])) + len(stages.literal_cases())
 
 
 def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
@@ -456,7 +458,8 @@ def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
     # input, which is not a test case and not counted; each campaign's dry run (its own
     # processes, fuzzer/dry_run.py) evaluated its 32 Hypothesis seeds, its robot's boundary
     # probes and its uniform and aligned configurations
-    dry = sum(32 + _dry_run(robot) for robot in ("probot_anno", "kinova"))
+    plugins = (("probot_anno", "tight_tolerance"), ("kinova", "wrap_continuous"))
+    dry = sum(32 + _dry_run(robot, f"tests.plugins.faults:{fault}") for robot, fault in plugins)
     assert data.summary.executions == 2 * 2999 + dry, "both campaigns' processes, last snapshot each"
     assert {"probot_anno", "kinova"} <= set(data.summary.robots)
     kinds = {b.kind for b in data.buckets}
