@@ -265,21 +265,23 @@ class Stages:
         self._first_count = len(cases)
         return cases
 
+    def _later_uniform(self) -> int:
+        """Uniform configurations the second stage evaluates (``UNIFORM`` less ``EARLY``)."""
+        op = self.session.config.op
+        return UNIFORM.get(op, 0) - min(EARLY.get(op, 0), UNIFORM.get(op, 0))
+
     def literal_cases(self) -> list[TestCase]:
         """The first ``LITERALS`` configurations with joints at the numbers the Python targets
         compare against (``corpus.literal_cases``), numbered after the second stage's inputs.
         The first stage makes them in its child, once its boundary probes have run: reading the
         targets' source takes 5-16 ms, which the campaign's start-up would otherwise wait for."""
-        op = self.session.config.op
-        rest = UNIFORM.get(op, 0) - min(EARLY.get(op, 0), UNIFORM.get(op, 0))
-        first = self.wanted + self._first_count + rest  # after second_cases' numbers
+        first = self.wanted + self._first_count + self._later_uniform()  # after second_cases' numbers
         return literal_cases(self.session, LITERALS, first)
 
     def second_cases(self, seeds: list[TestCase]) -> list[TestCase]:
         """The second stage's inputs (besides its sweeps): the seeds, then the rest of the
         uniform configurations."""
-        op = self.session.config.op
-        count = UNIFORM.get(op, 0) - min(EARLY.get(op, 0), UNIFORM.get(op, 0))
+        count = self._later_uniform()
         first = self.wanted + self._first_count  # numbered after the first stage's (first_cases)
         return seeds + uniform_cases(self.session, count, self.seed + SWEEP_SEED + 1, first)
 
