@@ -141,6 +141,50 @@ def test_point_count_is_exact_and_reported_before_values() -> None:
     assert (c.kind, c.field, c.difference, c.unit) == (Kind.VALUE, "plan.trajectory.points", 1, "points")
 
 
+def knife_edge_pair(gap: float, end: tuple[float, float] = (0.5, 0.5)) -> tuple[Outcome, Outcome]:
+    """Two plans of one move whose durations straddle a multiple of the sample period: the
+    first keeps a sample ``gap`` s before its end (a rounding error when ``gap`` is tiny)."""
+    shorter = PLAN
+    times = (0.0, 0.5, 1.0, 1.0 + gap)
+    positions = (0.0, 0.0, 0.25, 0.25, 0.5 - 1e-12, 0.5 - 1e-12, *end)
+    longer = ok(
+        success=(1.0,),
+        trajectory__time_from_start=times,
+        trajectory__positions=positions,
+        trajectory__velocities=(0.0, 0.0, 0.0, 0.0, 1e-3, 1e-3, 0.0, 0.0),
+        trajectory__accelerations=(0.0, 0.0, 0.0, 0.0, -1.0, -1.0, 0.0, 0.0),
+        joint_values=(0.0, 0.0),
+    )
+    return longer, shorter
+
+
+def test_a_sample_on_the_knife_edge_of_the_end_is_no_divergence() -> None:
+    # native's T a rounding error past a multiple of dt keeps the sample at that multiple; the
+    # twin's T on it does not (tests/regressions/minimized-95a7cc93...: 104.75000000000003 s)
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    longer, shorter = knife_edge_pair(3e-14)
+    assert judge(call, run(first, longer), run(first, shorter)).kind is Kind.AGREE
+    assert judge(call, run(first, shorter), run(first, longer)).kind is Kind.AGREE
+
+
+@pytest.mark.parametrize("gap", [2e-9, 1e-3, 0.5])
+def test_a_sample_farther_from_the_end_still_counts(gap: float) -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    longer, shorter = knife_edge_pair(gap)
+    c = judge(call, run(first, longer), run(first, shorter))
+    assert (c.kind, c.field, c.difference) == (Kind.VALUE, "plan.trajectory.points", 1)
+
+
+def test_the_rest_of_a_knife_edge_trajectory_is_still_compared() -> None:
+    call = scenario("joint_target", "plan")
+    first = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    longer, shorter = knife_edge_pair(3e-14, end=(0.5, 0.6))  # its end point is elsewhere
+    c = judge(call, run(first, longer), run(first, shorter))
+    assert (c.kind, c.field, c.joints) == (Kind.VALUE, "plan.trajectory.positions", (1,))
+
+
 def test_a_value_on_one_side_only_diverges() -> None:
     call = scenario("go")
     c = judge(call, run(ok(joint_values=(0.0, 0.0))), run(ok(joint_values=(0.0, 0.0), success=(1.0,))))
