@@ -151,8 +151,13 @@ class Harness:
 
 
 def main(argv: list[str]) -> None:
-    """Run libFuzzer over ``argv`` (flags and corpus directories) plus the seeds."""
-    scratch = Path(tempfile.mkdtemp(prefix="fuzz-urdf-"))
+    """Run libFuzzer over ``argv`` (flags and corpus directories) plus the seeds. The seeds,
+    the dictionary and the harness's file go to ``RROSFUZZ_URDF_SCRATCH`` (a folder, made if
+    missing) or else a new temporary folder: libFuzzer ends the process, so nothing here can
+    remove it afterwards; the test gives its own ``tmp_path``."""
+    named = os.environ.get("RROSFUZZ_URDF_SCRATCH")
+    scratch = Path(named) if named else Path(tempfile.mkdtemp(prefix="fuzz-urdf-"))
+    scratch.mkdir(parents=True, exist_ok=True)
     seeds = _write_seeds(scratch)
     flags = [a for a in argv[1:] if a.startswith("-")]
     dirs = [a for a in argv[1:] if not a.startswith("-")]

@@ -52,6 +52,7 @@ def _asan_env() -> dict[str, str] | None:
 def test_native_loader_survives_fuzzing(tmp_path: Path, flavour: str) -> None:
     env = dict(os.environ)
     env.pop("RROSFUZZ_NATIVE_MODULE", None)
+    env["RROSFUZZ_URDF_SCRATCH"] = str(tmp_path / "scratch")  # not a folder left in /tmp per run
     if flavour == "asan":
         build = subprocess.run(
             ["make", "-s", "native-cov"], cwd=REPO, capture_output=True, text=True, timeout=1200, check=False
@@ -71,3 +72,4 @@ def test_native_loader_survives_fuzzing(tmp_path: Path, flavour: str) -> None:
     assert proc.returncode == 0, tail
     assert f"Done {RUNS[flavour]} runs" in proc.stderr, tail
     assert not list(tmp_path.glob("crash-*")) and not list(tmp_path.glob("timeout-*")), tail
+    assert (tmp_path / "scratch" / "urdf.dict").is_file()  # the harness used the test's folder
