@@ -162,7 +162,7 @@ def _switches(a: Outcome, b: Outcome, va: np.ndarray, vb: np.ndarray, dof: int) 
         return vb
     profiles = []
     for o, acc in ((a, va), (b, vb)):
-        times = np.asarray(o.values.get("trajectory.time_from_start", ()), dtype=float)
+        times = np.asarray(o.values.get(TIMES, ()), dtype=float)
         speeds = np.asarray(o.values.get("trajectory.velocities", ()), dtype=float)
         if not (times.size >= 3 and speeds.size == acc.size == times.size * dof):
             return vb
@@ -213,7 +213,7 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
                     value_divergence(f"{kind}.trajectory.points", abs(points[0] - points[1]), "points")
                 )
                 break
-            if key != "trajectory.time_from_start" and not (va.size == vb.size == points[0] * dof):
+            if key != TIMES and not (va.size == vb.size == points[0] * dof):
                 found.append(value_divergence(field_name, math.inf, "points"))
                 break
         elif va.size != vb.size:
@@ -224,7 +224,7 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
             c = absolute(field_name, va, vb, 0.0, "status")
         elif key == "fraction":
             c = absolute(field_name, va, vb, FRACTION_TOLERANCE, "fraction")
-        elif key == "trajectory.time_from_start":
+        elif key == TIMES:
             c = absolute(field_name, va, vb, TIME_TOLERANCE, "s")
         elif key in ("trajectory.velocities", "trajectory.accelerations"):
             speed = key.endswith("velocities")
