@@ -20,7 +20,9 @@ from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
 from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import absolute, extent_changed
+from fuzzer.scenario.oracle_timing import limits_of
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
+from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api import robots
 
 TOL = Tolerance(1e-6, 1e-6)
@@ -452,14 +454,31 @@ def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
     assert (replanned.kind, replanned.step) == (Kind.VALUE, 4)
 
 
+def timed(rows: list[tuple[float, float]], path: bool = False, scaling: float = 1.0) -> Outcome:
+    """A ``/plan`` from ``rows[0]`` to ``rows[-1]`` (or a ``/cartesian_path`` through ``rows``)
+    on FACTS' joints, timed by the contract (``python_impl.trajectory``) at ``scaling`` (both)."""
+    limits = limits_of(FACTS)
+    if path:
+        t = time_parameterize(limits, [list(r) for r in rows], scaling, scaling)
+    else:
+        t = plan_trajectory(limits, list(rows[0]), list(rows[-1]), scaling, scaling)
+    return ok(
+        success=(1.0,),
+        trajectory__time_from_start=tuple(np.asarray(t.time_from_start).tolist()),
+        trajectory__positions=tuple(np.asarray(t.positions).ravel().tolist()),
+        trajectory__velocities=tuple(np.asarray(t.velocities).ravel().tolist()),
+        trajectory__accelerations=tuple(np.asarray(t.accelerations).ravel().tolist()),
+        joint_values=(0.0, 0.0),
+    )
+
+
 def test_timing_of_ik_answers_that_differ_within_tolerance_is_a_known_limitation() -> None:
     call = scenario("pose_target", "plan")
     set_ = ok(joint_values=(0.0, 0.0))
-    a = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
-    later = with_value(a, "trajectory.time_from_start", (0.0, 0.5, 1.0 + 3e-9))
-    moved = with_value(later, "trajectory.positions", (0.0, 0.0, 0.25, 0.25, 0.5 + 1e-9, 0.5))
+    a, moved = timed([(0.0, 0.0), (0.5, 0.5)]), timed([(0.0, 0.0), (0.5 + 5e-7, 0.5)])
     c = judge(call, run(set_, a), run(set_, moved))
     assert (c.kind, c.field) == (Kind.KNOWN_LIMITATION, "plan.trajectory.time_from_start")
+    later = with_value(a, "trajectory.time_from_start", (*a.values["trajectory.time_from_start"][:-1], 1.5))
     same_answer = judge(call, run(set_, a), run(set_, later))  # same points, other timing: a bug
     assert (same_answer.kind, same_answer.field) == (Kind.VALUE, "plan.trajectory.time_from_start")
     joint_goal = scenario("joint_target", "plan")
@@ -467,13 +486,49 @@ def test_timing_of_ik_answers_that_differ_within_tolerance_is_a_known_limitation
     assert judge(joint_goal, run(target, a), run(target, moved)).kind is Kind.VALUE
 
 
+def test_timing_that_does_not_follow_a_targets_own_points_is_not_explained_by_their_gap() -> None:
+    """moveit/moveit#1065: compute_cartesian_path timed at full speed whatever the scaling. Two
+    IK answers a rounding-sized gap apart must not explain a path that lasts half as long."""
+    rows = [(0.0, 0.0), (0.2, 0.1), (0.4, 0.2), (0.6, 0.3)]
+    near = [(0.0, 0.0), (0.2 + 5e-7, 0.1), (0.4, 0.2), (0.6, 0.3)]
+    call = scenario(
+        "velocity_scaling",
+        "acceleration_scaling",
+        "cartesian_path",
+        velocity_scaling=0.5,
+        acceleration_scaling=0.5,
+    )
+    set_ = ok(joint_values=(0.0, 0.0))
+    right = run(set_, set_, timed(rows, path=True, scaling=0.5))
+    assert (
+        judge(call, right, run(set_, set_, timed(near, path=True, scaling=0.5))).kind is Kind.KNOWN_LIMITATION
+    )
+    fast = judge(call, right, run(set_, set_, timed(near, path=True, scaling=1.0)))
+    assert (fast.kind, fast.step, fast.field) == (Kind.VALUE, 2, "cartesian_path.trajectory.time_from_start")
+    # the same holds for a plan to an IK answer
+    call = scenario(
+        "velocity_scaling",
+        "acceleration_scaling",
+        "pose_target",
+        "plan",
+        velocity_scaling=0.5,
+        acceleration_scaling=0.5,
+    )
+    answer = [rows[0], (0.6 + 5e-7, 0.3)]
+    right = run(set_, set_, set_, timed(rows, scaling=0.5))
+    assert judge(call, right, run(set_, set_, set_, timed(answer, scaling=0.5))).kind is Kind.KNOWN_LIMITATION
+    assert judge(call, right, run(set_, set_, set_, timed(answer, scaling=1.0))).kind is Kind.VALUE
+
+
 def test_timing_from_start_states_apart_within_tolerance_is_a_known_limitation() -> None:
     call = scenario("go", "plan")
-    a = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
-    later = with_value(a, "trajectory.time_from_start", (0.0, 0.5, 1.0 + 3e-9))
-    here, near = ok(joint_values=(0.0, 0.0)), ok(joint_values=(1e-9, 0.0))
-    c = judge(call, run(here, a), run(near, later), FACTS_ANY_GOAL)
-    assert (c.kind, c.field, c.step) == (Kind.KNOWN_LIMITATION, "plan.trajectory.time_from_start", 1)
+    a, b = timed([(0.0, 0.0), (0.5, 0.5)]), timed([(5e-7, 0.0), (0.5, 0.5)])
+    later = with_value(a, "trajectory.time_from_start", (*a.values["trajectory.time_from_start"][:-1], 1.5))
+    here, near = ok(joint_values=(0.0, 0.0)), ok(joint_values=(5e-7, 0.0))
+    c = judge(call, run(here, a), run(near, b), FACTS_ANY_GOAL)
+    assert (c.kind, c.step) == (Kind.KNOWN_LIMITATION, 1)
+    assert c.field.startswith("plan.trajectory.")
+    assert judge(call, run(here, a), run(near, later), FACTS_ANY_GOAL).kind is Kind.VALUE
     assert judge(call, run(here, a), run(here, later), FACTS_ANY_GOAL).kind is Kind.VALUE
 
 
@@ -481,10 +536,10 @@ def test_timing_to_joint_goals_apart_within_tolerance_is_a_known_limitation() ->
     """control@scenario/ur5: /remember after an IK /go stored answers 3.2e-7 rad apart;
     /named_target and /plan from one state then timed the plans 2.1e-8 s apart."""
     call = scenario("joint_target", "plan")
-    a = trajectory([(0.0, 0.0), (0.25, 0.25), (0.5, 0.5)])
-    later = with_value(a, "trajectory.time_from_start", (0.0, 0.5, 1.0 + 3e-9))
+    a, b = timed([(0.0, 0.0), (0.5, 0.5)]), timed([(0.0, 0.0), (0.5 + 3e-7, 0.5)])
+    later = with_value(a, "trajectory.time_from_start", (*a.values["trajectory.time_from_start"][:-1], 1.5))
     goal, near = (ok(joint_target=g, joint_values=(0.0, 0.0)) for g in ((0.5, 0.5), (0.5 + 3e-7, 0.5)))
-    c = judge(call, run(goal, a), run(near, later), FACTS_ANY_GOAL)
+    c = judge(call, run(goal, a), run(near, b), FACTS_ANY_GOAL)
     assert (c.kind, c.field, c.step) == (Kind.KNOWN_LIMITATION, "plan.trajectory.time_from_start", 1)
     assert judge(call, run(goal, a), run(goal, later), FACTS_ANY_GOAL).kind is Kind.VALUE
 
@@ -846,6 +901,29 @@ def test_a_fault_of_the_second_go_is_found_by_scenario_and_not_by_move() -> None
     for step in steps[::2]:
         single = TestCase("sensor_msgs/JointState", step["msg"])
         assert move.evaluate(single, validated=True).comparison.kind is Kind.AGREE
+
+
+def test_a_path_timed_at_full_speed_from_the_same_answers_is_a_divergence() -> None:
+    """moveit/moveit#1065 (the zoo's cartesian_ignores_scaling): one long segment timed at full
+    speed under a velocity scaling of 0.02. Two points, both at rest, and an acceleration within
+    its unscaled limit: no property sees it, only the duration (1.41 s against 8.39 s). The IK
+    answers agree to rounding, so every nudge and the dead zone's re-run leave them equal; that
+    alone must not explain a timing the re-run still disagrees on."""
+    steps = [live("velocity_scaling", data=0.02), live("eef_step", data=5.0)]
+    for second, expected in (
+        ("benchmarks.zoo.stateful:cartesian_ignores_scaling", Kind.VALUE),
+        ("python", Kind.AGREE),
+    ):
+        ev = evaluator("scenario", second)
+        path = live("cartesian_path", header=HEADER, poses=[reachable_pose(ev)])
+        found = ev.evaluate(TestCase("rrosfuzz/Scenario", {"steps": [*steps, path]}), validated=True)
+        c = found.comparison
+        assert (c.kind, c.step) == (expected, None if expected is Kind.AGREE else 2), second
+        if expected is Kind.VALUE:
+            assert c.field == "cartesian_path.trajectory.time_from_start"
+            durations = [o.steps[2].values["trajectory.time_from_start"][-1] for o in found.outcomes]
+            assert durations[0] == pytest.approx(8.3933, abs=1e-3)
+            assert durations[1] == pytest.approx(1.4142, abs=1e-3)
 
 
 def reachable_pose(ev: Evaluator) -> dict[str, Any]:

@@ -325,9 +325,11 @@ class Evaluator:
         points that move under a nudge near a singularity do not explain a path that stops at
         10% on one target and completes on the other whatever the nudge. Last, the scenario is
         run once more with KDL's rotation dead zone in the twin (``dead_zone``): if the two
-        targets then agree at that step, the documented dead zone is the whole difference,
-        ``known_limitation``. Every re-run stops after that step: only its answer is judged,
-        and each scenario runs on a new ``MoveGroup``, so the steps after it cannot change it."""
+        targets then agree at that step (their answers, and the scenario oracle finds no counted
+        divergence: a path timed differently from the same answers is not the dead zone's), the
+        documented dead zone is the whole difference, ``known_limitation``. Every re-run stops
+        after that step: only its answer is judged, and each scenario runs on a new
+        ``MoveGroup``, so the steps after it cannot change it."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
@@ -373,7 +375,9 @@ class Evaluator:
             again = self.run_both(call, runners=runners) if swapped else ()
         explained = len(again) == 2 and all(step < len(o.steps) for o in again)
         if explained and not changed(again[0].steps[step], again[1].steps[step]):
-            return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+            still = self.judge(again, call)  # the dead zone explains only what it takes away
+            if not (still.divergent and still.kind not in UNCOUNTED):
+                return replace(comparison, kind=Kind.KNOWN_LIMITATION)
         return comparison
 
     def _out_of_time(self, longest: float) -> bool:
