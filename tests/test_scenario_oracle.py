@@ -520,6 +520,32 @@ def test_timing_that_does_not_follow_a_targets_own_points_is_not_explained_by_th
     assert judge(call, right, run(set_, set_, set_, timed(answer, scaling=1.0))).kind is Kind.VALUE
 
 
+def test_a_path_point_on_the_switch_of_a_triangular_profile_may_take_either_phase() -> None:
+    """A control campaign's false positive (PROBOT Anno, 2026-11-26): a path of equal segments
+    puts its middle point at half its length, where a triangular profile switches from
+    accelerating to decelerating; whether ``u <= total - ua`` holds there falls on the last bits
+    of two sums, so one target reported the cruise's 0 and the other the deceleration."""
+    rows = [(0.0, 0.0), (0.01, 0.005), (0.02, 0.01), (0.03, 0.015), (0.04, 0.02)]
+    a = timed(rows, path=True)
+    acc = np.asarray(a.values["trajectory.accelerations"]).reshape(-1, 2)
+    first, middle = acc[1].copy(), acc[2].copy()
+    assert np.all(first > 0.0) and np.array_equal(middle, first)  # the rounding took this side
+    call = scenario("cartesian_path")
+
+    def with_row(row: int, value: np.ndarray) -> Outcome:
+        changed = acc.copy()
+        changed[row] = value
+        return with_value(a, "trajectory.accelerations", tuple(changed.ravel().tolist()))
+
+    c = judge(call, run(a), run(with_row(2, 0.0 * first)))  # the cruise's 0, as in the field
+    assert (c.kind, c.field) == (Kind.KNOWN_LIMITATION, "cartesian_path.trajectory.accelerations")
+    # decelerating: equal segments make it row 3's value, which oracle_switch already accepts
+    assert judge(call, run(a), run(with_row(2, -first))).kind is Kind.AGREE
+    for wrong in (with_row(2, 2.0 * first), with_row(1, 0.0 * first)):  # a wrong value; not on a switch
+        c = judge(call, run(a), run(wrong))
+        assert (c.kind, c.field) == (Kind.VALUE, "cartesian_path.trajectory.accelerations")
+
+
 def test_timing_from_start_states_apart_within_tolerance_is_a_known_limitation() -> None:
     call = scenario("go", "plan")
     a, b = timed([(0.0, 0.0), (0.5, 0.5)]), timed([(5e-7, 0.0), (0.5, 0.5)])

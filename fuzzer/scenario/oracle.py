@@ -56,14 +56,13 @@ from fuzzer.scenario.oracle_ik import (
     value_divergence,
 )
 from fuzzer.scenario.oracle_properties import first_property
+from fuzzer.scenario.oracle_switch import ACCELERATION_TOLERANCE
 from fuzzer.scenario.steps import ScenarioCall
 
 TIME_TOLERANCE = 1e-9
 """time_from_start (s)."""
 VELOCITY_TOLERANCE = 1e-6
 """Trajectory velocities (rad/s or m/s)."""
-ACCELERATION_TOLERANCE = 1e-6
-"""Trajectory accelerations (rad/s^2 or m/s^2)."""
 
 ORDER = (
     "success",

@@ -52,7 +52,8 @@ from fuzzer.execution import oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
-from fuzzer.scenario.oracle_timing import timed_as_contract
+from fuzzer.scenario.oracle_switch import ACCELERATION_TOLERANCE
+from fuzzer.scenario.oracle_timing import phase_knife_edge, timed_as_contract
 from fuzzer.scenario.steps import ScenarioCall
 
 FRACTION_TOLERANCE = 1e-9
@@ -165,6 +166,9 @@ def classify(
     gap = max(_gap([(before[0].state or (), before[1].state or ())]), _goal_gap(kind, before, tol))
     if ik:
         if kind == "cartesian_path" and _knife_edge(call, i, before[0], facts):
+            return replace(c, kind=Kind.KNOWN_LIMITATION)
+        switch = kind == "cartesian_path" and c.field.endswith(".trajectory.accelerations")
+        if switch and phase_knife_edge(a, b, before, facts, ACCELERATION_TOLERANCE):
             return replace(c, kind=Kind.KNOWN_LIMITATION)
         pairs = ik_answers(kind, a, b, len(facts.joints))
         if pairs is None:

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+ACCELERATION_TOLERANCE = 1e-6
+"""Trajectory accelerations (rad/s^2 or m/s^2): the scenario oracle's tolerance on them."""
 SWITCH_TIME = 1e-9
 """A sample this close to a switch of the acceleration is on it (s)."""
 VELOCITY_ROUNDING = 1e-12

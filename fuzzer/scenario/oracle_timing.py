@@ -27,6 +27,7 @@ import numpy as np
 
 from fuzzer.execution.records import Outcome
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
+from robot_api.constants import ACCELERATION_LIMIT
 from robot_api.errors import RobotAPIError
 from robot_api.records import JointLimit, JointType
 
@@ -78,3 +79,72 @@ def timed_as_contract(kind: str, outcome: Outcome, before: Context, facts: Scena
     actual = float(times[-1])
     slack = RETIME_TOLERANCE * max(abs(actual), abs(expected)) + RETIME_ABSOLUTE
     return math.isfinite(actual) and abs(actual - expected) <= slack
+
+
+PHASE_EDGE = 1e-9
+"""A point whose path coordinate is this close (relative to the path's length) to a switch of
+the time law's phase is on it."""
+
+
+Coordinate = tuple[np.ndarray, np.ndarray, np.ndarray, float, float]
+
+
+def _coordinate(rows: np.ndarray, before: Context, facts: ScenarioFacts) -> Coordinate:
+    """Of a ``cartesian_path``'s points (M, dof): the segments' deltas (M - 1, dof; continuous
+    joints the short way) and costs ``max_j |delta_j| / vmax_j`` (M - 1,), the path coordinate
+    ``u`` (M,; their running sum, docs/api.md), the acceleration bound ``A`` on ``u``, and where
+    the acceleration ends (``ua``; the deceleration starts at ``u[-1] - ua``)."""
+    from python_impl.angles import normalize_angles
+
+    vmax = np.array([spec.velocity for spec in facts.joints]) * before.velocity_scaling
+    continuous = np.array([spec.continuous for spec in facts.joints], dtype=bool)
+    delta = np.diff(rows, axis=0)
+    delta = np.where(continuous, normalize_angles(delta), delta)
+    moving = delta != 0.0
+    cost = np.where(moving, np.abs(delta) / vmax, 0.0).max(axis=1)
+    u = np.concatenate([[0.0], np.cumsum(cost)])
+    ratio = np.where(moving, cost[:, None] / np.where(moving, np.abs(delta), 1.0), np.inf)
+    accel = float(ACCELERATION_LIMIT * before.acceleration_scaling * ratio.min(initial=np.inf))
+    total = float(u[-1])
+    ua = 0.5 / accel if accel * total > 1.0 else 0.5 * total
+    return delta, cost, u, accel, ua
+
+
+def phase_knife_edge(
+    a: Outcome, b: Outcome, before: tuple[Context, Context], facts: ScenarioFacts, limit: float
+) -> bool:
+    """Whether every point of a ``cartesian_path`` whose accelerations differ beyond ``limit``
+    lies, on each target, on a switch of its time law (its path coordinate within
+    ``PHASE_EDGE`` of where the acceleration ends or the deceleration starts) and reports there
+    one of the three values the contract allows (accelerating, cruising, decelerating:
+    ``A * delta / cost`` with ``A`` its sign or 0). A triangular profile switches at half the
+    path, which a path of equal segments puts a point on: ``u < ua`` then falls on the last
+    bits of two sums."""
+    dof = len(facts.joints)
+    key = "trajectory.accelerations"
+    flat = [np.asarray(o.values.get(key, ()), dtype=float) for o in (a, b)]
+    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    if (
+        not dof
+        or flat[0].size != flat[1].size
+        or any(r.size != f.size or r.size < 3 * dof for r, f in zip(rows, flat, strict=True))
+    ):
+        return False
+    acc = [f.reshape(-1, dof) for f in flat]
+    differ = np.flatnonzero(~(np.abs(acc[0] - acc[1]) <= limit).all(axis=1))
+    for acc_i, flat_rows, ctx in zip(acc, rows, before, strict=True):
+        points = flat_rows.reshape(-1, dof)
+        if not np.isfinite(points).all():
+            return False
+        delta, costs, u, accel, ua = _coordinate(points, ctx, facts)
+        total = float(u[-1])
+        for r in differ.tolist():
+            if not 0 < r < len(u) - 1:
+                return False
+            if min(abs(u[r] - ua), abs(u[r] - (total - ua))) > PHASE_EDGE * total:
+                return False
+            cost = float(costs[r - 1])
+            allowed = [s * accel * delta[r - 1] / cost for s in (1.0, 0.0, -1.0)] if cost > 0.0 else []
+            if not any(np.all(np.abs(acc_i[r] - x) <= limit) for x in allowed):
+                return False
+    return differ.size > 0
