@@ -62,6 +62,9 @@ def test_view_draws_both_arms_under_xvfb(tmp_path: Path) -> None:
     crash = _crash(tmp_path, [0.5, 0.3, -0.4, 0.0, 0.6, 0.0], [-1.2, 0.9, 0.4, 0.0, -0.6, 0.0])
     shot = tmp_path / "view.ppm"
     environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_") and k != "DISPLAY"}
+    logs = tmp_path / "ros-logs"  # this test's own (its processes are found by it), not a /tmp folder
+    logs.mkdir()
+    environment["ROS_LOG_DIR"] = str(logs)
     run = subprocess.run(
         [sys.executable, str(ROOT / "fuzz_diff.py"), "view", str(crash), "--screenshot", str(shot)],
         capture_output=True, text=True, timeout=180, env=environment, cwd=tmp_path, check=False,
@@ -71,7 +74,8 @@ def test_view_draws_both_arms_under_xvfb(tmp_path: Path) -> None:
     assert counts is not None and min(int(counts[1]), int(counts[2])) >= 200, run.stdout
     assert shot.read_bytes().startswith(b"P6")
     log_dir = re.search(r"logs in (\S+)\)", run.stderr)
-    assert log_dir is not None and _processes_with(log_dir[1]) == []  # Xvfb, RViz, master, nodes: gone
+    assert log_dir is not None and log_dir[1] == str(logs) and (logs / "rviz.log").is_file()
+    assert _processes_with(log_dir[1]) == []  # Xvfb, RViz, master, nodes: gone
 
 
 def test_view_refuses_a_missing_crash_file(tmp_path: Path) -> None:
