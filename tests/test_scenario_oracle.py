@@ -18,9 +18,9 @@ from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import MoveCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
-from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
+from fuzzer.scenario.oracle_facts import Context, JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import absolute, extent_changed
-from fuzzer.scenario.oracle_timing import limits_of
+from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api import robots
@@ -544,6 +544,20 @@ def test_a_path_point_on_the_switch_of_a_triangular_profile_may_take_either_phas
     for wrong in (with_row(2, 2.0 * first), with_row(1, 0.0 * first)):  # a wrong value; not on a switch
         c = judge(call, run(a), run(wrong))
         assert (c.kind, c.field) == (Kind.VALUE, "cartesian_path.trajectory.accelerations")
+
+
+def test_the_switch_rule_takes_any_scaling_factor_without_an_error() -> None:
+    """A subnormal or huge scaling factor makes the path coordinate infinite: no switch, no
+    warning turned error, no crash of the oracle."""
+    rows = [(0.0, 0.0), (0.01, 0.005), (0.02, 0.01), (0.03, 0.015), (0.04, 0.02)]
+    a = timed(rows, path=True)
+    acc = np.asarray(a.values["trajectory.accelerations"]).reshape(-1, 2)
+    acc[2] = 0.0
+    b = with_value(a, "trajectory.accelerations", tuple(acc.ravel().tolist()))
+    for scaling in (5e-324, 1e300, math.inf):
+        ctx = Context(velocity_scaling=scaling, acceleration_scaling=scaling)
+        with np.errstate(all="raise"):
+            assert phase_knife_edge(a, b, (ctx, ctx), FACTS, 1e-6) is False
 
 
 def test_timing_from_start_states_apart_within_tolerance_is_a_known_limitation() -> None:

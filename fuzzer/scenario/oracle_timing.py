@@ -136,8 +136,11 @@ def phase_knife_edge(
         points = flat_rows.reshape(-1, dof)
         if not np.isfinite(points).all():
             return False
-        delta, costs, u, accel, ua = _coordinate(points, ctx, facts)
+        with np.errstate(all="ignore"):  # a subnormal scaling factor: inf, which fails below
+            delta, costs, u, accel, ua = _coordinate(points, ctx, facts)
         total = float(u[-1])
+        if not (math.isfinite(total) and math.isfinite(accel) and accel > 0.0):
+            return False
         for r in differ.tolist():
             if not 0 < r < len(u) - 1:
                 return False
