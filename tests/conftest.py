@@ -22,13 +22,7 @@ def default_urdf():  # type: ignore[no-untyped-def]
 def ros_logs(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
     """ROS masters, nodes and RViz started by the tests log into the session's temporary
     folder (``ROS_LOG_DIR``, which pytest clears with its old runs), not a new /tmp folder each."""
-    import os
-
     folder = str(tmp_path_factory.mktemp("ros-logs"))
-    before = os.environ.get("ROS_LOG_DIR")
-    os.environ["ROS_LOG_DIR"] = folder
-    yield folder
-    if before is None:
-        os.environ.pop("ROS_LOG_DIR", None)
-    else:
-        os.environ["ROS_LOG_DIR"] = before
+    with pytest.MonkeyPatch.context() as patch:  # restores what was there before
+        patch.setenv("ROS_LOG_DIR", folder)
+        yield folder

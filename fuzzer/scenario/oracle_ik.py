@@ -7,6 +7,9 @@ vector (``fuzzer.execution.oracle`` compares single IK calls by pose only). At s
 
 * ``cartesian_path``: a segment is on the knife edge of its step count (``d / eef_step``
   within ``KNIFE_EDGE`` relative of an integer >= 1: ``floor`` may fall either way);
+* ``cartesian_path``: the accelerations differ only at points on a switch of the time law's
+  phase, each target reporting one of the contract's values there
+  (``oracle_timing.phase_knife_edge``);
 * the IK answers (the state after ``go``, a plan's last point, every point of a path with the
   same point count) differ beyond the campaign tolerance in joint space (modulo 2pi) but put the
   link at the same pose within ``IK_AGREEMENT`` (KDL's rotation dead zone, docs/api.md);

@@ -87,6 +87,7 @@ the time law's phase is on it."""
 
 
 Coordinate = tuple[np.ndarray, np.ndarray, np.ndarray, float, float]
+"""``_coordinate``'s result: deltas, costs, ``u``, ``A``, ``ua``."""
 
 
 def _coordinate(rows: np.ndarray, before: Context, facts: ScenarioFacts) -> Coordinate:
