@@ -15,8 +15,9 @@ Mutators
   target that mostly names one that exists at that point...).
   The context and the fresh steps are ``fuzzer.scenario.fresh``.
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
-  ``/execute``; often after a fresh scaling factor), often right after a ``/remember X`` and
-  then often followed by ``/named_target X`` and a move back.
+  ``/execute``, or, with the robot's FK, ``/go`` and a ``/cartesian_path`` to a reachable
+  waypoint and ``/execute``; often after a fresh scaling factor), often right after a
+  ``/remember X`` and then often followed by ``/named_target X`` and a move back.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -44,10 +45,12 @@ from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
 from fuzzer.scenario.fresh import (
     GO,
+    Reach,
     SequenceContext,
     StepDict,
     Steps,
     Tables,
+    cartesian_move,
     field_types,
     fresh_message,
     msg_type_of,
@@ -67,6 +70,9 @@ RETURN_PROBABILITY: Final = 0.5
 """``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and a move follow the move."""
 PLAN_EXECUTE_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that a move is ``/plan`` + ``/execute`` rather than ``/go``."""
+CARTESIAN_PROBABILITY: Final = 1 / 3
+"""``seq_motion`` with the robot's FK: chance that the move is a Cartesian one (MoveIt's third way
+to move, ``fuzzer.scenario.fresh.cartesian_move``)."""
 SETTING_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move starts by setting one of :data:`MOVE_SETTINGS`."""
 MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
@@ -115,11 +121,14 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 @register("seq_motion", weight=1.0)
 def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a move, a call template as syzkaller's: a fresh joint target, then ``/go`` or,
-    half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move; the second shows the
-    oracle the trajectory). Half the time a velocity or acceleration scaling factor is set
-    first (a fresh value), as a script slows a move down. Half the time it goes right after a
-    ``/remember X`` (when there is one), and then half the time ``/named_target X`` and a move
-    come back to the remembered state (pick and place), when there is room."""
+    half the time, ``/plan`` and ``/execute`` (MoveIt's ways to move to a goal; the second
+    shows the oracle the trajectory). With the robot's FK (``Tables.reach``), a third of the
+    moves are instead Cartesian: ``/go`` to a start state, a ``/cartesian_path`` to a
+    reachable waypoint near it and ``/execute`` (:func:`fuzzer.scenario.fresh.cartesian_move`).
+    Half the time a velocity or acceleration scaling factor is set first (a fresh value), as a
+    script slows a move down. Half the time it goes right after a ``/remember X`` (when there
+    is one), and then half the time ``/named_target X`` and a move come back to the remembered
+    state (pick and place), when there is room."""
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
@@ -129,8 +138,11 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         at, name = ctx.rng.choice(remembered)
     else:
         at, name = ctx.rng.randint(0, len(steps)), None
-    target = {"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}
-    template = [target, *_move(ctx)]
+    state = fresh_message("/joint_target", steps, ctx, at)
+    cartesian = None
+    if ctx.tables.reach is not None and ctx.rng.random() < CARTESIAN_PROBABILITY:
+        cartesian = cartesian_move(state, ctx)
+    template = cartesian if cartesian is not None else [{"topic": "/joint_target", "msg": state}, *_move(ctx)]
     if ctx.rng.random() < SETTING_PROBABILITY:
         topic = ctx.rng.choice(MOVE_SETTINGS)
         template.insert(0, {"topic": topic, "msg": fresh_message(topic, steps, ctx, at)})
@@ -360,6 +372,7 @@ def for_registry(
     registry: MessageRegistry,
     max_steps: int = MAX_STEPS,
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
+    reach: Reach | None = None,
 ) -> tuple[SequenceMutator, SequenceCrossover]:
     """The scenario mutator and crossover for messages known to ``registry``.
 
@@ -372,6 +385,9 @@ def for_registry(
     box : tuple of two tuples of float, optional
         The robot's joint limits (lower, upper), each of shape (n_joints,), finite (rad, m):
         a fresh joint target in a scenario without one is then drawn uniformly inside them.
+    reach : callable, optional
+        The robot's FK, configuration (n_joints,) -> (position (3,) m, quaternion (4,) x, y, z,
+        w): with ``box``, ``seq_motion`` also makes Cartesian moves to reachable waypoints.
 
     Returns
     -------
@@ -388,5 +404,5 @@ def for_registry(
         raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
     types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
     fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
-    tables = Tables(registry, types, fields, box=box)
+    tables = Tables(registry, types, fields, box=box, reach=reach)
     return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)
