@@ -192,18 +192,23 @@ GO: Final[StepDict] = {"topic": "/go", "msg": {}}
 EXECUTE: Final[StepDict] = {"topic": "/execute", "msg": {}}
 
 
-def cartesian_move(target: dict[str, Any], ctx: SequenceContext) -> Steps | None:
+def cartesian_move(target: dict[str, Any], ctx: SequenceContext) -> Steps:
     """MoveIt's third way to move: ``/joint_target`` + ``/go`` to a start state, then
     ``/cartesian_path`` to one reachable waypoint and ``/execute``.
 
     The start state is ``target`` (a fresh ``sensor_msgs/JointState``) when it sets every joint
     in order inside the limits, else one drawn uniformly inside them; the waypoint is the tip
     (``Tables.reach``) at the configuration ``CARTESIAN_STEP`` of the way from it toward another
-    uniform one, so the path is short and reachable. None without ``Tables.reach`` and ``box``.
+    uniform one, so the path is short and reachable.
+
+    Raises
+    ------
+    NotApplicable
+        Without ``Tables.reach`` and ``box`` (no robot to reach with).
     """
     box, reach = ctx.tables.box, ctx.tables.reach
     if box is None or reach is None:
-        return None
+        raise NotApplicable("no FK and limits of the robot: no reachable waypoint")
     lower, upper = box
     position = target.get("position") if not target.get("name") else None
     start: tuple[float, ...] = tuple(ctx.rng.uniform(lo, hi) for lo, hi in zip(lower, upper, strict=True))

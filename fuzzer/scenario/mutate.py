@@ -15,9 +15,10 @@ Mutators
   target that mostly names one that exists at that point...).
   The context and the fresh steps are ``fuzzer.scenario.fresh``.
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
-  ``/execute``, or, with the robot's FK, ``/go`` and a ``/cartesian_path`` to a reachable
-  waypoint and ``/execute``; often after a fresh scaling factor), often right after a
-  ``/remember X`` and then often followed by ``/named_target X`` and a move back.
+  ``/execute``; often after a fresh scaling factor), often right after a ``/remember X`` and
+  then often followed by ``/named_target X`` and a move back.
+* ``seq_cartesian`` (with the robot's FK): the same with a Cartesian move, ``/go`` to a start
+  state, a ``/cartesian_path`` to a reachable waypoint near it and ``/execute``.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -70,9 +71,6 @@ RETURN_PROBABILITY: Final = 0.5
 """``seq_motion`` after a ``/remember X``: chance that ``/named_target X`` and a move follow the move."""
 PLAN_EXECUTE_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that a move is ``/plan`` + ``/execute`` rather than ``/go``."""
-CARTESIAN_PROBABILITY: Final = 1 / 3
-"""``seq_motion`` with the robot's FK: chance that the move is a Cartesian one (MoveIt's third way
-to move, ``fuzzer.scenario.fresh.cartesian_move``)."""
 SETTING_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move starts by setting one of :data:`MOVE_SETTINGS`."""
 MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
@@ -121,14 +119,27 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 @register("seq_motion", weight=1.0)
 def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a move, a call template as syzkaller's: a fresh joint target, then ``/go`` or,
-    half the time, ``/plan`` and ``/execute`` (MoveIt's ways to move to a goal; the second
-    shows the oracle the trajectory). With the robot's FK (``Tables.reach``), a third of the
-    moves are instead Cartesian: ``/go`` to a start state, a ``/cartesian_path`` to a
-    reachable waypoint near it and ``/execute`` (:func:`fuzzer.scenario.fresh.cartesian_move`).
-    Half the time a velocity or acceleration scaling factor is set first (a fresh value), as a
-    script slows a move down. Half the time it goes right after a ``/remember X`` (when there
-    is one), and then half the time ``/named_target X`` and a move come back to the remembered
-    state (pick and place), when there is room."""
+    half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move to a joint goal; the
+    second shows the oracle the trajectory). Half the time a velocity or acceleration scaling
+    factor is set first (a fresh value), as a script slows a move down. Half the time it goes
+    right after a ``/remember X`` (when there is one), and then half the time
+    ``/named_target X`` and a move come back to the remembered state (pick and place), when
+    there is room."""
+    return _insert_move(steps, ctx, "seq_motion")
+
+
+@register("seq_cartesian", weight=1.0)
+def seq_cartesian(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Insert a Cartesian move, MoveIt's third way to move, placed and preceded as
+    ``seq_motion``'s moves: ``/joint_target`` and ``/go`` to a start state, a
+    ``/cartesian_path`` to a reachable waypoint near it and ``/execute``
+    (:func:`fuzzer.scenario.fresh.cartesian_move`; it needs the robot's FK, ``Tables.reach``)."""
+    return _insert_move(steps, ctx, "seq_cartesian")
+
+
+def _insert_move(steps: Steps, ctx: SequenceContext, kind: str) -> tuple[Steps, str]:
+    """``seq_motion`` (``kind``), or with ``kind`` ``seq_cartesian`` the same with a Cartesian
+    move first."""
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
@@ -139,10 +150,10 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     else:
         at, name = ctx.rng.randint(0, len(steps)), None
     state = fresh_message("/joint_target", steps, ctx, at)
-    cartesian = None
-    if ctx.tables.reach is not None and ctx.rng.random() < CARTESIAN_PROBABILITY:
-        cartesian = cartesian_move(state, ctx)
-    template = cartesian if cartesian is not None else [{"topic": "/joint_target", "msg": state}, *_move(ctx)]
+    if kind == "seq_cartesian":
+        template = cartesian_move(state, ctx)
+    else:
+        template = [{"topic": "/joint_target", "msg": state}, *_move(ctx)]
     if ctx.rng.random() < SETTING_PROBABILITY:
         topic = ctx.rng.choice(MOVE_SETTINGS)
         template.insert(0, {"topic": topic, "msg": fresh_message(topic, steps, ctx, at)})
@@ -154,7 +165,7 @@ def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         if len(steps) + len(template) + len(back) <= ctx.max_steps:  # else the move alone
             template += back
     steps[at:at] = clone(template)
-    return steps, "seq_motion"
+    return steps, kind
 
 
 def _move(ctx: SequenceContext) -> Steps:
