@@ -383,10 +383,7 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
 
     limits = session.reference.joint_limits
     box = finite_box([lim.lower for lim in limits], [lim.upper for lim in limits])
-    reach = session.facts().reachable
-    mutate_message, crossover_message = mutate.for_registry(
-        session.registry, session.config.max_steps, box, reach
-    )
+    mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps, box)
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 
 

@@ -31,17 +31,6 @@ from fuzzer.triage.minimize import Minimizer, joints_that_matter
 REGISTRY = MessageRegistry()
 MAX = 12
 MUTATE, CROSSOVER = for_registry(REGISTRY, MAX)
-
-
-def fake_reach(q: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """A made-up FK: the tip at the first three joint values, a fixed quarter turn about z."""
-    return tuple(q[:3]), (0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5))
-
-
-BOX = ((-1.0,) * 6, (1.0,) * 6)
-"""Joint limits of the six-joint test scenarios, for ``seq_cartesian``."""
-WITH_FK, _ = for_registry(REGISTRY, MAX, BOX, fake_reach)
-"""The mutator of a campaign that knows the robot's limits and FK (``seq_cartesian`` applies)."""
 SEEDS = range(40)
 INTERESTING = (3.1416, -2.0071)
 
@@ -143,9 +132,8 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
     used = set()
     for seed in SEEDS:
         known = name == "seq_compared"
-        mutate = WITH_FK if name == "seq_cartesian" else MUTATE
-        child, reported = mutate(parent, context(seed, other, known), name)
-        again, _ = mutate(parent, context(seed, other, known), name)
+        child, reported = MUTATE(parent, context(seed, other, known), name)
+        again, _ = MUTATE(parent, context(seed, other, known), name)
         assert child == again  # a seed gives a mutation
         validate(child, REGISTRY, MAX)
         assert parent == before and other == other_before  # inputs untouched
@@ -169,9 +157,6 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
         elif name == "seq_motion":
             assert motion_at(old, new) is not None
-        elif name == "seq_cartesian":
-            found = motion_at(old, new, cartesian=True)
-            assert found is not None and "/cartesian_path" in [s["topic"] for s in found[1]]
         elif name == "seq_compared":
             changed = [i for i in range(len(old)) if old[i] != new[i]]
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
@@ -221,7 +206,7 @@ def test_random_mutations_stay_valid_and_reach_every_mutator() -> None:
     message = base_scenario()
     used = set()
     for seed in range(300):
-        message, name = WITH_FK(message, context(seed, other_scenario(), known=True))
+        message, name = MUTATE(message, context(seed, other_scenario(), known=True))
         validate(message, REGISTRY, MAX)
         used.add(name.split(":")[0])
     assert used == set(SEQ_MUTATORS)
@@ -269,16 +254,11 @@ MOVES = (["/go"], ["/plan", "/execute"])
 SETTINGS = ([], ["/velocity_scaling"], ["/acceleration_scaling"])
 
 
-CARTESIAN = ["/joint_target", "/go", "/cartesian_path", "/execute"]
-
-
-def motion_at(old: list[Any], new: list[Any], cartesian: bool = False) -> tuple[int, list[Any]] | None:
+def motion_at(old: list[Any], new: list[Any]) -> tuple[int, list[Any]] | None:
     """Where ``new`` is ``old`` with a move (optionally a scaling factor, then a joint target
-    and a move: ``/go``, or ``/plan`` and ``/execute``, or with ``cartesian`` a Cartesian move,
-    :data:`CARTESIAN`; optionally followed by ``/named_target`` and a move) inserted, and the
-    inserted steps; else None."""
-    firsts = [["/joint_target", *m] for m in MOVES] + ([CARTESIAN] if cartesian else [])
-    templates = [[*setting, *first] for setting in SETTINGS for first in firsts]
+    and a move: ``/go``, or ``/plan`` and ``/execute``; optionally followed by
+    ``/named_target`` and a move) inserted, and the inserted steps; else None."""
+    templates = [[*setting, "/joint_target", *m] for setting in SETTINGS for m in MOVES]
     templates += [[*t, "/named_target", *m] for t in templates for m in MOVES]
     for template in templates:
         size = len(template)
@@ -348,75 +328,6 @@ def test_with_the_limits_a_move_starts_anywhere_inside_them() -> None:
     assert 60 <= len(inside) <= 140
     assert len({tuple(p) for p in inside}) == len(inside)  # drawn, not a fixed point
     assert min(p[1] for p in inside) < -1.5 and max(p[1] for p in inside) > 1.5
-
-
-def test_a_cartesian_move_starts_inside_the_limits_and_ends_at_a_reachable_waypoint_nearby() -> None:
-    box = ((-1.0, -2.0, 0.0), (1.0, 2.0, 0.5))
-    mutate, _ = for_registry(REGISTRY, MAX, box, fake_reach)
-    parent = {"steps": [joint_target(0.5, 1.0, 0.25), GO, step("/remember", data="x")]}
-    scaled, kept, back = 0, 0, 0
-    for seed in range(300):
-        child, name = mutate(parent, context(seed), "seq_cartesian")
-        assert name == "seq_cartesian" and validate(child, REGISTRY, MAX) is None
-        found = motion_at(parent["steps"], child["steps"], cartesian=True)
-        assert found is not None, [s["topic"] for s in child["steps"]]
-        topics = [s["topic"] for s in found[1]]
-        first = topics.index("/joint_target")
-        assert topics[first : first + 4] == CARTESIAN
-        scaled += first == 1
-        back += "/named_target" in topics
-        start = found[1][first]["msg"]
-        assert start["name"] == [] and all(
-            lo <= v <= hi for v, lo, hi in zip(start["position"], *box, strict=True)
-        )
-        kept += start["position"] == [0.5, 1.0, 0.25]  # the scenario's own target, when inside the limits
-        [pose] = found[1][first + 2]["msg"]["poses"]
-        waypoint = [pose["position"][axis] for axis in "xyz"]
-        assert [pose["orientation"][axis] for axis in "xyzw"] == [0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)]
-        for value, begin, lo, hi in zip(waypoint, start["position"], *box, strict=True):  # a tenth of the way
-            assert lo <= value <= hi and abs(value - begin) <= 0.1 * (hi - lo) + 1e-12
-        assert waypoint != start["position"]  # drawn toward another configuration, not the start itself
-    assert 0.4 <= scaled / 300 <= 0.6  # after a scaling factor half the time, as seq_motion's moves
-    assert 100 <= kept <= 200 and back > 30  # the target kept unless an interesting value left the limits
-
-
-def test_only_seq_cartesian_makes_cartesian_moves_and_only_with_the_robots_fk() -> None:
-    parent = {"steps": [joint_target(0.5, 1.0, 0.25, 0.0, 0.0, 0.0), GO]}
-    for seed in range(100):
-        child, name = WITH_FK(parent, context(seed), "seq_motion")
-        assert name == "seq_motion" and motion_at(parent["steps"], child["steps"]) is not None
-        _, name = MUTATE(parent, context(seed), "seq_cartesian")
-        assert name != "seq_cartesian"  # not applicable: another mutator ran
-
-
-def test_a_cartesian_moves_path_is_followed_on_the_shipped_robot() -> None:
-    """The waypoint is reachable and near: on PROBOT Anno the twin follows most paths to the
-    end (measured: 19 of these 20 paths, 181 points)."""
-    from fuzzer.execution.targets import Runner
-    from fuzzer.generation.spacefill import finite_box
-    from fuzzer.scenario.steps import to_call
-    from robot_api import robots
-
-    runner = Runner.create("python", robots.resolve("probot_anno"), None)
-    model = runner.model
-    limits = model.joint_limits
-    box = finite_box([lim.lower for lim in limits], [lim.upper for lim in limits])
-
-    def reach(q: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        pose = model.forward_kinematics(list(q))
-        return tuple(pose.position), tuple(pose.orientation)
-
-    mutate, _ = for_registry(REGISTRY, MAX, box, reach)
-    followed, points = 0, 0
-    for seed in range(20):
-        child, name = mutate({"steps": [GO]}, context(seed), "seq_cartesian")
-        assert name == "seq_cartesian"
-        outcome = runner.run(to_call(child))
-        kinds = [s["topic"] for s in child["steps"]]
-        path = outcome.steps[kinds.index("/cartesian_path")].values
-        followed += path["fraction"] == (1.0,)
-        points += len(path["trajectory.time_from_start"])
-    assert followed >= 15 and points >= 5 * 20
 
 
 def test_field_types_cover_arrays_of_messages() -> None:

@@ -10,7 +10,7 @@ the injected ``ctx.rng``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from random import Random
 from typing import Any, Final
@@ -39,13 +39,6 @@ earlier call made; otherwise any string of the scenario, "home" or a joint or li
 unknown target: the error path)."""
 INTERESTING_PROBABILITY: Final = 0.5
 """Fresh joint target: chance that one joint takes an engine interesting value."""
-CARTESIAN_STEP: Final = 0.1
-"""A Cartesian move's waypoint is the tip at the configuration this share of the way from the
-move's start state toward a uniform one: reachable, and near enough for the path's IK, seeded by
-the start state, to follow the straight line (``fuzzer.generation.spacefill.GOAL_STEP``)."""
-
-Reach = Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
-"""The robot's FK: a configuration (rad, m) -> the tip's position (m) and quaternion (x, y, z, w)."""
 
 
 @dataclass
@@ -61,9 +54,6 @@ class Tables:
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
     """The robot's joint limits (lower, upper; rad, m; finite: a continuous joint's are -pi, pi),
     for a fresh joint target in a scenario that has none to recombine; None: no such target."""
-    reach: Reach | None = None
-    """The robot's FK, for the reachable waypoint of a Cartesian move (:func:`cartesian_move`);
-    with ``box``. None: no Cartesian moves."""
 
     def default(self, topic: str) -> dict[str, Any]:
         """The zero message of ``topic``'s type, unit quaternions instead of zero ones."""
@@ -189,52 +179,6 @@ def fresh_message(topic: str, steps: Steps, ctx: SequenceContext, at: int | None
 
 
 GO: Final[StepDict] = {"topic": "/go", "msg": {}}
-EXECUTE: Final[StepDict] = {"topic": "/execute", "msg": {}}
-
-
-def cartesian_move(target: dict[str, Any], ctx: SequenceContext) -> Steps:
-    """MoveIt's third way to move: ``/joint_target`` + ``/go`` to a start state, then
-    ``/cartesian_path`` to one reachable waypoint and ``/execute``.
-
-    The start state is ``target`` (a fresh ``sensor_msgs/JointState``) when it sets every joint
-    in order inside the limits, else one drawn uniformly inside them; the waypoint is the tip
-    (``Tables.reach``) at the configuration ``CARTESIAN_STEP`` of the way from it toward another
-    uniform one, so the path is short and reachable.
-
-    Raises
-    ------
-    NotApplicable
-        Without ``Tables.reach`` and ``box`` (no robot to reach with).
-    """
-    box, reach = ctx.tables.box, ctx.tables.reach
-    if box is None or reach is None:
-        raise NotApplicable("no FK and limits of the robot: no reachable waypoint")
-    lower, upper = box
-    position = target.get("position") if not target.get("name") else None
-    start: tuple[float, ...] = tuple(ctx.rng.uniform(lo, hi) for lo, hi in zip(lower, upper, strict=True))
-    if (
-        isinstance(position, list)
-        and len(position) == len(lower)
-        and all(
-            isinstance(v, float) and lo <= v <= hi for v, lo, hi in zip(position, lower, upper, strict=True)
-        )
-    ):
-        start = tuple(position)  # every joint in order, inside the limits
-    toward = [ctx.rng.uniform(lo, hi) for lo, hi in zip(lower, upper, strict=True)]
-    xyz, quaternion = reach(tuple(q + CARTESIAN_STEP * (t - q) for q, t in zip(start, toward, strict=True)))
-    state = {**ctx.tables.default("/joint_target"), "position": list(start)}
-    path = ctx.tables.default("/cartesian_path")
-    pose = {
-        "position": dict(zip("xyz", map(float, xyz), strict=True)),
-        "orientation": dict(zip("xyzw", map(float, quaternion), strict=True)),
-    }
-    path["poses"] = [pose]
-    return [
-        {"topic": "/joint_target", "msg": state},
-        dict(GO),
-        {"topic": "/cartesian_path", "msg": path},
-        dict(EXECUTE),
-    ]
 
 
 def new_step(steps: Steps, ctx: SequenceContext, at: int | None = None) -> StepDict:

@@ -17,8 +17,6 @@ Mutators
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
   ``/execute``; often after a fresh scaling factor), often right after a ``/remember X`` and
   then often followed by ``/named_target X`` and a move back.
-* ``seq_cartesian`` (with the robot's FK): the same with a Cartesian move, ``/go`` to a start
-  state, a ``/cartesian_path`` to a reachable waypoint near it and ``/execute``.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -46,12 +44,10 @@ from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
 from fuzzer.scenario.fresh import (
     GO,
-    Reach,
     SequenceContext,
     StepDict,
     Steps,
     Tables,
-    cartesian_move,
     field_types,
     fresh_message,
     msg_type_of,
@@ -119,27 +115,11 @@ def seq_insert(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 @register("seq_motion", weight=1.0)
 def seq_motion(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Insert a move, a call template as syzkaller's: a fresh joint target, then ``/go`` or,
-    half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move to a joint goal; the
-    second shows the oracle the trajectory). Half the time a velocity or acceleration scaling
-    factor is set first (a fresh value), as a script slows a move down. Half the time it goes
-    right after a ``/remember X`` (when there is one), and then half the time
-    ``/named_target X`` and a move come back to the remembered state (pick and place), when
-    there is room."""
-    return _insert_move(steps, ctx, "seq_motion")
-
-
-@register("seq_cartesian", weight=1.0)
-def seq_cartesian(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
-    """Insert a Cartesian move, MoveIt's third way to move, placed and preceded as
-    ``seq_motion``'s moves: ``/joint_target`` and ``/go`` to a start state, a
-    ``/cartesian_path`` to a reachable waypoint near it and ``/execute``
-    (:func:`fuzzer.scenario.fresh.cartesian_move`; it needs the robot's FK, ``Tables.reach``)."""
-    return _insert_move(steps, ctx, "seq_cartesian")
-
-
-def _insert_move(steps: Steps, ctx: SequenceContext, kind: str) -> tuple[Steps, str]:
-    """``seq_motion`` (``kind``), or with ``kind`` ``seq_cartesian`` the same with a Cartesian
-    move first."""
+    half the time, ``/plan`` and ``/execute`` (MoveIt's two ways to move; the second shows the
+    oracle the trajectory). Half the time a velocity or acceleration scaling factor is set
+    first (a fresh value), as a script slows a move down. Half the time it goes right after a
+    ``/remember X`` (when there is one), and then half the time ``/named_target X`` and a move
+    come back to the remembered state (pick and place), when there is room."""
     remembered = [
         (i + 1, s["msg"]["data"])
         for i, s in enumerate(steps)
@@ -149,11 +129,8 @@ def _insert_move(steps: Steps, ctx: SequenceContext, kind: str) -> tuple[Steps, 
         at, name = ctx.rng.choice(remembered)
     else:
         at, name = ctx.rng.randint(0, len(steps)), None
-    state = fresh_message("/joint_target", steps, ctx, at)
-    if kind == "seq_cartesian":
-        template = cartesian_move(state, ctx)
-    else:
-        template = [{"topic": "/joint_target", "msg": state}, *_move(ctx)]
+    target = {"topic": "/joint_target", "msg": fresh_message("/joint_target", steps, ctx, at)}
+    template = [target, *_move(ctx)]
     if ctx.rng.random() < SETTING_PROBABILITY:
         topic = ctx.rng.choice(MOVE_SETTINGS)
         template.insert(0, {"topic": topic, "msg": fresh_message(topic, steps, ctx, at)})
@@ -165,7 +142,7 @@ def _insert_move(steps: Steps, ctx: SequenceContext, kind: str) -> tuple[Steps, 
         if len(steps) + len(template) + len(back) <= ctx.max_steps:  # else the move alone
             template += back
     steps[at:at] = clone(template)
-    return steps, kind
+    return steps, "seq_motion"
 
 
 def _move(ctx: SequenceContext) -> Steps:
@@ -383,7 +360,6 @@ def for_registry(
     registry: MessageRegistry,
     max_steps: int = MAX_STEPS,
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-    reach: Reach | None = None,
 ) -> tuple[SequenceMutator, SequenceCrossover]:
     """The scenario mutator and crossover for messages known to ``registry``.
 
@@ -396,9 +372,6 @@ def for_registry(
     box : tuple of two tuples of float, optional
         The robot's joint limits (lower, upper), each of shape (n_joints,), finite (rad, m):
         a fresh joint target in a scenario without one is then drawn uniformly inside them.
-    reach : callable, optional
-        The robot's FK, configuration (n_joints,) -> (position (3,) m, quaternion (4,) x, y, z,
-        w): with ``box``, ``seq_motion`` also makes Cartesian moves to reachable waypoints.
 
     Returns
     -------
@@ -415,5 +388,5 @@ def for_registry(
         raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
     types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
     fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
-    tables = Tables(registry, types, fields, box=box, reach=reach)
+    tables = Tables(registry, types, fields, box=box)
     return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)
