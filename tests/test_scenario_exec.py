@@ -198,6 +198,13 @@ def test_fixed_script_runs_and_both_targets_agree_step_by_step(runners: tuple[Ru
         reached = tuple(runners[1].model.forward_kinematics(Q1).position)
         assert_close(steps[8].values["position"], reached, 1e-5, "the pose target is reached")
         assert "in_effect.joint_goal" not in steps[8].values  # a pose target is active
+        remembered = steps[2].values["named.here"]
+        for i, step_outcome in enumerate(steps[3:], 3):  # a move shows what was remembered, as it was
+            moved = call.steps[i].kind in ("go", "execute")
+            assert ("named.here" in step_outcome.values) == moved, i
+            if moved:
+                assert step_outcome.values["named.here"] == remembered, i
+        assert steps[5].values["joint_values"] != remembered  # and the arm did move away from it
         assert_close(outcome.values["joint_values"], steps[8].values["joint_values"], 0.0, "final state")
     a, b = outcomes
     for i, (x, y) in enumerate(zip(a.steps, b.steps, strict=True)):

@@ -966,6 +966,27 @@ def test_a_path_timed_at_full_speed_from_the_same_answers_is_a_divergence() -> N
             assert durations[1] == pytest.approx(1.4142, abs=1e-3)
 
 
+def test_a_remembered_state_that_a_later_move_changes_is_a_divergence_at_that_move() -> None:
+    """The zoo's remember_aliases_state (a remembered state kept by reference, which moves update
+    in place): it shows at the first move after ``/remember``, with no ``/named_target`` to read
+    it back, since every move reports what was remembered."""
+    steps = [
+        live("joint_target", position=[0.2, 0.1, 0.3, 0.0, 0.2, 0.1]),
+        live("go"),
+        live("remember", data="spot"),
+        live("joint_target", position=[-0.3, 0.2, 0.1, 0.4, -0.2, 0.3]),
+        live("go"),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    c = (
+        evaluator("scenario", "benchmarks.zoo.stateful:remember_aliases_state")
+        .evaluate(case, validated=True)
+        .comparison
+    )
+    assert (c.kind, c.step, c.field) == (Kind.VALUE, 4, "go.named")
+    assert evaluator("scenario", "python").evaluate(case, validated=True).comparison.kind is Kind.AGREE
+
+
 def reachable_pose(ev: Evaluator) -> dict[str, Any]:
     fk = ev.runners[0].model.forward_kinematics([0.3, -0.2, 0.4, 0.1, 0.5, 0.2])
     return {

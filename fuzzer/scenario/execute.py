@@ -14,7 +14,9 @@ Per-step ``Outcome.values`` (tuples of floats):
 * ``fraction`` for ``/cartesian_path``;
 * ``trajectory.time_from_start`` (M,) and ``trajectory.positions``, ``.velocities``,
   ``.accelerations`` flattened row-major (M*dof,) for ``/plan`` and ``/cartesian_path``;
-* ``named.<name>``: ``get_named_target_values(name)`` in joint order, after ``/remember``.
+* ``named.<name>``: ``get_named_target_values(name)`` in joint order, after ``/remember``,
+  and after ``/go`` and ``/execute`` for every name a ``/remember`` of this run stored (a move
+  must leave what was remembered as it was).
 
 What the executor knows for the oracle's per-target properties, on ``/plan``, ``/go``,
 ``/execute`` and ``/cartesian_path`` steps (``in_effect.*``, the settings the script made
@@ -29,6 +31,7 @@ a plan ``in_effect.plan_last`` (the executed plan's last point).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -88,6 +91,8 @@ class _Run:
         self.pose_goal = False
         self.goal_step: Step | None = None
         self.last_plan: Any = None
+        self.remembered: dict[str, None] = {}
+        """Names a ``/remember`` of this run stored, in order."""
         self._joint_names: tuple[str, ...] | None = None
 
     @property
@@ -145,8 +150,8 @@ class _Run:
         elif kind == "remember":
             name = msg["data"]
             group.remember_joint_values(name)
-            table = group.get_named_target_values(name)
-            values[f"named.{name}"] = tuple(float(table.get(j, math.nan)) for j in self.joint_names)
+            self.remembered[name] = None
+            self._named(values, (name,))
         elif kind == "velocity_scaling":
             group.set_max_velocity_scaling_factor(msg["data"])
             self.velocity_scaling = msg["data"]
@@ -179,7 +184,13 @@ class _Run:
         values["joint_values"] = _floats(group.get_current_joint_values())
         if kind in _POSED:
             _pose(values, group.get_current_pose())
+            self._named(values, self.remembered)
         return status, values
+
+    def _named(self, values: Values, names: Iterable[str]) -> None:
+        for name in names:
+            table = self.group.get_named_target_values(name)
+            values[f"named.{name}"] = tuple(float(table.get(j, math.nan)) for j in self.joint_names)
 
     def _plan(self, values: Values) -> Status:
         result = self.group.plan()
