@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import threading
 from dataclasses import dataclass
 from typing import Any
@@ -56,8 +55,7 @@ def context() -> RosContext:
         if _context is not None:
             return _context
         env.require()
-        log_dir = os.environ.get("ROS_LOG_DIR") or tempfile.mkdtemp(prefix="rrosfuzz-ros-")
-        master = processes.join_or_start_master(log_dir)
+        master = processes.join_or_start_master()  # logs: processes.log_folder()
         env.apply_environment(master.environment)
         import rospy
 

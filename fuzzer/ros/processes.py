@@ -183,6 +183,12 @@ class Master:
             self.process.stop()
 
 
+def log_folder(given: str | None = None, prefix: str = "rrosfuzz-ros-") -> str:
+    """Where ROS processes log: ``given``, else ``ROS_LOG_DIR`` (ROS's own variable), else a new
+    temporary folder named ``prefix``..."""
+    return given or os.environ.get("ROS_LOG_DIR") or tempfile.mkdtemp(prefix=prefix)
+
+
 def start_master(log_dir: str | None = None, attempts: int = 3) -> Master:
     """Start ``rosmaster --core`` on a free port of 127.0.0.1 and wait until it answers.
 
@@ -192,7 +198,7 @@ def start_master(log_dir: str | None = None, attempts: int = 3) -> Master:
         ROS is not installed, or the master does not come up (its log's tail says why).
     """
     env.require()
-    log_dir = log_dir or os.environ.get("ROS_LOG_DIR") or tempfile.mkdtemp(prefix="rrosfuzz-ros-")
+    log_dir = log_folder(log_dir)
     last = ""
     for _ in range(attempts):  # the port may be taken between free_port() and the bind
         port = free_port()
@@ -214,7 +220,7 @@ def start_master(log_dir: str | None = None, attempts: int = 3) -> Master:
 def join_or_start_master(log_dir: str | None = None) -> Master:
     """The master of ``ROS_MASTER_URI`` when one answers there, else a new one on a free port."""
     uri = os.environ.get("ROS_MASTER_URI", "")
-    log_dir = log_dir or os.environ.get("ROS_LOG_DIR") or tempfile.mkdtemp(prefix="rrosfuzz-ros-")
+    log_dir = log_folder(log_dir)
     if uri and master_answers(uri):
         return Master(uri if uri.endswith("/") else uri + "/", log_dir)
     return start_master(log_dir)

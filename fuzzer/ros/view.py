@@ -25,7 +25,6 @@ import argparse
 import math
 import os
 import shutil
-import tempfile
 import threading
 import time
 from collections.abc import Sequence
@@ -223,7 +222,7 @@ def run_view(crash: Path, screenshot: Path | None, seconds: float) -> int:
         )
     case, sidecar, model, tree = load(crash)
     states = states_of(case, sidecar, model)
-    log_dir = os.environ.get("ROS_LOG_DIR") or tempfile.mkdtemp(prefix="rrosfuzz-view-")
+    log_dir = processes.log_folder(prefix="rrosfuzz-view-")
     try:
         display = os.environ.get("DISPLAY", "")
         if screenshot is not None:
