@@ -30,6 +30,7 @@ from fuzzer.generation.corpus import (
     prescan,
     space_filling_count,
     space_filling_seeds,
+    tutorial_seeds,
     write_seeds,
 )
 from fuzzer.input.testcase import TestCase
@@ -156,11 +157,15 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
         filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
         filling += orientation if count else []  # a pose target's quaternion at lengths other than one
-        write_seeds(folders[0], generated + filling)
+        tutorials = (
+            tutorial_seeds(session, options.seed, len(generated)) if options.mutator == "rrosfuzz" else []
+        )
+        write_seeds(folders[0], generated + filling + tutorials)
         seeds = generated + seeds
         reporting.info(
             f"wrote {len(generated)} seeds from Hypothesis ({config.message_type})"
             + (f" and {len(filling)} space-filling configurations" if filling else "")
+            + (f" and {len(tutorials)} script(s) of MoveIt's tutorials" if tutorials else "")
             + f" to {folders[0]}"
         )
     if not seeds:

@@ -298,6 +298,8 @@ def test_scipy_stats_is_imported_only_where_a_space_filling_point_is_drawn() -> 
         "session = Session.open(RunConfig(op='scenario'))\n"
         "parts = search_parts(session, 'rrosfuzz', 1, Features(enabled=False))\n"
         "assert 'scipy.stats' not in sys.modules, 'imported before a point is drawn'\n"
+        "from fuzzer.generation.corpus import tutorial_seeds\n"
+        "assert tutorial_seeds(session, 1) and 'scipy.stats' not in sys.modules, 'by the tutorials'\n"
         "seed = make_seeds(session, 1, 1)[0]\n"
         "made = parts['sources'].make('spacefill', seed.message, random.Random(1))\n"
         "assert made is not None and 'scipy.stats' in sys.modules\n"

@@ -40,6 +40,9 @@ def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
 SPACEFILL_SEED = 0xC0DE5
 """Added to ``-seed`` for the space-filling seeds' Sobol stream (not the harness's own)."""
 
+TUTORIAL_SEED = 0x7070
+"""Added to ``-seed`` for the configurations of the tutorial scripts' seeds."""
+
 SLOW_OP_SPACEFILL_SEEDS = {"ik": 1}
 """Space-filling seed files of the ops whose evaluation is slow (``ik``: a solver run per input,
 about 100 a second; the others as many as the Hypothesis seeds). libFuzzer runs every seed file
@@ -182,6 +185,25 @@ def literal_cases(session: Session, n: int, first: int = 0) -> list[TestCase]:
     facts = session.facts()
     configurations = literal_configurations(module_numbers(modules), facts.lower, facts.upper, n)
     return configuration_cases(session, configurations, LITERAL, first)
+
+
+def tutorial_seeds(session: Session, seed: int, first: int = 0) -> list[TestCase]:
+    """The scripts of MoveIt's tutorials for a scenario campaign (``fuzzer.generation.tutorial``),
+    origin and lineage ``tutorial``, numbered from ``first``; their configurations drawn with
+    ``seed``. None for the other ops or a chain without joints."""
+    from fuzzer.generation.tutorial import TUTORIAL, tutorial_scenarios
+
+    config = session.config
+    if config.op != "scenario" or not session.reference.joint_limits:
+        return []
+    facts = session.facts()
+    scripts = tutorial_scenarios(
+        facts.lower, facts.upper, facts.joint_names, facts.reachable, seed + TUTORIAL_SEED, config.max_steps
+    )
+    return [
+        TestCase(config.message_type, message, first + i, TUTORIAL, (TUTORIAL,), 1)
+        for i, (_, message) in enumerate(scripts)
+    ]
 
 
 def orientation_cases(session: Session, first: int = 0) -> list[TestCase]:
