@@ -95,3 +95,18 @@ def test_the_tutorial_script_shows_the_scaling_fault_it_was_reported_against(
     comparison = evaluator.evaluate(case).comparison
     assert comparison.divergent and comparison.kind not in UNCOUNTED, comparison
     assert comparison.field.startswith(field), comparison
+
+
+def test_the_shipped_scenario_corpus_holds_the_default_campaigns_tutorial_scripts() -> None:
+    """``make run`` starts from ``corpus-scenario/``: the files a fresh default campaign
+    (``-seed`` 0) writes, Hypothesis' 32 and the tutorial scripts after them."""
+    from pathlib import Path
+
+    from fuzzer.input.testcase import decode
+
+    root = Path(__file__).resolve().parents[1] / "corpus-scenario"
+    shipped = [decode(p.read_bytes()) for p in sorted(root.glob("seed-*"))]
+    tutorials = [c for c in shipped if c.origin == TUTORIAL]
+    expected = tutorial_seeds(scenario_session(), 0, first=32)
+    assert [(c.sequence, c.message) for c in tutorials] == [(c.sequence, c.message) for c in expected]
+    assert len(shipped) == 32 + len(expected)
