@@ -13,19 +13,21 @@ vector (``fuzzer.execution.oracle`` compares single IK calls by pose only). At s
 * the IK answers (the state after ``go``, a plan's last point, every point of a path with the
   same point count) differ beyond the campaign tolerance in joint space (modulo 2pi) but put the
   link at the same pose within ``IK_AGREEMENT`` (KDL's rotation dead zone, docs/api.md);
-* the IK answers differ as numbers by more than ``IK_EXACT`` but within the campaign
-  tolerance, and the divergence is of what the contract computes *from* them (the point
-  count, ``time_from_start``, velocities, accelerations): with different inputs the timing
-  differs by the inputs' gap times a sensitivity that grows without bound as a segment
-  shrinks, so no tolerance on the timing itself can hold; provided each target's trajectory
-  lasts what the contract's timing of its own positions gives (``oracle_timing``), so a
-  target that times its path wrongly is still reported.
+* the IK answers differ as numbers (by any amount) but within the campaign tolerance, and
+  the divergence is of what the contract computes *from* them (the point count,
+  ``time_from_start``, velocities, accelerations): with different inputs the timing differs by
+  the inputs' gap times a sensitivity that grows without bound as a segment shrinks (a move of
+  2.3e-13 rad lasts 2 sqrt(d / A), about 9.5e-7 s, and a rounding error of its length changes
+  that by 1e-9 s), so no tolerance on the timing itself can hold; provided each target's
+  trajectory lasts what the contract's timing of its own positions gives (``oracle_timing``),
+  so a target that times its path wrongly is still reported. Inputs equal as numbers must time
+  alike.
 
 The timing rule holds at any ``plan`` or ``cartesian_path`` step whose start states differ as
-numbers by more than ``IK_EXACT`` (within the tolerance, or an earlier step would have been
-reported): an earlier IK answer left the two arms that far apart. It holds as well at a ``plan``
-or ``go`` to joint goals that differ as numbers by more than ``IK_EXACT`` and by no more than the
-tolerance: a named target remembered after an IK answer (``_goal_gap``). And at any step, a
+numbers (within the tolerance, or an earlier step would have been reported): an earlier IK
+answer left the two arms that far apart. It holds as well at a ``plan`` or ``go`` to joint goals
+that differ as numbers by no more than the tolerance: a named target remembered after an IK
+answer (``_goal_gap``). And at any step, a
 divergence of the end effector's position or orientation is ``known_limitation`` when the two
 joint vectors agree within the campaign tolerance but not as numbers (``IK_EXACT``) and the
 reported poses are no farther apart than the reference FK of the two vectors plus the
@@ -64,7 +66,8 @@ FRACTION_TOLERANCE = 1e-9
 IK_AGREEMENT = 2.0 * oracle.IK_RESIDUAL
 """Two IK answers each within the solver's tolerance of one pose are this close (m, rad)."""
 IK_EXACT = 1e-12
-"""IK answers closer than this (rad, m) are the same answer (rounding): their timing compares."""
+"""Joint vectors closer than this (rad, m) are the same answer (rounding): the pose rule does not
+explain their poses, and ``state_gap`` does not nudge by it. (The timing rule takes any gap.)"""
 KNIFE_EDGE = 1e-9
 """Relative distance of ``d / eef_step`` to an integer within which its floor is rounding."""
 DEAD_ZONE = 1e-6
@@ -186,7 +189,7 @@ def classify(
     if positions and _either_way_round(a, b, c, facts, tol):
         return replace(c, kind=Kind.KNOWN_LIMITATION)
     derived = any(c.field.endswith("." + name) for name in DERIVED)
-    if not (derived and gap > IK_EXACT):
+    if not (derived and gap > 0.0):  # inputs equal as numbers: their timings must agree
         return c
     own = all(timed_as_contract(kind, o, ctx, facts) for o, ctx in zip((a, b), before, strict=True))
     return replace(c, kind=Kind.KNOWN_LIMITATION) if own else c
