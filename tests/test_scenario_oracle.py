@@ -966,40 +966,37 @@ def test_a_path_timed_at_full_speed_from_the_same_answers_is_a_divergence() -> N
             assert durations[1] == pytest.approx(1.4142, abs=1e-3)
 
 
-def _pose(xyz: tuple[float, ...], q: tuple[float, ...]) -> dict[str, Any]:
-    return {"position": dict(zip("xyz", xyz, strict=True)), "orientation": dict(zip("xyzw", q, strict=True))}
+def _path(*poses: tuple[tuple[float, ...], tuple[float, ...]]) -> dict[str, Any]:
+    """A ``/cartesian_path`` step through ``poses``, each (position xyz, quaternion xyzw)."""
+    waypoints = [
+        {"position": dict(zip("xyz", xyz, strict=True)), "orientation": dict(zip("xyzw", q, strict=True))}
+        for xyz, q in poses
+    ]
+    return live("cartesian_path", header=HEADER, poses=waypoints)
 
 
 ROUNDING_MOVE = [
-    live(
-        "cartesian_path",
-        header=HEADER,
-        poses=[
-            _pose(
-                (0.027478078988, 0.0111967506052, 0.678620430932),
-                (0.401864863344, 0.05223588946, -0.90406031191, 0.135834442975),
-            ),
-            _pose(
-                (-0.1050658064104, -1.19187752e-06, 0.355978910054),
-                (0.36982468401966, -0.47852627658434, -0.486996889911, 0.6301399328127),
-            ),
-        ],
+    _path(
+        (
+            (0.027478078988, 0.0111967506052, 0.678620430932),
+            (0.401864863344, 0.05223588946, -0.90406031191, 0.135834442975),
+        ),
+        (
+            (-0.1050658064104, -1.19187752e-06, 0.355978910054),
+            (0.36982468401966, -0.47852627658434, -0.486996889911, 0.6301399328127),
+        ),
     ),
     live("execute"),
     live("remember", data="place"),
-    live(
-        "cartesian_path",
-        header=HEADER,
-        poses=[
-            _pose(
-                (0.0274780789882, 0.0111967506052, 0.678620430932),
-                (0.4018648633444, 0.052235889457, -0.904060311906, 0.135834442975),
-            ),
-            _pose(
-                (-0.10506580641042, -1.19187752e-06, 0.355978910054),
-                (0.36982468401966, -0.4785262765843, -0.486996889911, 0.6301399328127),
-            ),
-        ],
+    _path(
+        (
+            (0.0274780789882, 0.0111967506052, 0.678620430932),
+            (0.4018648633444, 0.052235889457, -0.904060311906, 0.135834442975),
+        ),
+        (
+            (-0.10506580641042, -1.19187752e-06, 0.355978910054),
+            (0.36982468401966, -0.4785262765843, -0.486996889911, 0.6301399328127),
+        ),
     ),
     live("execute"),
     live("named_target", data="place"),

@@ -240,8 +240,13 @@ SEEDED_BY_STATE = ("/pose_target", "/position_target", "/cartesian_path")
 path's IK with it): a fault that depends on the IK seed shows only from some states."""
 
 
-def _state_steps(values: tuple[float, ...], joint_names: Sequence[str]) -> list[dict[str, Any]]:
-    """``/joint_target`` (all joints, by name) then ``/go``: the robot moves to ``values``."""
+def toward(a: Sequence[float], b: Sequence[float], share: float = GOAL_STEP) -> tuple[float, ...]:
+    """The configuration ``share`` of the way from ``a`` to ``b`` (rad, m), joint by joint."""
+    return tuple(v + share * (t - v) for v, t in zip(a, b, strict=True))
+
+
+def joint_target_step(values: Sequence[float], joint_names: Sequence[str]) -> dict[str, Any]:
+    """A ``/joint_target`` step setting every joint, by name, to ``values``."""
     state = {
         "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
         "name": list(joint_names),
@@ -249,7 +254,12 @@ def _state_steps(values: tuple[float, ...], joint_names: Sequence[str]) -> list[
         "velocity": [],
         "effort": [],
     }
-    return [{"topic": "/joint_target", "msg": state}, {"topic": "/go", "msg": {}}]
+    return {"topic": "/joint_target", "msg": state}
+
+
+def _state_steps(values: tuple[float, ...], joint_names: Sequence[str]) -> list[dict[str, Any]]:
+    """``/joint_target`` (all joints, by name) then ``/go``: the robot moves to ``values``."""
+    return [joint_target_step(values, joint_names), {"topic": "/go", "msg": {}}]
 
 
 def scenario_with_configuration(
@@ -317,8 +327,7 @@ def fresh_inputs(
     def goal(values: tuple[float, ...]) -> dict[str, Any]:
         # the tip at a configuration a tenth of the way from ``values`` toward the stream's next
         # point: reachable, and near enough for an iterative IK from ``values`` to converge
-        toward = stream.next()
-        near = tuple(v + GOAL_STEP * (t - v) for v, t in zip(values, toward, strict=True))
+        near = toward(values, stream.next())
         pose = configuration_message("geometry_msgs/PoseStamped", _STAMPED, near, (), reachable)
         assert pose is not None
         return pose

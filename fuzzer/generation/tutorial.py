@@ -33,12 +33,18 @@ and near enough for an iterative IK from that state. Nothing here runs a target.
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, Final
 
-from fuzzer.generation.spacefill import GOAL_STEP, Uniform, configuration_message
+from fuzzer.generation.spacefill import (
+    GOAL_STEP,
+    Reachable,
+    Uniform,
+    configuration_message,
+    joint_target_step,
+    toward,
+)
 
-Reachable = Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
 Step = dict[str, Any]
 
 TUTORIAL: Final = "tutorial"
@@ -64,21 +70,6 @@ def _float(topic: str, value: float) -> Step:
 
 def _call(topic: str) -> Step:
     return {"topic": topic, "msg": {}}
-
-
-def _joint_target(values: Sequence[float], joint_names: Sequence[str]) -> Step:
-    state = {
-        "header": copy.deepcopy(_HEADER),
-        "name": list(joint_names),
-        "position": [float(v) for v in values],
-        "velocity": [],
-        "effort": [],
-    }
-    return {"topic": "/joint_target", "msg": state}
-
-
-def _toward(a: Sequence[float], b: Sequence[float], share: float) -> tuple[float, ...]:
-    return tuple(float(x + share * (y - x)) for x, y in zip(a, b, strict=True))
 
 
 def _pose(values: tuple[float, ...], reachable: Reachable) -> dict[str, Any]:
@@ -122,13 +113,13 @@ def tutorial_scenarios(
         return []
     q = [tuple(map(float, row)) for row in Uniform(lower, upper, seed=seed).block(6)]
     names = list(joint_names)
-    path = [_pose(_toward(q[2], q[3], GOAL_STEP * k / WAYPOINTS), reachable) for k in range(1, WAYPOINTS + 1)]
+    path = [_pose(toward(q[2], q[3], GOAL_STEP * k / WAYPOINTS), reachable) for k in range(1, WAYPOINTS + 1)]
     cartesian = {"header": copy.deepcopy(_HEADER), "poses": path}
     scripts: list[tuple[str, list[Step]]] = [
         (
             "joint_goal",
             [
-                _joint_target(q[0], names),
+                joint_target_step(q[0], names),
                 _float("/velocity_scaling", SLOW),
                 _float("/acceleration_scaling", SLOW),
                 _call("/plan"),
@@ -138,14 +129,14 @@ def tutorial_scenarios(
         (
             "pose_goal",
             [
-                _joint_target(q[1], names),
+                joint_target_step(q[1], names),
                 _call("/go"),
                 _call("/stop"),
                 {
                     "topic": "/pose_target",
                     "msg": {
                         "header": copy.deepcopy(_HEADER),
-                        "pose": _pose(_toward(q[1], q[4], GOAL_STEP), reachable),
+                        "pose": _pose(toward(q[1], q[4]), reachable),
                     },
                 },
                 _call("/go"),
@@ -155,7 +146,7 @@ def tutorial_scenarios(
                     "topic": "/cartesian_path",
                     "msg": {
                         "header": copy.deepcopy(_HEADER),
-                        "poses": [_pose(_toward(q[1], q[5], GOAL_STEP), reachable)],
+                        "poses": [_pose(toward(q[1], q[5]), reachable)],
                     },
                 },
                 _call("/execute"),
@@ -164,7 +155,7 @@ def tutorial_scenarios(
         (
             "cartesian_slow",
             [
-                _joint_target(q[2], names),
+                joint_target_step(q[2], names),
                 _call("/go"),
                 _float("/velocity_scaling", SLOW),
                 _float("/eef_step", EEF_STEP),
@@ -178,10 +169,10 @@ def tutorial_scenarios(
             [
                 _float("/velocity_scaling", PICK_SCALING),
                 _float("/acceleration_scaling", PICK_SCALING),
-                _joint_target(q[3], names),
+                joint_target_step(q[3], names),
                 _call("/go"),
                 {"topic": "/remember", "msg": {"data": "pick"}},
-                _joint_target(q[4], names),
+                joint_target_step(q[4], names),
                 _call("/go"),
                 {"topic": "/named_target", "msg": {"data": "pick"}},
                 _call("/go"),
