@@ -6,6 +6,7 @@ import json
 import math
 import signal
 from dataclasses import asdict, replace
+from typing import Any
 
 import pytest
 
@@ -14,9 +15,18 @@ import python_impl
 from benchmarks import bench_deep, deep_stats
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import DEEP, STATEFUL, ZOO, deep
+from fuzzer.execution.evaluate import UNCOUNTED
+from fuzzer.execution.records import Comparison
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.execution.tolerance import default_tolerance
+from fuzzer.generation.corpus import tutorial_seeds
+from fuzzer.generation.spacefill import joint_target_step
+from fuzzer.input.testcase import TestCase
+from python_impl.trajectory import plan_trajectory
 from robot_api import robots
 
 ANNO = robots.resolve("probot_anno")
+SECOND = [-0.4, 0.6, 0.9, -0.3, 0.7, -0.5]
 
 
 def _gap(a: tuple[float, ...], b: tuple[float, ...]) -> float:
@@ -112,6 +122,137 @@ def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotMo
     right = model.inverse_kinematics(goal, [0.2, 0.3, 0.6, 0.0, 0.7, 0.0])
     assert str(right.status) == "success" and right.joint_values[0] == pytest.approx(0.5, abs=1e-5)
     assert model.inverse_kinematics(goal).joint_values[0] != 0.0  # the default seed is home: no fault
+
+
+# -- the deep scenario bugs: each needs a call sequence, and the tutorial scripts miss them ----------
+
+
+def _scenario(target: str) -> Session:
+    return Session.open(
+        RunConfig(
+            op="scenario",
+            robot="probot_anno",
+            targets=("native", target),
+            tolerance=default_tolerance("scenario"),
+        )
+    )
+
+
+def _judge(target: str, steps: list[dict[str, Any]]) -> Comparison:
+    session = _scenario(target)
+    evaluation = session.evaluator().evaluate(
+        TestCase(session.config.message_type, {"steps": steps}, 0, "t", ("t",), 1)
+    )
+    assert evaluation.verdict == "evaluated", evaluation.reason
+    return evaluation.comparison
+
+
+def _call(topic: str) -> dict[str, Any]:
+    return {"topic": topic, "msg": {}}
+
+
+def _factor(topic: str, value: float) -> dict[str, Any]:
+    return {"topic": topic, "msg": {"data": value}}
+
+
+def _target(values: list[float]) -> dict[str, Any]:
+    return joint_target_step(values, [f"joint_{i}" for i in range(1, 7)])
+
+
+def _in_start_band(share: float) -> float:
+    """joint_2 (limits about +-2.007) at ``share`` of plan_start_band's band (0 its start, 1 its end)."""
+    lim = python_impl.RobotModel(ANNO).joint_limits[1]
+    width = lim.upper - lim.lower
+    return lim.lower + (deep.START_BAND_AT + 0.001 * share) * width
+
+
+SWITCH_SCALING = 0.2
+"""Both scaling factors of the profile-switch scripts: on PROBOT Anno (every joint 3 rad/s,
+``ACCELERATION_LIMIT`` 1) the ratio A / v**2 of a move is then max |delta| / 1.8."""
+
+
+def _switch_script(ratio: float) -> list[dict[str, Any]]:
+    move = 9.0 * SWITCH_SCALING * ratio  # joint_1's displacement from home, the largest one
+    return [
+        _factor("/velocity_scaling", SWITCH_SCALING),
+        _factor("/acceleration_scaling", SWITCH_SCALING),
+        _target([move, 0.1, 0.2, 0.1, 0.4, 0.2]),
+        _call("/plan"),
+    ]
+
+
+DEEP_SCRIPTS = {
+    "execute_skips_start_check": (
+        [
+            _target([0.5, 0.3, 0.2, 0.1, 0.4, 0.2]),
+            _call("/plan"),
+            _target(SECOND),
+            _call("/go"),
+            _call("/execute"),
+        ],
+        # the tutorials' order: the plan executed at once, so it starts where the arm is
+        [
+            _target([0.5, 0.3, 0.2, 0.1, 0.4, 0.2]),
+            _call("/plan"),
+            _call("/execute"),
+            _target(SECOND),
+            _call("/go"),
+        ],
+        "execute.status",
+    ),
+    "plan_start_band": (
+        [
+            _target([0.1, _in_start_band(0.5), 0.3, 0.0, 0.5, 0.0]),
+            _call("/go"),
+            _target(SECOND),
+            _call("/plan"),
+        ],
+        [
+            _target([0.1, _in_start_band(1.01), 0.3, 0.0, 0.5, 0.0]),
+            _call("/go"),
+            _target(SECOND),
+            _call("/plan"),
+        ],
+        "plan.trajectory",
+    ),
+    "profile_switch_band": (_switch_script(1.0005), _switch_script(1.0011), "plan.trajectory"),
+}
+"""Per deep scenario bug: a script that shows it, a near miss that does not, the field reported."""
+
+
+@pytest.mark.parametrize("name", sorted(DEEP_SCRIPTS))
+def test_a_deep_scenario_fault_shows_in_its_script_and_not_in_the_near_miss(name: str) -> None:
+    shows, near_miss, field = DEEP_SCRIPTS[name]
+    comparison = _judge(f"benchmarks.zoo.deep:{name}", shows)
+    assert comparison.divergent and comparison.kind not in UNCOUNTED, comparison
+    assert comparison.field.startswith(field), comparison
+    assert not _judge(f"benchmarks.zoo.deep:{name}", near_miss).divergent
+    assert not _judge("python", shows).divergent  # the unmodified twin agrees on both
+    assert not _judge("python", near_miss).divergent
+
+
+def test_the_profile_ratio_is_the_switch_of_the_twin_s_profile() -> None:
+    """Below 1 the twin's plan never reaches its cruise speed, above 1 it does (then holds it)."""
+    limits = python_impl.RobotModel(ANNO).joint_limits
+    home = [0.0] * 6
+    for ratio in (0.9, 0.999, 1.001, 1.1):
+        goal = [9.0 * SWITCH_SCALING * ratio, 0.1, 0.2, 0.1, 0.4, 0.2]
+        assert deep.profile_ratio(limits, home, goal, SWITCH_SCALING, SWITCH_SCALING) == pytest.approx(ratio)
+        speed = plan_trajectory(limits, home, goal, SWITCH_SCALING, SWITCH_SCALING).velocities[:, 0]
+        cruise = 3.0 * SWITCH_SCALING
+        assert (abs(speed.max() - cruise) < 1e-12) == (ratio > 1), ratio
+    assert deep.profile_ratio(limits, home, home, 1.0, 1.0) == 0.0  # no move
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_tutorial_scripts_do_not_show_the_deep_scenario_faults(seed: int) -> None:
+    """What the campaign starts from misses them, so the table measures the search."""
+    for name in DEEP_SCRIPTS:
+        session = _scenario(f"benchmarks.zoo.deep:{name}")
+        evaluator = session.evaluator()
+        for case in tutorial_seeds(session, seed):
+            comparison = evaluator.evaluate(case).comparison
+            assert not comparison.divergent or comparison.kind in UNCOUNTED, (name, case.sequence, comparison)
 
 
 # -- the statistics of benchmarks/bench_deep.py ---------------------------------------------------

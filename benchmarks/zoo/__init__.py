@@ -279,6 +279,27 @@ DEEP: tuple[Bug, ...] = (
         op="scenario",
         module="deep",
     ),
+    Bug(
+        "execute_skips_start_check",
+        "execute(plan) runs a plan made before the arm moved from the plan's own start (no check of the start against the current state): it takes /plan, a move, then /execute",
+        "https://github.com/moveit/moveit/pull/63 ('validate trajectory before execution': the start point against the current state, allowed_start_tolerance); https://github.com/personalrobotics/aikido/issues/272 ('TrajectoryExecutors should check that the trajectory starts at the right place')",
+        op="scenario",
+        module="deep",
+    ),
+    Bug(
+        "plan_start_band",
+        "a plan starts 1 mrad off when the current joint_2 lies in a band 0.1% of its range wide (at 68.21% of it): the arm must be moved into the band before a /plan",
+        "https://github.com/robotology/mesh-support/issues/308 (a wrong entry of a per-joint calibration table); https://github.com/ros-industrial-consortium/scan_n_plan_workshop/pull/81 (the planner's start state read wrong)",
+        op="scenario",
+        module="deep",
+    ),
+    Bug(
+        "profile_switch_band",
+        "a move just past the switch from the triangular to the trapezoidal velocity profile (A / v^2 of the path's bounds in (1, 1.001), a float computed from the move and both scaling factors) timed as a triangle: up to 0.05% over the velocity limit",
+        "https://github.com/nameofuser1/py-scurve/issues/3 ('wrong profile when max velocity can not be reached': the duration jumps at the switch between the profiles); https://github.com/orocos/orocos_kinematics_dynamics/pull/39 ('Check that the maxvel is obtainable in a half trapezoidal velocity profile')",
+        op="scenario",
+        module="deep",
+    ),
 )
 """Deep bugs (issue 11, ``benchmarks/zoo/deep.py``): faults confined to narrow regions of
 the input space, for ``benchmarks.bench_deep``; not part of ``ZOO``'s runs."""

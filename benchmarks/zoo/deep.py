@@ -21,7 +21,9 @@ from numpy.typing import NDArray
 
 import python_impl
 from python_impl.angles import normalize_angle
-from robot_api.records import IKResult, IKStatus, JointType, Pose
+from python_impl.trajectory import plan_trajectory
+from robot_api.constants import ACCELERATION_LIMIT
+from robot_api.records import IKResult, IKStatus, JointLimit, JointType, Pose, RobotTrajectory
 
 Model = python_impl.RobotModel
 Group = python_impl.MoveGroup
@@ -240,16 +242,118 @@ class _SeedBandIk(Model):
 
 ik_seed_band = _impl(model=_SeedBandIk)
 
+
+# -- 10-12. deep in a script: faults a scenario must reach through a call sequence ----------
+
+
+class _ExecuteSkipsStartCheck(Group):
+    """execute(plan) does not compare the plan's start with the current state: a plan made
+    before the arm moved is run from its own start, the arm jumping there.
+
+    A plan executed right after it is made starts where the arm is, and go() plans from the
+    current state, so neither shows it: it takes a ``/plan``, a move, then ``/execute``."""
+
+    def execute(self, plan: Any, wait: bool = True) -> bool:
+        positions = getattr(plan, "positions", None)
+        times = getattr(plan, "time_from_start", ())
+        shaped = isinstance(positions, np.ndarray) and positions.shape == (len(times), self._model.dof)
+        if shaped and len(positions) and np.isfinite(positions[0]).all():
+            self._current = [
+                normalize_angle(v) if lim.type == JointType.CONTINUOUS else min(max(v, lim.lower), lim.upper)
+                for v, lim in zip(positions[0].tolist(), self._limits, strict=True)
+            ]
+        return bool(super().execute(plan, wait))
+
+
+execute_skips_start_check = _impl(group=_ExecuteSkipsStartCheck)
+
+
+START_BAND_AT = 0.6821
+"""Where ``plan_start_band``'s band starts, as a share of joint_2's range (0.1% of it wide)."""
+
+
+class _PlanStartBand(Group):
+    """plan() and go() read the current state through a calibration table with one wrong
+    entry: with the *current* joint_2 in a band 0.1% of its range wide (at 68.21% of it) the
+    trajectory starts 1 mrad off in joint_2.
+
+    A fresh group is at home, outside the band, so one call never shows it: the arm must
+    first be moved into the band, then a ``/plan`` made (go() still ends at its goal, the
+    1 mrad being inside the execution's start tolerance)."""
+
+    def _plan(self) -> RobotTrajectory:
+        start = list(self._current)
+        lim = self._limits[1]
+        low = lim.lower + START_BAND_AT * (lim.upper - lim.lower)
+        if low <= start[1] < low + 0.001 * (lim.upper - lim.lower):
+            start[1] += SHIFT
+        return plan_trajectory(
+            self._limits, start, self._goal(), self._velocity_scaling, self._acceleration_scaling
+        )
+
+
+plan_start_band = _impl(group=_PlanStartBand)
+
+
+SWITCH_BAND = 1e-3
+"""How far past the profile switch ``profile_switch_band``'s fault reaches (relative)."""
+
+
+def profile_ratio(
+    limits: tuple[JointLimit, ...],
+    start: list[float],
+    goal: list[float],
+    velocity: float,
+    acceleration: float,
+) -> float:
+    """``A / v**2`` of the twin's synchronized profile (``plan_trajectory``'s bounds on the path
+    coordinate): above 1 the move reaches its cruise speed (a trapezoid), below it does not (a
+    triangle); 0 for no move."""
+    vs = accel = math.inf
+    for lim, a, b in zip(limits, start, goal, strict=True):
+        d = normalize_angle(b - a) if lim.type == JointType.CONTINUOUS else b - a
+        if d != 0.0:
+            vs = min(vs, lim.velocity * velocity / abs(d))
+            accel = min(accel, ACCELERATION_LIMIT * acceleration / abs(d))
+    if vs == math.inf:
+        return 0.0
+    square = vs * vs
+    return accel / square if square > 0.0 else math.inf  # a bound so small its square underflows
+
+
+class _ProfileSwitchBand(Group):
+    """A move just past the switch from the triangular to the trapezoidal velocity profile (the
+    ratio ``A / v**2`` of the path's bounds in (1, 1.001)) is timed as a triangle: its peak
+    speed exceeds the scaled velocity limit by up to 0.05%.
+
+    The ratio is a computed float of the move's largest displacement and both scaling factors;
+    at the default factors (1.0) no move of the default robot reaches the switch, so it takes
+    a scaling factor, then a ``/plan`` whose move lies in a band about 0.1% wide."""
+
+    def _plan(self) -> RobotTrajectory:
+        goal = self._goal()
+        velocity = self._velocity_scaling
+        ratio = profile_ratio(self._limits, self._current, goal, velocity, self._acceleration_scaling)
+        if 1.0 < ratio < 1.0 + SWITCH_BAND:
+            velocity *= 1.0 + SWITCH_BAND  # the triangle's peak sqrt(A) is now within the bound
+        return plan_trajectory(self._limits, self._current, goal, velocity, self._acceleration_scaling)
+
+
+profile_switch_band = _impl(group=_ProfileSwitchBand)
+
 __all__ = [
     "amplified_error",
     "atan2_quadrant",
     "calibration_entry",
     "computed_branch",
+    "execute_skips_start_check",
     "ik_seed_band",
     "joint_relation",
     "narrow_band",
     "narrower_band",
     "per_joint_band",
+    "plan_start_band",
+    "profile_switch_band",
     "small_angle_wrist",
     "tight_relation",
     "wrap_past_pi",
