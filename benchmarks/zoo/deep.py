@@ -254,7 +254,7 @@ class _ExecuteSkipsStartCheck(Group):
     current state, so neither shows it: it takes a ``/plan``, a move, then ``/execute``."""
 
     def execute(self, plan: Any, wait: bool = True) -> bool:
-        positions = getattr(plan, "positions", None)
+        positions: Any = getattr(plan, "positions", None)
         times = getattr(plan, "time_from_start", ())
         shaped = isinstance(positions, np.ndarray) and positions.shape == (len(times), self._model.dof)
         if shaped and len(positions) and np.isfinite(positions[0]).all():
