@@ -105,6 +105,25 @@ def test_an_unsolved_site_names_the_values_its_varying_operand_took() -> None:
     assert table.crossing(2.0) == [] and 7 in table.done
 
 
+def test_the_way_to_cross_is_the_side_the_site_never_compared_a_value_on() -> None:
+    """``x < 0.735`` seen false with x = 1.5 and with x = 0.735 itself: from 0.735 the branch
+    not taken lies below, which the value alone cannot tell (a campaign that wrote the threshold
+    into a leaf then only ever wrote values above it)."""
+    table = ComparedValues()
+    for x in (1.5, 0.735):
+        table.watch(4, x, 0.735, x < 0.735)
+    assert table.crossings(0.735) == [(0.735, -1.0)] and table.crossings(1.5) == [(0.735, -1.0)]
+    for x in (0.2, 0.3):
+        table.watch(5, 0.6, x, x >= 0.6)  # never true: the values lie below, cross up
+    assert table.crossings(0.3) == [(0.6, 1.0)]
+    table.watch(6, 1.0, 2.0, False)
+    table.watch(6, 2.0, 2.0, False)  # x > 2.0, false at 1.0 and at 2.0: up from 2.0
+    assert table.crossings(2.0) == [(2.0, 1.0)]
+    table.watch(7, 1.0, 9.5, True)
+    table.watch(7, 12.0, 9.5, True)  # x != 9.5 on both sides: no side to prefer
+    assert table.crossings(12.0) == [(9.5, 0.0)]
+
+
 def test_a_site_remembers_only_its_newest_operand_values() -> None:
     table = ComparedValues()
     values = [1.0 + i for i in range(cv.RECENT + 2)]

@@ -1049,6 +1049,26 @@ def test_compared_writes_past_the_threshold_into_the_leaf_a_comparison_saw() -> 
     assert abs(sum(o["position"][1] in below for o in unseen) / 400 - random_leaf) < 0.06
 
 
+def test_compared_crosses_from_a_leaf_on_the_threshold_to_the_side_never_reached() -> None:
+    """``x < 0.31`` saw x = 1.2, then x = 0.31 (a leaf the mutator had set to the threshold): the
+    leaf holding 0.31 gets a value below it, never one above (before: always above)."""
+    table = ComparedValues()
+    for x in (1.2, 0.31):
+        table.watch(1, x, 0.31, x < 0.31)
+    below = {math.nextafter(0.31, -math.inf), 0.31 - 1e-6, 0.31 - 1e-3}
+    written = []
+    for seed in range(200):
+        out = MUTATORS["compared"](
+            joint_state(position=(0.1, 0.31)), make_ctx(seed, JS_TYPES, compared=table)
+        )
+        if out["position"][0] == 0.1:
+            written.append(out["position"][1])
+    assert set(written) & below == below
+    down = sum(v in below for v in written)
+    up = sum(0.31 < v <= 0.31 + 1e-3 for v in written)  # only the random leaf's draws (1 in 8)
+    assert down >= 0.7 * 200 and up <= 0.15 * 200, (down, up)
+
+
 def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:
     """``0.3 <= x < 0.31`` (two sites) only ever saw x = 1.2 and 0.5: the leaf holding 1.2 gets
     the band's middle, 0.305, half the times input-to-state picks it, a value past one edge

@@ -297,27 +297,29 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
     if ctx.compared is not None and ctx.rng.random() < CROSSING_PROBABILITY:
         found = ctx.compared
         crossing = [
-            (leaf, threshold)
+            (leaf, threshold, way)
             for leaf in _eligible_leaves(message, ctx, ("compared",))
-            for threshold in found.crossing(_get(message, leaf.loc))
+            for threshold, way in found.crossings(_get(message, leaf.loc))
         ]
         if crossing:
-            leaf, threshold = ctx.rng.choice(crossing)
+            leaf, threshold, way = ctx.rng.choice(crossing)
             value = _get(message, leaf.loc)
-            others = [t for other, t in crossing if other is leaf and t != threshold]
+            others = [t for other, t, _ in crossing if other is leaf and t != threshold]
             if others and ctx.rng.random() < BETWEEN_PROBABILITY:
                 new = (threshold + ctx.rng.choice(others)) / 2.0
             else:
-                new = _past(threshold, value, ctx.rng)
+                new = _past(threshold, value, ctx.rng, way)
             _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
             return message
     return _apply_leaf_ops(message, ctx, ("compared",))
 
 
-def _past(threshold: float, value: float, rng: Random) -> float:
+def _past(threshold: float, value: float, rng: Random, way: float = 0.0) -> float:
     """``threshold``, or the next float, a relative 1e-6 or 1e-3 (at least that much absolute)
-    beyond it, on the side away from ``value``."""
-    way = -1.0 if value > threshold else 1.0
+    beyond it, on the side ``way`` (+1.0 up, -1.0 down; 0.0: away from ``value``, and either
+    way, drawn, from a value on the threshold)."""
+    if way == 0.0:
+        way = -1.0 if value > threshold else 1.0 if value < threshold else rng.choice((-1.0, 1.0))
     step = max(1.0, abs(threshold))
     near = (
         threshold,

@@ -24,7 +24,8 @@ operand a target compares is often a value of the input itself (a joint target t
 to, then the seed of the next IK). Each unsolved site keeps the last :data:`RECENT` distinct
 values its varying operand took; :meth:`ComparedValues.crossing` names the thresholds whose
 site compared a given value, and the mutator writes, into the leaf that holds it, the threshold
-or a value past it on the side that value never reached (the branch not yet taken).
+or a value past it on the side the site never compared a value on (the branch not yet taken;
+:meth:`ComparedValues.crossings`).
 
 Nothing here decides a verdict: the table only shapes mutations. The order of sites is the
 order they were first seen, so a campaign with a given ``-seed`` draws the same values.
@@ -114,13 +115,25 @@ class ComparedValues:
         """Thresholds of the unsolved sites that recently compared ``value`` (one of the last
         :data:`RECENT` values of their varying operand), in the order the sites were first seen.
         None for 0.0, the default of every field, which matches by coincidence."""
+        return [threshold for threshold, _ in self.crossings(value)]
+
+    def crossings(self, value: float) -> list[tuple[float, float]]:
+        """``crossing``'s thresholds, each with the way (+1.0 up, -1.0 down) from it to the side
+        its site never compared a value on: an unsolved ``<``, ``<=``, ``>`` or ``>=`` gave one
+        outcome, so the values it saw lie on one side of the threshold, or on it. From a value
+        *on* the threshold that side is the one away from the site's other values (``x < t``
+        seen false with x = t and x = 1.5: down), which the value alone cannot tell; 0.0 when
+        the site saw no value off its threshold, or values on both sides (``==``, ``!=``)."""
         if value == 0.0:
             return []
-        return [
-            threshold
-            for site, threshold in self.thresholds.items()
-            if value in self._recent.get(site, ()) and self._state[site][_OUTCOMES] != 3
-        ]
+        out = []
+        for site, threshold in self.thresholds.items():
+            recent = self._recent.get(site, ())
+            if value in recent and self._state[site][_OUTCOMES] != 3:
+                below = any(v < threshold for v in recent)
+                above = any(v > threshold for v in recent)
+                out.append((threshold, 0.0 if below == above else (1.0 if below else -1.0)))
+        return out
 
     def __len__(self) -> int:
         return len(self.thresholds)
