@@ -20,7 +20,7 @@ from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
 from fuzzer.scenario.oracle_facts import Context, JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import absolute, extent_changed
-from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge
+from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge, plan_points, timed_as_contract
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api import robots
@@ -1008,6 +1008,43 @@ remembered in between (the goals 4.9e-16 apart), so the last plan is a move of 2
 duration, 2 sqrt(d / A), is 9.514e-7 s on native and 9.525e-7 s on the twin, 1.08e-9 s apart
 (unminimized: moves of 1e-17 and 4e-16 rad, 5.3e-9 s against 3.0e-8 s), each what the contract
 gives its own two points."""
+
+
+def _plan_outcome(times: np.ndarray, positions: np.ndarray) -> Outcome:
+    return Outcome(
+        Status.OK,
+        values={"trajectory.time_from_start": tuple(times), "trajectory.positions": tuple(positions.ravel())},
+    )
+
+
+@pytest.mark.parametrize("move", [0.3, 0.7, 1.2345, 2.5e-13])  # no duration on a multiple of dt
+def test_a_plan_with_a_sample_more_or_fewer_at_the_same_duration_is_not_timed_as_the_contract(
+    move: float,
+) -> None:
+    """``timed_as_contract`` checked only the duration, so with inputs apart by any amount the
+    timing rule explained away a plan that repeats its start at t = 0 (the zoo's
+    ``duplicate_start_point``) or drops a sample, whose duration is the contract's."""
+    plan = plan_trajectory(limits_of(FACTS), [0.0, 0.0], [move, -move], 1.0, 1.0)
+    t, q = plan.time_from_start, plan.positions
+    assert timed_as_contract("plan", _plan_outcome(t, q), Context(), FACTS)
+    doubled = _plan_outcome(np.concatenate([t[:1], t]), np.vstack([q[:1], q]))
+    assert not timed_as_contract("plan", doubled, Context(), FACTS)
+    if len(t) > 2:
+        dropped = _plan_outcome(np.delete(t, 1), np.delete(q, 1, axis=0))
+        assert not timed_as_contract("plan", dropped, Context(), FACTS)
+
+
+def test_a_duration_on_a_multiple_of_the_sampling_step_allows_either_count() -> None:
+    """Two correct targets whose durations straddle k * dt within the tolerance sample k or
+    k + 1 points: both are the contract's timing."""
+    assert plan_points(0.3) == 31 and plan_points(0.3 + 1e-12) == 32 and plan_points(0.0) == 1
+    total = 0.3 + 1e-13  # just past 30 steps: 31 samples before the end, then the end
+    q = np.linspace([0.0, 0.0], [0.1, 0.0], 32)
+    times = np.append(np.arange(31) * 0.01, total)
+    expected = 0.3  # as if the contract gave 0.3 s: within 1e-9 relative of the target's
+    slack = 1e-9 * total + 1e-12
+    assert plan_points(expected - slack) <= len(times) <= plan_points(expected + slack)
+    assert len(q) == len(times)
 
 
 def test_a_plan_as_long_as_a_rounding_error_is_timed_as_each_target_s_own_points() -> None:

@@ -27,7 +27,7 @@ import numpy as np
 
 from fuzzer.execution.records import Outcome
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
-from robot_api.constants import ACCELERATION_LIMIT
+from robot_api.constants import ACCELERATION_LIMIT, TRAJECTORY_DT
 from robot_api.errors import RobotAPIError
 from robot_api.records import JointLimit, JointType
 
@@ -63,9 +63,21 @@ def reference_duration(kind: str, rows: np.ndarray, before: Context, facts: Scen
     return float(timed.time_from_start[-1])
 
 
+def plan_points(duration: float) -> int:
+    """How many points the contract's plan of ``duration`` s has: one every ``TRAJECTORY_DT``
+    strictly before the end, then the end (``python_impl.trajectory.plan_trajectory``)."""
+    if not (duration > 0.0 and math.isfinite(duration)):
+        return 1
+    steps = np.arange(math.ceil(duration / TRAJECTORY_DT), dtype=np.float64) * TRAJECTORY_DT
+    return int(np.count_nonzero(steps < duration)) + 1
+
+
 def timed_as_contract(kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts) -> bool:
     """Whether ``outcome`` (one target's ``plan`` or ``cartesian_path`` step) lasts what the
-    contract's timing of its own positions gives, within ``RETIME_TOLERANCE`` (relative)."""
+    contract's timing of its own positions gives, within ``RETIME_TOLERANCE`` (relative), and,
+    for a plan, has as many points as a plan of a duration within that tolerance has (a sample
+    more or fewer at the same duration, e.g. the start repeated at t = 0, is not the contract's
+    timing; a duration near a multiple of ``TRAJECTORY_DT`` allows either count)."""
     if kind not in ("plan", "cartesian_path"):
         return False
     dof = len(facts.joints)
@@ -78,7 +90,9 @@ def timed_as_contract(kind: str, outcome: Outcome, before: Context, facts: Scena
         return False
     actual = float(times[-1])
     slack = RETIME_TOLERANCE * max(abs(actual), abs(expected)) + RETIME_ABSOLUTE
-    return math.isfinite(actual) and abs(actual - expected) <= slack
+    if not (math.isfinite(actual) and abs(actual - expected) <= slack):
+        return False
+    return kind != "plan" or plan_points(expected - slack) <= times.size <= plan_points(expected + slack)
 
 
 PHASE_EDGE = 1e-9
