@@ -126,9 +126,14 @@ class Harness:
         """Evaluate a decoded test case and record what it showed."""
         if self.stats.first_input is None:
             self.stats.first_input = time.time()
+        compared = self.float_tracer.compared if self.float_tracer is not None else None
         if self.float_tracer is not None:
             self.float_tracer.install()  # a fresh budget; again if Atheris swapped its _trace_cmp in
+        if compared is not None:
+            compared.begin()
         evaluation = self.evaluator.evaluate(case, validated=trusted)
+        if compared is not None:
+            compared.end(_digest(data))  # what this input compared, for when it is mutated
         if evaluation.verdict != Verdict.MALFORMED:
             self._remember(data, case)
         if evaluation.verdict == Verdict.FILTERED:
@@ -324,7 +329,7 @@ class Harness:
         a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
         try:
             rng = random.Random(seed)
-            parent = self._parent(data, rng, pool=partner is None)
+            parent = self._parent(data, rng, pool=partner is None, select=True)
             fresh = self._fresh(parent, rng)
             if fresh is not None:
                 return self._emit(parent.child(*fresh), parent, max_size, data)
@@ -347,12 +352,16 @@ class Harness:
         except Exception:  # noqa: BLE001 - must never raise into libFuzzer
             return data[:max_size]
 
-    def _parent(self, data: bytes, rng: random.Random, pool: bool = True) -> TestCase:
+    def _parent(self, data: bytes, rng: random.Random, pool: bool = True, select: bool = False) -> TestCase:
+        """The test case of ``data`` (or, ``pool``, sometimes a high-difference input instead);
+        ``select``: the one to mutate, whose compared values ``ComparedValues.operands`` gives."""
         if pool and rng.random() < POOL_PARENT_CHANCE:
             preferred = self.pool.pick(rng)
             if preferred is not None:
                 data = preferred
         case, _ = self._decode(data)
+        if select and self.float_tracer is not None and self.float_tracer.compared is not None:
+            self.float_tracer.compared.select(_digest(data))
         if case is None:
             # not a test case (a foreign or damaged file): restart from a generated seed
             base = rng.choice(self.seeds)
@@ -382,3 +391,8 @@ class Harness:
                 self._last = (out, candidate)
                 return out
         return fallback[:max_size]
+
+
+def _digest(data: bytes) -> bytes:
+    """A short key of an input's bytes (``ComparedValues``' memory of what each input compared)."""
+    return hashlib.blake2b(data, digest_size=16).digest()

@@ -124,6 +124,42 @@ def test_the_way_to_cross_is_the_side_the_site_never_compared_a_value_on() -> No
     assert table.crossings(12.0) == [(9.5, 0.0)]
 
 
+def test_each_input_s_own_compared_values_are_remembered_for_when_it_is_mutated() -> None:
+    """``ratio < 1.001`` seen false with ratios 2.0 (input b"a") and 3.0 (b"b"), computed from
+    the input, held by no leaf: mutating b"a" gives (1.001, 2.0, down), b"b" (1.001, 3.0, down)."""
+    table = ComparedValues()
+    table.watch(9, 4.0, 1.001, False)  # a site's first comparison only opens its record
+    for key, ratio in ((b"a", 2.0), (b"b", 3.0), (b"c", 2.5)):
+        table.begin()
+        table.watch(9, ratio, 1.001, False)
+        table.watch(9, ratio * 7, 1.001, False)  # only the first value of an input is its own
+        table.end(key)
+    table.select(b"a")
+    assert table.operands() == [(1.001, 2.0, -1.0)]
+    table.select(b"b")
+    assert table.operands() == [(1.001, 3.0, -1.0)]
+    table.select(b"unknown")
+    assert table.operands() == []
+    table.begin()
+    table.watch(9, 1.0005, 1.001, True)  # solved: nothing left to cross
+    table.end(b"d")
+    table.select(b"a")
+    assert table.operands() == []
+
+
+def test_the_memory_keeps_the_newest_inputs() -> None:
+    table = ComparedValues()
+    table.watch(1, 5.0, 0.5, False)
+    for i in range(cv.MEMORY + 1):
+        table.begin()
+        table.watch(1, 6.0 + i, 0.5, False)
+        table.end(str(i).encode())
+    table.select(b"0")
+    assert table.operands() == []  # the oldest went
+    table.select(b"1")
+    assert table.operands() == [(0.5, 7.0, -1.0)]
+
+
 def test_a_site_remembers_only_its_newest_operand_values() -> None:
     table = ComparedValues()
     values = [1.0 + i for i in range(cv.RECENT + 2)]

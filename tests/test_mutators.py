@@ -1069,6 +1069,36 @@ def test_compared_crosses_from_a_leaf_on_the_threshold_to_the_side_never_reached
     assert down >= 0.7 * 200 and up <= 0.15 * 200, (down, up)
 
 
+def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_threshold() -> None:
+    """No leaf holds what ``ratio < 1.001`` compared (a ratio computed from the input: 2.0 for
+    this parent): three times in four a leaf is scaled by 1.001 / 2.0 (or just below), so a ratio
+    proportional to that leaf lands right past the threshold."""
+    table = ComparedValues()
+    table.watch(9, 3.0, 1.001, False)
+    table.begin()
+    table.watch(9, 2.0, 1.001, False)
+    table.end(b"parent")
+    table.select(b"parent")
+    below = {1.001, math.nextafter(1.001, -math.inf), 1.001 - 1e-6 * 1.001, 1.001 - 1e-3 * 1.001}
+    scaled = 0
+    for seed in range(400):
+        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=table))
+        for before, after in zip((0.4, 0.8), out["position"], strict=True):
+            if after != before and any(after == before * (t / 2.0) for t in below):
+                scaled += 1
+    assert abs(scaled / 400 - 0.75) < 0.07
+    table.select(b"another")  # an input that compared nothing there: the random leaf only
+    outs = [
+        MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(s, JS_TYPES, compared=table))
+        for s in range(100)
+    ]
+    assert not any(
+        a != b and a == b * (1.001 / 2.0)
+        for o in outs
+        for a, b in zip(o["position"], (0.4, 0.8), strict=True)
+    )
+
+
 def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:
     """``0.3 <= x < 0.31`` (two sites) only ever saw x = 1.2 and 0.5: the leaf holding 1.2 gets
     the band's middle, 0.305, half the times input-to-state picks it, a value past one edge

@@ -18,11 +18,15 @@ class Thresholds(Protocol):
     """Where ``compared`` draws a value (``fuzzer.selection.compared.ComparedValues``): ``pick``
     gives a comparison threshold of the targets, or None before one is known; ``crossings`` the
     thresholds of branches never taken whose comparison recently saw a given value, each with the
-    way to that branch (+1.0 up, -1.0 down, 0.0 unknown); ``len`` is how many are known."""
+    way to that branch (+1.0 up, -1.0 down, 0.0 unknown); ``operands`` the values the input being
+    mutated compared at unsolved sites, with their thresholds and ways; ``len`` is how many are
+    known."""
 
     def pick(self, rng: Random) -> float | None: ...
 
     def crossings(self, value: float) -> list[tuple[float, float]]: ...
+
+    def operands(self) -> list[tuple[float, float, float]]: ...
 
     def __len__(self) -> int: ...
 

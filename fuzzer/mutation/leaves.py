@@ -311,7 +311,35 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
                 new = _past(threshold, value, ctx.rng, way)
             _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
             return message
+        if _scaled(message, ctx):
+            return message
     return _apply_leaf_ops(message, ctx, ("compared",))
+
+
+def _scaled(message: Message, ctx: MutationContext) -> bool:
+    """When no leaf holds a value an unsolved comparison saw: a float leaf (not 0) of the
+    message multiplied by ``t' / v``, for ``v`` a value this input compared at an unsolved site
+    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``). A value
+    computed from the input in proportion to that leaf (a ratio of a scaling factor and a
+    squared one, a distance from home) then lands right past the threshold; one that is not,
+    moves toward it. Whether one was written."""
+    assert ctx.compared is not None
+    operands = ctx.compared.operands()
+    if not operands:
+        return False
+    leaves = [
+        leaf for leaf in _eligible_leaves(message, ctx, ("compared",)) if _get(message, leaf.loc) != 0.0
+    ]
+    if not leaves:
+        return False
+    threshold, value, way = ctx.rng.choice(operands)
+    leaf = ctx.rng.choice(leaves)
+    x = _get(message, leaf.loc)
+    new = x * (_past(threshold, value, ctx.rng, way) / value) if value != 0.0 else math.nan
+    if not math.isfinite(new) or new == x:
+        return False
+    _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
+    return True
 
 
 def _past(threshold: float, value: float, rng: Random, way: float = 0.0) -> float:

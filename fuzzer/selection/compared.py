@@ -34,6 +34,7 @@ order they were first seen, so a campaign with a given ``-seed`` draws the same 
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from random import Random
 from typing import Final
 
@@ -46,6 +47,9 @@ MAX_SITES: Final = 4096
 RECENT: Final = 256
 """Distinct values of its varying operand an unsolved site remembers (the newest): enough to
 still hold the values of most corpus inputs when one of them is mutated."""
+MEMORY: Final = 4096
+"""Inputs whose operands at the unsolved sites are remembered (the most recently run or
+mutated), for :meth:`ComparedValues.operands`."""
 
 _FIRST_A, _FIRST_B, _A_VARIES, _B_VARIES, _OUTCOMES, _COUNT = range(6)
 
@@ -67,6 +71,9 @@ class ComparedValues:
         self.thresholds: dict[int, float] = {}
         self._state: dict[int, list[float | bool | int]] = {}
         self._recent: dict[int, dict[float, None]] = {}
+        self._running: dict[int, float] = {}
+        self._memory: OrderedDict[bytes, dict[int, float]] = OrderedDict()
+        self._parent: dict[int, float] = {}
 
     def watch(self, site: int, a: float, b: float, result: object) -> None:
         """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
@@ -99,7 +106,9 @@ class ComparedValues:
             if recent is None:  # the first value it took counts too
                 recent = self._recent[site] = {}
                 _remember(recent, float(state[_FIRST_A] if a_varies else state[_FIRST_B]))
-            _remember(recent, float(a if a_varies else b))
+            operand = float(a if a_varies else b)
+            _remember(recent, operand)
+            self._running.setdefault(site, operand)
         elif int(state[_COUNT]) >= PATIENCE:
             self._settle(site)
 
@@ -116,6 +125,43 @@ class ComparedValues:
         :data:`RECENT` values of their varying operand), in the order the sites were first seen.
         None for 0.0, the default of every field, which matches by coincidence."""
         return [threshold for threshold, _ in self.crossings(value)]
+
+    def begin(self) -> None:
+        """An input starts running: what the unsolved sites compare from now on is its own."""
+        self._running = {}
+
+    def end(self, key: bytes) -> None:
+        """The input ``key`` (a digest of its bytes) has run: remember the first value each
+        unsolved threshold site compared (the newest :data:`MEMORY` inputs)."""
+        if self._running:
+            self._memory[key] = self._running
+            self._memory.move_to_end(key)
+            if len(self._memory) > MEMORY:
+                self._memory.popitem(last=False)
+        else:
+            self._memory.pop(key, None)
+        self._running = {}
+
+    def select(self, key: bytes) -> None:
+        """The input ``key`` is about to be mutated: :meth:`operands` are now its."""
+        self._parent = self._memory.get(key, {})
+        if self._parent:
+            self._memory.move_to_end(key)
+
+    def operands(self) -> list[tuple[float, float, float]]:
+        """For the input being mutated (:meth:`select`), each still unsolved threshold site it
+        reached: (threshold, the value it compared there, the way from that value to the branch
+        never taken: +1.0 up, -1.0 down, 0.0 unknown), in the order the sites were first seen.
+        A value computed from the input (a ratio of two scaling factors, a distance) rather than
+        held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
+        value, which puts a value proportional to that leaf right past the threshold."""
+        out = []
+        for site, value in self._parent.items():
+            threshold = self.thresholds.get(site)
+            if threshold is None or self._state[site][_OUTCOMES] == 3 or value == threshold:
+                continue
+            out.append((threshold, value, 1.0 if value < threshold else -1.0))
+        return out
 
     def crossings(self, value: float) -> list[tuple[float, float]]:
         """``crossing``'s thresholds, each with the way (+1.0 up, -1.0 down) from it to the side
