@@ -17,6 +17,8 @@ Mutators
 * ``seq_motion``: insert a move (a fresh joint target and ``/go``, or ``/plan`` and
   ``/execute``; often after a fresh scaling factor), often right after a ``/remember X`` and
   then often followed by ``/named_target X`` and a move back.
+* ``seq_observe``: one ``/go`` replaced by ``/plan`` and ``/execute``, the same move with its
+  trajectory in the outputs.
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -150,6 +152,22 @@ def _move(ctx: SequenceContext) -> Steps:
     if ctx.rng.random() < PLAN_EXECUTE_PROBABILITY:
         return [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
     return [GO]
+
+
+@register("seq_observe", weight=1.0)
+def seq_observe(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Replace one ``/go`` by ``/plan`` and ``/execute``: the same move (go() plans, then
+    executes the plan), now with its trajectory among the outputs the oracle compares. A fault
+    that shows only in a trajectory (where it starts, how it is timed) is invisible behind a
+    ``/go``, and the scripts a campaign starts from mostly move with ``/go``."""
+    gos = [i for i, s in enumerate(steps) if s["topic"] == "/go"]
+    if not gos:
+        raise NotApplicable("no /go to observe")
+    if len(steps) >= ctx.max_steps:
+        raise NotApplicable("no room for /plan and /execute")
+    at = ctx.rng.choice(gos)
+    steps[at : at + 1] = [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
+    return steps, "seq_observe"
 
 
 @register("seq_delete", weight=1.0)
