@@ -159,7 +159,7 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             assert motion_at(old, new) is not None
         elif name == "seq_observe":
             at = [i for i in range(len(old)) if old[i] == GO and new[i : i + 2] == [PLAN, EXECUTE]]
-            assert any(new[:i] + [GO] + new[i + 2 :] == old for i in at)
+            assert any([*new[:i], GO, *new[i + 2 :]] == old for i in at)
         elif name == "seq_compared":
             changed = [i for i in range(len(old)) if old[i] != new[i]]
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
