@@ -32,7 +32,7 @@ test: setup
 	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
-## then every deep bug x 6 engines x 10 trials x 60 s (about 3 hours on 2 cores), then every zoo
+## then every deep bug x 6 engines x 10 trials x 60 s (about 3.5 hours on 2 cores), then every zoo
 ## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes). Each step keeps
 ## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup

@@ -82,9 +82,12 @@ MODES = {
     ),
 }
 """quick: CI-sized (about a minute on 2 cores). short: every deep bug against the baselines the
-goal names, 10 trials x 10 s (32 minutes on 2 cores; 55 before trials stopped at their first
-detection). full: 10 trials x 60 s, the old engine (``weights``) too: 690 trials, about 2.7
-hours on 2 cores (4.2 trials a minute over the first 495, run in pieces with the journal).
+goal names, 10 trials x 10 s (32 minutes on 2 cores for the first 12 deep bugs, 55 before
+trials stopped at their first detection; the three deep scenario bugs of 2026-11-27 add 60
+trials of at most 10 s, about 5 minutes). full: 10 trials x 60 s, the old engine (``weights``)
+too: 780 trials (690 for the first 12 bugs, about 2.7 hours on 2 cores at 4.2 trials a minute;
+the three deep scenario bugs add 90 trials that mostly run their whole minute, about 45
+minutes), run in pieces with the journal.
 zoo: the 22 shallow zoo bugs (``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x
 10 s; the 8 of the scenario op under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on
 2 cores."""
