@@ -1097,16 +1097,6 @@ def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_th
         for o in outs
         for a, b in zip(o["position"], (0.4, 0.8), strict=True)
     )
-    noise = ComparedValues()  # an oracle's ``gap > 1e-6`` that saw rounding errors: no proportion
-    noise.watch(5, 3e-16, 1e-6, False)
-    noise.begin()
-    noise.watch(5, 2e-16, 1e-6, False)
-    noise.end(b"parent")
-    noise.select(b"parent")
-    assert noise.operands() == [(1e-6, 2e-16, 1.0)]
-    for seed in range(100):
-        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=noise))
-        assert all(abs(v) < 2.0 for v in out["position"])  # never scaled by 5e9
 
 
 def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:

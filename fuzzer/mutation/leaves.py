@@ -316,24 +316,20 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
     return _apply_leaf_ops(message, ctx, ("compared",))
 
 
-SCALE_LOW, SCALE_HIGH = 1e-3, 1e3
-""":func:`_scaled` scales a leaf by at least 1e-3 and at most 1e3, and never across zero: a
-threshold 0 (``abs(d) > 0.0``) or an oracle's 1e-6 against a rounding error of 1e-16 says
-nothing a proportion could use."""
-
-
 def _scaled(message: Message, ctx: MutationContext) -> bool:
     """When no leaf holds a value an unsolved comparison saw: a float leaf (not 0) of the
     message multiplied by ``t' / v``, for ``v`` a value this input compared at an unsolved site
-    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``; ``t / v``
-    within [``SCALE_LOW``, ``SCALE_HIGH``]). A value
+    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``). A value
     computed from the input in proportion to that leaf (a ratio of a scaling factor and a
     squared one, a distance from home) then lands right past the threshold; one that is not,
-    moves toward it. Whether one was written."""
+    moves toward it. Whether one was written.
+
+    The factor is not bounded: an oracle's ``gap > 1e-6`` that saw a rounding error of 2e-16
+    scales a leaf by 5e9, a threshold 0 scales one to about 0. Keeping only factors within
+    1e-3..1e3 (edc5fe9) lost ``plan_start_band`` in 10 of 10 one-minute trials against 4 of 10
+    without (p = 0.035, BENCHMARKS.md): such far values are mutations of their own."""
     assert ctx.compared is not None
-    operands = [
-        (t, v, w) for t, v, w in ctx.compared.operands() if v != 0.0 and SCALE_LOW <= t / v <= SCALE_HIGH
-    ]
+    operands = ctx.compared.operands()
     if not operands:
         return False
     leaves = [
