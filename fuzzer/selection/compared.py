@@ -150,8 +150,9 @@ class ComparedValues:
 
     def operands(self) -> list[tuple[float, float, float]]:
         """For the input being mutated (:meth:`select`), each still unsolved threshold site it
-        reached: (threshold, the value it compared there, the way from that value to the branch
-        never taken: +1.0 up, -1.0 down, 0.0 unknown), in the order the sites were first seen.
+        reached off its threshold: (threshold, the value it compared there, the way from that
+        value to the branch never taken: +1.0 up, -1.0 down), in the order that input reached
+        them (a value on the threshold is left to :meth:`crossings`, which knows the way).
         A value computed from the input (a ratio of two scaling factors, a distance) rather than
         held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
         value, which puts a value proportional to that leaf right past the threshold."""
