@@ -161,6 +161,11 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             at = [i for i in range(len(old)) if old[i] == GO and new[i : i + 2] == [PLAN, EXECUTE]]
             assert any([*new[:i], GO, *new[i + 2 :]] == old for i in at)
         elif name == "seq_compared":
+            if reported == "seq_compared:observe":  # the first /go after the changed step observed
+                at = [i for i in range(len(new) - 1) if new[i : i + 2] == [PLAN, EXECUTE] and old[i] == GO]
+                assert at and new[at[0] + 2 :] == old[at[0] + 1 :]
+                new = [*new[: at[0]], GO, *new[at[0] + 2 :]]
+                assert any(old[i] != new[i] for i in range(at[0]))
             changed = [i for i in range(len(old)) if old[i] != new[i]]
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
             before_values, after_values = floats(old[changed[0]]["msg"]), floats(new[changed[0]]["msg"])
@@ -170,6 +175,8 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             assert any(new == old[:i] + other["steps"][j:] for i in range(8) for j in range(5))
     if name == "seq_step":
         assert len(used) > 3 and all(u.split(":")[1] in mutators.MUTATORS for u in used)
+    elif name == "seq_compared":
+        assert used == {name, f"{name}:observe"}
     else:
         assert used == {name}
 

@@ -24,7 +24,8 @@ Mutators
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
 * ``seq_compared``: one float of one step set to a comparison threshold of the targets, or a
-  value just either side of it (the value mutator ``compared``).
+  value just either side of it (the value mutator ``compared``); often the next ``/go`` is
+  observed too (``seq_compared:observe``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
 Every child has 1..``max_steps`` steps and, when its parents validate, validates
@@ -74,6 +75,11 @@ SETTING_PROBABILITY: Final = 0.5
 MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
 """What a script sets just before a move (MoveIt's tutorials slow a move down this way)."""
 SPLICE_ATTEMPTS: Final = 8
+OBSERVE: Final = "observe"
+"""Lineage suffix of a ``seq_compared`` child whose next ``/go`` was also observed."""
+OBSERVE_PROBABILITY: Final = 0.5
+"""``seq_compared``: chance that the first ``/go`` after the changed step becomes ``/plan`` +
+``/execute`` (when there is one and room for it)."""
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -165,9 +171,13 @@ def seq_observe(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
         raise NotApplicable("no /go to observe")
     if len(steps) >= ctx.max_steps:
         raise NotApplicable("no room for /plan and /execute")
-    at = ctx.rng.choice(gos)
-    steps[at : at + 1] = [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
+    _observe(steps, ctx.rng.choice(gos))
     return steps, "seq_observe"
+
+
+def _observe(steps: Steps, at: int) -> None:
+    """Replace the ``/go`` at ``at`` by ``/plan`` and ``/execute`` (the caller checks for room)."""
+    steps[at : at + 1] = [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
 
 
 @register("seq_delete", weight=1.0)
@@ -220,10 +230,10 @@ def _one_step(
     steps: Steps,
     ctx: SequenceContext,
     change: Callable[[StepDict, MutationContext], tuple[dict[str, Any], str]],
-) -> tuple[Steps, str]:
+) -> tuple[Steps, str, int]:
     """``steps`` with one step's message replaced by ``change(step, value context)`` (a step
     drawn among those with values; another one when it raises ``NotApplicable`` or changes
-    nothing), and the name it gives."""
+    nothing), the name it gives, and that step's index."""
     candidates = [i for i, s in enumerate(steps) if ctx.tables.fields.get(msg_type_of(s, ctx) or "")]
     while candidates:
         index = candidates.pop(ctx.rng.randrange(len(candidates)))
@@ -235,7 +245,7 @@ def _one_step(
             continue
         if message != step["msg"]:  # a value splice of equal fields changes nothing
             steps[index] = {**step, "msg": message}
-            return steps, name
+            return steps, name, index
     raise NotApplicable("no step has a value to mutate")
 
 
@@ -259,19 +269,31 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
             raise NotApplicable("no value mutator applies to this step")
         return message, f"{SEQ_STEP}:{name}"
 
-    return _one_step(steps, ctx, change)
+    steps, name, _ = _one_step(steps, ctx, change)
+    return steps, name
 
 
 @register(SEQ_COMPARED, weight=1.0)
 def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Set one float of one step to a comparison threshold of the targets, or a value just
     either side of it (the value mutator ``compared``; its own bandit arm, as it needs no other
-    value mutator to come up first)."""
+    value mutator to come up first).
+
+    With probability :data:`OBSERVE_PROBABILITY` the first ``/go`` after that step also becomes
+    ``/plan`` + ``/execute`` (as ``seq_observe``; lineage ``seq_compared:observe``): the
+    comparison this step aims to flip (a profile's switch on a ratio of the scaling factors,
+    a band of the start state) mostly changes the move that follows, and a ``/go`` shows the
+    oracle where the move ended, not the trajectory that changed."""
     if ctx.value.compared is None or not len(ctx.value.compared):
         raise NotApplicable("no comparison threshold known yet")
-    return _one_step(
+    steps, name, index = _one_step(
         steps, ctx, lambda step, inner: (mutators.MUTATORS["compared"](step["msg"], inner), SEQ_COMPARED)
     )
+    go = next((i for i in range(index + 1, len(steps)) if steps[i]["topic"] == "/go"), None)
+    if go is not None and len(steps) < ctx.max_steps and ctx.rng.random() < OBSERVE_PROBABILITY:
+        _observe(steps, go)
+        return steps, f"{SEQ_COMPARED}:{OBSERVE}"
+    return steps, name
 
 
 def _splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:
