@@ -1099,6 +1099,29 @@ def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_th
     )
 
 
+def test_compared_scales_by_no_value_0() -> None:
+    """``gap > 1e-6`` that compared 0.0 (an oracle's exact agreement) beside ``ratio < 1.001``
+    at 2.0: no factor takes 0.0 past 1e-6, so the scaling step always uses the ratio, three
+    times in four as with the ratio alone."""
+    table = ComparedValues()
+    table.watch(8, 0.5, 1e-6, True)
+    table.watch(9, 3.0, 1.001, False)
+    table.begin()
+    table.watch(8, 0.0, 1e-6, True)
+    table.watch(9, 2.0, 1.001, False)
+    table.end(b"parent")
+    table.select(b"parent")
+    assert {t for t, _, _ in table.operands()} == {1e-6, 1.001}
+    below = {1.001, math.nextafter(1.001, -math.inf), 1.001 - 1e-6 * 1.001, 1.001 - 1e-3 * 1.001}
+    scaled = 0
+    for seed in range(400):
+        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=table))
+        for before, after in zip((0.4, 0.8), out["position"], strict=True):
+            if after != before and any(after == before * (t / 2.0) for t in below):
+                scaled += 1
+    assert abs(scaled / 400 - 0.75) < 0.07
+
+
 def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:
     """``0.3 <= x < 0.31`` (two sites) only ever saw x = 1.2 and 0.5: the leaf holding 1.2 gets
     the band's middle, 0.305, half the times input-to-state picks it, a value past one edge

@@ -319,17 +319,17 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
 def _scaled(message: Message, ctx: MutationContext) -> bool:
     """When no leaf holds a value an unsolved comparison saw: a float leaf (not 0) of the
     message multiplied by ``t' / v``, for ``v`` a value this input compared at an unsolved site
-    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``). A value
-    computed from the input in proportion to that leaf (a ratio of a scaling factor and a
-    squared one, a distance from home) then lands right past the threshold; one that is not,
-    moves toward it. Whether one was written.
+    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``; never a
+    ``v`` of 0, which no factor moves). A value computed from the input in proportion to that
+    leaf (a ratio of a scaling factor and a squared one, a distance from home) then lands right
+    past the threshold; one that is not, moves toward it. Whether one was written.
 
     The factor is not bounded: an oracle's ``gap > 1e-6`` that saw a rounding error of 2e-16
     scales a leaf by 5e9, a threshold 0 scales one to about 0. Keeping only factors within
     1e-3..1e3 (edc5fe9) lost ``plan_start_band`` in 10 of 10 one-minute trials against 4 of 10
     without (p = 0.035, BENCHMARKS.md): such far values are mutations of their own."""
     assert ctx.compared is not None
-    operands = ctx.compared.operands()
+    operands = [operand for operand in ctx.compared.operands() if operand[1] != 0.0]  # 0 scales nothing
     if not operands:
         return False
     leaves = [
@@ -340,7 +340,7 @@ def _scaled(message: Message, ctx: MutationContext) -> bool:
     threshold, value, way = ctx.rng.choice(operands)
     leaf = ctx.rng.choice(leaves)
     x = _get(message, leaf.loc)
-    new = x * (_past(threshold, value, ctx.rng, way) / value) if value != 0.0 else math.nan
+    new = x * (_past(threshold, value, ctx.rng, way) / value)
     if not math.isfinite(new) or new == x:
         return False
     _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
