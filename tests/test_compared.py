@@ -147,6 +147,27 @@ def test_each_input_s_own_compared_values_are_remembered_for_when_it_is_mutated(
     assert table.operands() == []
 
 
+def test_the_first_input_to_reach_a_site_has_its_operand_there_too() -> None:
+    """The seed that first makes a ratio pass 1 is the first to compare it with 1.001: the
+    site's threshold is known only when a second input compares another ratio there, and the
+    first input's own value must still be remembered for it (it was not, before 2026-11-27)."""
+    table = ComparedValues()
+    for key, ratio in ((b"first", 6.2), (b"second", 6.2), (b"third", 1.7)):
+        table.begin()
+        table.watch(9, ratio, 1.001, False)
+        table.end(key)
+    for key, ratio in ((b"first", 6.2), (b"second", 6.2), (b"third", 1.7)):
+        table.select(key)
+        assert table.operands() == [(1.001, ratio, -1.0)], key
+    table.begin()
+    table.watch(9, 1.0005, 1.001, True)  # solved: no operand left, and nothing kept for it
+    table.end(b"fourth")
+    table.select(b"first")
+    assert table.operands() == []
+    table.select(b"fourth")
+    assert table.operands() == []
+
+
 def test_the_memory_keeps_the_newest_inputs() -> None:
     table = ComparedValues()
     table.watch(1, 5.0, 0.5, False)

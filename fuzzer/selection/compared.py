@@ -71,14 +71,16 @@ class ComparedValues:
         self.thresholds: dict[int, float] = {}
         self._state: dict[int, list[float | bool | int]] = {}
         self._recent: dict[int, dict[float, None]] = {}
-        self._running: dict[int, float] = {}
-        self._memory: OrderedDict[bytes, dict[int, float]] = OrderedDict()
-        self._parent: dict[int, float] = {}
+        self._running: dict[int, tuple[float, float]] = {}
+        self._memory: OrderedDict[bytes, dict[int, tuple[float, float]]] = OrderedDict()
+        self._parent: dict[int, tuple[float, float]] = {}
 
     def watch(self, site: int, a: float, b: float, result: object) -> None:
         """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
         state = self._state.get(site)
         outcome = 2 if result else 1
+        if site not in self._running:  # this input's first comparison there, whichever operand varies
+            self._running[site] = (a, b)
         if state is None:
             if len(self._state) < MAX_SITES:
                 self._state[site] = [a, b, False, False, outcome, 1]
@@ -106,9 +108,7 @@ class ComparedValues:
             if recent is None:  # the first value it took counts too
                 recent = self._recent[site] = {}
                 _remember(recent, float(state[_FIRST_A] if a_varies else state[_FIRST_B]))
-            operand = float(a if a_varies else b)
-            _remember(recent, operand)
-            self._running.setdefault(site, operand)
+            _remember(recent, float(a if a_varies else b))
         elif int(state[_COUNT]) >= PATIENCE:
             self._settle(site)
 
@@ -131,10 +131,14 @@ class ComparedValues:
         self._running = {}
 
     def end(self, key: bytes) -> None:
-        """The input ``key`` (a digest of its bytes) has run: remember the first value each
-        unsolved threshold site compared (the newest :data:`MEMORY` inputs)."""
-        if self._running:
-            self._memory[key] = self._running
+        """The input ``key`` (a digest of its bytes) has run: remember the operands of the
+        first comparison it made at each site still watched (the newest :data:`MEMORY` inputs),
+        the first input to reach a site included, although the site's threshold is known
+        only once another input compares a different value there."""
+        done = self.done
+        running = {site: pair for site, pair in self._running.items() if site not in done}
+        if running:
+            self._memory[key] = running
             self._memory.move_to_end(key)
             if len(self._memory) > MEMORY:
                 self._memory.popitem(last=False)
@@ -157,11 +161,13 @@ class ComparedValues:
         held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
         value, which puts a value proportional to that leaf right past the threshold."""
         out = []
-        for site, value in self._parent.items():
+        for site, (a, b) in self._parent.items():
             threshold = self.thresholds.get(site)
-            if threshold is None or self._state[site][_OUTCOMES] == 3 or value == threshold:
+            if threshold is None or self._state[site][_OUTCOMES] == 3:
                 continue
-            out.append((threshold, value, 1.0 if value < threshold else -1.0))
+            value = float(a if self._state[site][_A_VARIES] else b)
+            if value != threshold:
+                out.append((threshold, value, 1.0 if value < threshold else -1.0))
         return out
 
     def crossings(self, value: float) -> list[tuple[float, float]]:
