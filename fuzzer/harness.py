@@ -39,6 +39,7 @@ from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.mutation import mutators
 from fuzzer.selection.floatcmp import FloatCompareTracer
 from fuzzer.selection.guidance import Features, input_features, step_bigrams
+from fuzzer.selection.i2s import I2SQueue
 from fuzzer.selection.state import Made, Pool, Sources, Stats
 
 SNAPSHOT_SECONDS = 5.0
@@ -93,6 +94,8 @@ class Harness:
     """The bandit over input sources and mutators (None: libFuzzer's parent, one mutator by weight)."""
     float_tracer: FloatCompareTracer | None = None
     """Float comparisons of the Python targets as features (``fuzzer.selection.floatcmp``)."""
+    i2s: I2SQueue | None = None
+    """New inputs waiting for the ``compared`` arm (``fuzzer.selection.i2s``)."""
     sweep: Sweep | None = None
     """Batched FK sweeps for ``--op fk`` (``fuzzer.generation.sweep``)."""
     stats: Stats = field(default_factory=Stats)
@@ -116,6 +119,10 @@ class Harness:
         if self.sources is not None and case.origin == "mutation":
             paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
             self.sources.reward(case.strategy, paid)
+        compared = self.float_tracer.compared if self.float_tracer is not None else None
+        new = len(self.features.seen) > seen
+        if self.i2s is not None and compared is not None and new and compared.operands_of(_digest(data)):
+            self.i2s.offer(data)  # its input-to-state stage (fuzzer.selection.i2s)
         if self.sweep is not None and self.sweep.due():
             self.run_sweep()
         if self.log is not None and (first or not self.stats.execs & 255):
@@ -329,8 +336,9 @@ class Harness:
         a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
         try:
             rng = random.Random(seed)
-            parent = self._parent(data, rng, pool=partner is None, select=True)
-            fresh = self._fresh(parent, rng)
+            queued = self.i2s.take(rng) if self.i2s is not None and partner is None else None
+            parent = self._parent(queued or data, rng, pool=partner is None and queued is None, select=True)
+            fresh = self._fresh(parent, rng) if queued is None else None
             if fresh is not None:
                 return self._emit(parent.child(*fresh), parent, max_size, data)
             ctx = self.context
@@ -341,6 +349,8 @@ class Harness:
                 message = self.crossover_message(parent.message, other.message, ctx)
                 return self._emit(parent.child(message, splice), parent, max_size, data)
             wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
+            if queued is not None and self.i2s is not None:
+                wanted = self.i2s.arm  # the input-to-state stage of a new input
             if wanted == splice or getattr(self.mutate_message, "uses_other", False):
                 other = self._parent(partner, rng, False) if partner is not None else self._other_parent(rng)
                 ctx.other = other.message

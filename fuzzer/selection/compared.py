@@ -160,8 +160,15 @@ class ComparedValues:
         A value computed from the input (a ratio of two scaling factors, a distance) rather than
         held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
         value, which puts a value proportional to that leaf right past the threshold."""
+        return self._operands(self._parent)
+
+    def operands_of(self, key: bytes) -> list[tuple[float, float, float]]:
+        """:meth:`operands` of the remembered input ``key``, without selecting it."""
+        return self._operands(self._memory.get(key, {}))
+
+    def _operands(self, entry: dict[int, tuple[float, float]]) -> list[tuple[float, float, float]]:
         out = []
-        for site, (a, b) in self._parent.items():
+        for site, (a, b) in entry.items():
             threshold = self.thresholds.get(site)
             if threshold is None or self._state[site][_OUTCOMES] == 3:
                 continue

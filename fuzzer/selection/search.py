@@ -1,8 +1,9 @@
 """What the full engine's search is made of, beside libFuzzer (issue 11): the bandits over input
 sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sources``), the
 float-comparison tracer (``fuzzer.selection.floatcmp``) with the thresholds it learns for the
-``compared`` mutator (``fuzzer.selection.compared``) and, for ``fk`` in process, the batched
-sweeps (``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harness."""
+``compared`` mutator (``fuzzer.selection.compared``), the queue of new inputs for that mutator
+(``fuzzer.selection.i2s``) and, for ``fk`` in process, the batched sweeps
+(``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harness."""
 
 from __future__ import annotations
 
@@ -35,6 +36,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     from fuzzer.mutation import mutators
     from fuzzer.selection.bandit import Bandit
     from fuzzer.selection.compared import ComparedValues
+    from fuzzer.selection.i2s import I2SQueue
     from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
 
     config = session.config
@@ -61,7 +63,8 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     fresh = maker(stream, boundary=Boundary(facts.lower, facts.upper, start=min(seeded, first_round)))
     aligned = maker(Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED), name=ALIGNED)
     sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
-    search: dict[str, Any] = {"sources": sources, "float_tracer": tracer}
+    arm = "seq_compared" if config.op == "scenario" else "compared"
+    search: dict[str, Any] = {"sources": sources, "float_tracer": tracer, "i2s": I2SQueue(arm)}
     if config.op == "fk" and config.transport == "inprocess":
         from fuzzer.generation.sweep import Sweep
 

@@ -1,0 +1,84 @@
+"""The input-to-state queue: new inputs that compared at an unsolved site get the compared arm."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from fuzzer.input.testcase import decode
+from fuzzer.selection import i2s
+from fuzzer.selection.compared import ComparedValues
+from fuzzer.selection.floatcmp import FloatCompareTracer
+from fuzzer.selection.i2s import I2SQueue
+from tests.test_harness import make_harness
+
+
+def test_the_queue_gives_each_input_its_attempts_in_arrival_order() -> None:
+    queue = I2SQueue("compared")
+    rng = random.Random(0)
+    assert queue.take(rng) is None  # empty
+    queue.offer(b"first")
+    queue.offer(b"second")
+    taken = [queue.take(rng) for _ in range(4000)]
+    given = [t for t in taken if t is not None]
+    assert given == [b"first"] * i2s.ATTEMPTS + [b"second"] * i2s.ATTEMPTS
+    assert len(queue) == 0
+    first_uses = [i for i, t in enumerate(taken) if t is not None]
+    assert first_uses[-1] < 400  # about SHARE of the draws while it holds inputs
+
+
+def test_the_queue_takes_a_share_of_the_mutations() -> None:
+    queue = I2SQueue("compared")
+    rng = random.Random(1)
+    for i in range(i2s.CAPACITY + 10):
+        queue.offer(str(i).encode())
+    assert len(queue) == i2s.CAPACITY  # later ones wait for room
+    share = sum(queue.take(rng) is not None for _ in range(4000)) / 4000
+    assert share == pytest.approx(i2s.SHARE, abs=0.03)
+
+
+def _harness_with_table(tmp_path: Path) -> tuple[Any, ComparedValues]:
+    harness = make_harness(tmp_path)
+    table = ComparedValues()
+    harness.float_tracer = FloatCompareTracer(harness.features, SimpleNamespace(), compared=table)
+    harness.context.compared = table  # as fuzzer.campaign wires them
+    harness.i2s = I2SQueue("compared")
+    return harness, table
+
+
+def test_a_new_input_that_compared_at_an_unsolved_site_is_queued(tmp_path: Path) -> None:
+    harness, table = _harness_with_table(tmp_path)
+    table.watch(5, 0.9, 0.31, False)  # ``x < 0.31``, unsolved
+    evaluate = harness.evaluator.evaluate
+
+    def comparing(case: Any, **kw: Any) -> Any:
+        table.watch(5, 0.7 + len(harness.i2s), 0.31, False)  # what a target compares while it runs
+        return evaluate(case, **kw)
+
+    harness.evaluator.evaluate = comparing  # type: ignore[method-assign]
+    first = harness.seeds[0].encode()
+    harness.test_one_input(first)  # new coverage (its first features) and an operand: queued
+    assert len(harness.i2s) == 1
+    harness.test_one_input(first)  # nothing new: not queued again
+    assert len(harness.i2s) == 1
+    table.watch(5, 0.2, 0.31, True)  # solved: no operand left
+    harness.test_one_input(harness.seeds[1].encode())
+    assert len(harness.i2s) == 1
+
+
+def test_a_queued_input_is_mutated_with_the_compared_arm(tmp_path: Path) -> None:
+    harness, table = _harness_with_table(tmp_path)
+    table.watch(5, 0.9, 0.31, False)
+    table.watch(5, 0.7, 0.31, False)
+    queued = harness.seeds[2].child(harness.seeds[2].message, "queued")  # a lineage to tell its children by
+    harness.i2s.offer(queued.encode())
+    other = harness.seeds[0].encode()
+    children = [decode(harness.mutate(other, 4096, seed)) for seed in range(200)]
+    staged = [c for c in children if c.lineage[:-1] == queued.lineage]
+    assert all(c.lineage[-2:-1] != ("queued",) for c in children if c not in staged)
+    assert len(staged) == i2s.ATTEMPTS and all(c.lineage[-1] == "compared" for c in staged)
+    assert len(harness.i2s) == 0
