@@ -1069,6 +1069,19 @@ def test_compared_crosses_from_a_leaf_on_the_threshold_to_the_side_never_reached
     assert down >= 0.7 * 200 and up <= 0.15 * 200, (down, up)
 
 
+def _scaled_to_the_ratio_threshold(table: ComparedValues) -> float:
+    """Share of 400 ``compared`` mutations of a (0.4, 0.8) message that scale a leaf by 1.001 /
+    2.0 or just below it (the selected input compared a ratio of 2.0 with 1.001)."""
+    below = {1.001, math.nextafter(1.001, -math.inf), 1.001 - 1e-6 * 1.001, 1.001 - 1e-3 * 1.001}
+    scaled = 0
+    for seed in range(400):
+        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=table))
+        for before, after in zip((0.4, 0.8), out["position"], strict=True):
+            if after != before and any(after == before * (t / 2.0) for t in below):
+                scaled += 1
+    return scaled / 400
+
+
 def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_threshold() -> None:
     """No leaf holds what ``ratio < 1.001`` compared (a ratio computed from the input: 2.0 for
     this parent): three times in four a leaf is scaled by 1.001 / 2.0 (or just below), so a ratio
@@ -1079,14 +1092,7 @@ def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_th
     table.watch(9, 2.0, 1.001, False)
     table.end(b"parent")
     table.select(b"parent")
-    below = {1.001, math.nextafter(1.001, -math.inf), 1.001 - 1e-6 * 1.001, 1.001 - 1e-3 * 1.001}
-    scaled = 0
-    for seed in range(400):
-        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=table))
-        for before, after in zip((0.4, 0.8), out["position"], strict=True):
-            if after != before and any(after == before * (t / 2.0) for t in below):
-                scaled += 1
-    assert abs(scaled / 400 - 0.75) < 0.07
+    assert abs(_scaled_to_the_ratio_threshold(table) - 0.75) < 0.07
     table.select(b"another")  # an input that compared nothing there: the random leaf only
     outs = [
         MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(s, JS_TYPES, compared=table))
@@ -1112,14 +1118,7 @@ def test_compared_scales_by_no_value_0() -> None:
     table.end(b"parent")
     table.select(b"parent")
     assert {t for t, _, _ in table.operands()} == {1e-6, 1.001}
-    below = {1.001, math.nextafter(1.001, -math.inf), 1.001 - 1e-6 * 1.001, 1.001 - 1e-3 * 1.001}
-    scaled = 0
-    for seed in range(400):
-        out = MUTATORS["compared"](joint_state(position=(0.4, 0.8)), make_ctx(seed, JS_TYPES, compared=table))
-        for before, after in zip((0.4, 0.8), out["position"], strict=True):
-            if after != before and any(after == before * (t / 2.0) for t in below):
-                scaled += 1
-    assert abs(scaled / 400 - 0.75) < 0.07
+    assert abs(_scaled_to_the_ratio_threshold(table) - 0.75) < 0.07
 
 
 def test_compared_writes_the_middle_of_a_band_a_value_was_compared_against() -> None:
