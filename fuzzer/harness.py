@@ -8,7 +8,8 @@ default the campaign goes on past divergences. With ``stop_on_divergence`` the
 first one raises, libFuzzer writes ``crash-<sha1>`` and exits.
 
 The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
-a high-difference one), applies one registered mutator (``fuzzer.mutation.mutators``,
+a high-difference one or a new input for its input-to-state stage,
+``fuzzer.selection.i2s``), applies one registered mutator (``fuzzer.mutation.mutators``,
 or for ``--op scenario`` the sequence mutators of ``fuzzer.scenario.mutate``,
 given as ``mutate_message``/``crossover_message``) with an RNG seeded by
 libFuzzer, records it in the lineage, and encodes. With the bandit over sources and
