@@ -325,6 +325,29 @@ def test_the_last_point_of_a_plan_is_its_joint_goal() -> None:
     assert both(posed, ok(joint_values=(0.0, 0.0)), short).kind is Kind.AGREE
 
 
+def test_a_plan_and_a_path_start_at_the_state_they_began_in() -> None:
+    """MoveIt plans from the current state: a first point elsewhere (beyond the goal
+    tolerance) breaks it, even when both targets return the same plan."""
+    home = ok(joint_values=(0.0, 0.0))
+    for kind in ("plan", "cartesian_path"):
+        call = scenario("pose_target", kind)  # a pose goal: no joint goal to check
+        assert both(call, home, PLAN).kind is Kind.AGREE
+        within = trajectory([(5e-5, 0.0), (0.25, 0.25), (0.5, 0.5)])  # inside the 1e-4 goal tolerance
+        assert both(call, home, within).kind is Kind.AGREE
+        off = trajectory([(0.0, 1e-3), (0.25, 0.25), (0.5, 0.5)])
+        c = both(call, home, off)  # (where the targets differ, the differential verdict wins)
+        assert (c.kind, c.field, c.step, c.joints) == (Kind.PROPERTY, f"{kind}.start", 1, (1,))
+        assert c.difference == pytest.approx(9e-4, rel=1e-6)
+    # after a move, from where the arm stands
+    call = scenario("joint_target", "go", "pose_target", "plan")
+    target = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
+    there = ok(joint_values=(0.5, 0.5), success=(1.0,))
+    back = with_value(trajectory([(0.5, 0.5), (0.0, 0.0)]), "joint_values", (0.5, 0.5))
+    assert both(call, target, there, there, back).kind is Kind.AGREE
+    c = both(call, target, there, there, with_value(PLAN, "joint_values", (0.5, 0.5)))
+    assert (c.kind, c.field, c.step, c.joints) == (Kind.PROPERTY, "plan.start", 3, (0, 1))
+
+
 def test_go_reaches_its_joint_goal_and_execute_the_last_point() -> None:
     call = scenario("joint_target", "go", "cartesian_path", "execute")
     target = ok(joint_target=(0.5, 0.5), joint_values=(0.0, 0.0))
@@ -442,9 +465,10 @@ def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
     calls = ScenarioCall((*scenario("cartesian_path", "execute", "remember").steps, off_edge))
     short = with_value(three, "fraction", (0.25,))
     full = with_value(three, "fraction", (1.0,))
-    farther = judge(calls, run(three, executed, still, short), run(four, apart, moved, full), facts)
+    # (both paths start where each arm stands before them: a path starts at the current state)
+    farther = judge(calls, run(three, executed, still, short), run(four, apart, still, full), facts)
     assert (farther.kind, farther.step, farther.field) == (Kind.VALUE, 3, "cartesian_path.fraction")
-    same_extent = judge(calls, run(three, executed, still, full), run(four, apart, moved, full), facts)
+    same_extent = judge(calls, run(three, executed, still, full), run(four, apart, still, full), facts)
     assert (same_extent.kind, same_extent.step) == (Kind.KNOWN_LIMITATION, 0)
     # unless a plan that succeeds on both came in between
     calls = scenario("cartesian_path", "joint_target", "plan", "execute", "remember")

@@ -14,13 +14,15 @@ field                    property                                               
 <kind>.acceleration_     abs(acceleration) <= ACCELERATION_LIMIT x acceleration      rad/s^2
 limits                   scaling                                                     (m/s^2)
 <kind>.time_from_start   starts at 0 exactly, strictly increasing                    s
+<kind>.start             /plan, /cartesian_path: the first point is the state the    rad (m)
+                         step began in (MoveIt plans from the current state)
 plan.goal                /plan with a joint goal: the last point is the goal         rad (m)
 go.goal                  /go with a joint goal: the state after it is the goal       rad (m)
 execute.last_point       /execute of a plan: the state after it is its last point    rad (m)
 =======================  ==========================================================  ============
 
 Velocity and acceleration bounds get a relative slack of ``RELATIVE_SLACK`` plus
-``ABSOLUTE_SLACK``; the goal and last-point checks allow the goal tolerance (``execute``
+``ABSOLUTE_SLACK``; the start, goal and last-point checks allow the goal tolerance (``execute``
 clamps a last point up to that far past a limit) plus the same slack; continuous joints
 compare modulo 2pi. The reported ``difference`` is how far past the bound the worst sample is.
 """
@@ -129,6 +131,10 @@ def check_trajectory(
     if m > 1 and not bool(np.all(steps > 0.0)):
         back = float(np.max(-steps)) if not np.isnan(steps).any() else math.inf
         return _violation(target, f"{kind}.time_from_start", back, "s")
+    if before.state is not None:  # MoveIt plans from the current state
+        start = _equal(target, f"{kind}.start", tuple(positions[0].tolist()), before.state, before, facts)
+        if start is not None:
+            return start
     if kind == "plan" and before.pose_goal is None and before.joint_goal is not None:
         return _equal(target, "plan.goal", tuple(positions[-1].tolist()), before.joint_goal, before, facts)
     return None
