@@ -161,7 +161,7 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             at = [i for i in range(len(old)) if old[i] == GO and new[i : i + 2] == [PLAN, EXECUTE]]
             assert any([*new[:i], GO, *new[i + 2 :]] == old for i in at)
         elif name == "seq_compared":
-            if reported == "seq_compared:observe":  # the first /go after the changed step observed
+            if reported == "seq_compared:observe":  # the /go after the changed step observed
                 at = [i for i in range(len(new) - 1) if new[i : i + 2] == [PLAN, EXECUTE] and old[i] == GO]
                 assert at and new[at[0] + 2 :] == old[at[0] + 1 :]
                 new = [*new[: at[0]], GO, *new[at[0] + 2 :]]
@@ -179,6 +179,25 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
         assert used == {name, f"{name}:observe"}
     else:
         assert used == {name}
+
+
+def test_seq_compared_observes_every_go_after_the_changed_step_while_there_is_room() -> None:
+    """The comparison a threshold flips can be made by any later move (a start state in a
+    band is compared by the move after the one that put the arm there): each later ``/go``
+    becomes ``/plan`` + ``/execute``, the earlier ones first when the room runs out."""
+    remember = step("/remember", data="here")
+    parent = {"steps": [GO, step("/velocity_scaling", data=0.5), GO, GO, remember]}
+    shapes = set()
+    for seed in SEEDS:
+        for max_steps, gos in ((MAX, 2), (6, 1)):
+            mutate, _ = for_registry(REGISTRY, max_steps)
+            child, name = mutate(parent, context(seed, known=True), "seq_compared")
+            if name.endswith(":observe"):
+                topics = [s["topic"] for s in child["steps"]]
+                observed = ["/plan", "/execute"] * gos + ["/go"] * (2 - gos)
+                assert topics == ["/go", "/velocity_scaling", *observed, "/remember"]
+                shapes.add(gos)
+    assert shapes == {1, 2}
 
 
 def test_seq_step_names_its_value_mutator_and_keeps_the_topic() -> None:

@@ -24,8 +24,8 @@ Mutators
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
 * ``seq_compared``: one float of one step set to a comparison threshold of the targets, or a
-  value just either side of it (the value mutator ``compared``); often the next ``/go`` is
-  observed too (``seq_compared:observe``).
+  value just either side of it (the value mutator ``compared``); often the ``/go`` steps after
+  it are observed too (``seq_compared:observe``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
 Every child has 1..``max_steps`` steps and, when its parents validate, validates
@@ -76,10 +76,10 @@ MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
 """What a script sets just before a move (MoveIt's tutorials slow a move down this way)."""
 SPLICE_ATTEMPTS: Final = 8
 OBSERVE: Final = "observe"
-"""Lineage suffix of a ``seq_compared`` child whose next ``/go`` was also observed."""
+"""Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed."""
 OBSERVE_PROBABILITY: Final = 0.5
-"""``seq_compared``: chance that the first ``/go`` after the changed step becomes ``/plan`` +
-``/execute`` (when there is one and room for it)."""
+"""``seq_compared``: chance that each ``/go`` after the changed step becomes ``/plan`` +
+``/execute`` (when there is one; the earlier ones while there is room)."""
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -279,19 +279,24 @@ def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     either side of it (the value mutator ``compared``; its own bandit arm, as it needs no other
     value mutator to come up first).
 
-    With probability :data:`OBSERVE_PROBABILITY` the first ``/go`` after that step also becomes
-    ``/plan`` + ``/execute`` (as ``seq_observe``; lineage ``seq_compared:observe``): the
-    comparison this step aims to flip (a profile's switch on a ratio of the scaling factors,
-    a band of the start state) mostly changes the move that follows, and a ``/go`` shows the
-    oracle where the move ended, not the trajectory that changed."""
+    With probability :data:`OBSERVE_PROBABILITY` every ``/go`` after that step also becomes
+    ``/plan`` + ``/execute`` (as ``seq_observe``; lineage ``seq_compared:observe``), the
+    earlier ones while ``max_steps`` leaves room: the comparison this step aims to flip
+    changes a later move's trajectory, and a ``/go`` shows the oracle where the move ended,
+    not the trajectory. Which move is not the first one after it for a band of the start
+    state: a joint target written into the band is compared by the move *after* the one that
+    takes the arm there (a profile's switch on a ratio of the scaling factors is compared by
+    the first)."""
     if ctx.value.compared is None or not len(ctx.value.compared):
         raise NotApplicable("no comparison threshold known yet")
     steps, name, index = _one_step(
         steps, ctx, lambda step, inner: (mutators.MUTATORS["compared"](step["msg"], inner), SEQ_COMPARED)
     )
-    go = next((i for i in range(index + 1, len(steps)) if steps[i]["topic"] == "/go"), None)
-    if go is not None and len(steps) < ctx.max_steps and ctx.rng.random() < OBSERVE_PROBABILITY:
-        _observe(steps, go)
+    gos = [i for i in range(index + 1, len(steps)) if steps[i]["topic"] == "/go"]
+    room = ctx.max_steps - len(steps)
+    if gos and room > 0 and ctx.rng.random() < OBSERVE_PROBABILITY:
+        for go in reversed(gos[:room]):  # from the last, so the indices before it hold
+            _observe(steps, go)
         return steps, f"{SEQ_COMPARED}:{OBSERVE}"
     return steps, name
 
