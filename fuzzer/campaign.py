@@ -380,15 +380,15 @@ def build_sidecar(
 
 def _scenario_mutators(session: Session) -> dict[str, Any]:
     """For ``--op scenario``: the Harness's sequence mutator and crossover
-    (``fuzzer.scenario.mutate.for_registry``); {} for the other ops."""
+    (``fuzzer.scenario.dispatch.for_registry``); {} for the other ops."""
     if session.config.op != "scenario":
         return {}
     from fuzzer.generation.spacefill import finite_box
-    from fuzzer.scenario import mutate
+    from fuzzer.scenario import dispatch
 
     limits = session.reference.joint_limits
     box = finite_box([lim.lower for lim in limits], [lim.upper for lim in limits])
-    mutate_message, crossover_message = mutate.for_registry(session.registry, session.config.max_steps, box)
+    mutate_message, crossover_message = dispatch.for_registry(session.registry, session.config.max_steps, box)
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 
 

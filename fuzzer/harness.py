@@ -87,7 +87,7 @@ class Harness:
     log: CampaignLog | None = None
     joint_names: tuple[str, ...] = ()
     mutate_message: MessageMutator = mutators.mutate
-    """The mutator of one message (``fuzzer.scenario.mutate.for_registry`` for scenarios). One
+    """The mutator of one message (``fuzzer.scenario.dispatch.for_registry`` for scenarios). One
     with a true ``uses_other`` attribute gets a second parent as ``context.other``."""
     crossover_message: MessageCrossover = mutators.crossover
     """The crossover of two messages; its ``lineage_name`` (default ``splice``) goes in the lineage."""

@@ -20,8 +20,9 @@ from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.mutation import mutators
 from fuzzer.mutation.mutators import MutationContext
-from fuzzer.scenario.fresh import FRESH_FLOATS
-from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE, field_types, for_registry
+from fuzzer.scenario.dispatch import for_registry
+from fuzzer.scenario.fresh import FRESH_FLOATS, field_types
+from fuzzer.scenario.mutate import SEQ_MUTATORS, SPLICE
 from fuzzer.scenario.steps import MSG_TYPE, TOPICS, validate
 from fuzzer.selection.compared import ComparedValues
 from fuzzer.selection.guidance import START, Features, step_bigrams
