@@ -188,3 +188,18 @@ def test_a_site_remembers_only_its_newest_operand_values() -> None:
         table.watch(3, x, 0.5, False)
     assert table.crossing(values[0]) == [] and table.crossing(values[1]) == []
     assert table.crossing(values[2]) == [0.5] and table.crossing(values[-1]) == [0.5]
+
+
+def test_a_value_of_0_is_no_operand() -> None:
+    """A leaf at its default 0 compared at an unsolved site: no factor scales 0 past the
+    threshold, so the input has no operand there, and the input-to-state stage does not queue it
+    for that site (two 10-trial runs per arm, BENCHMARKS.md: ``plan_start_band`` 10/20 -> 15/20
+    one-minute trials, p = 0.015)."""
+    table = ComparedValues()
+    table.watch(4, 3.0, 0.25, False)
+    for key, value in ((b"zero", 0.0), (b"other", 0.5)):
+        table.begin()
+        table.watch(4, value, 0.25, False)
+        table.end(key)
+    assert table.operands_of(b"zero") == []
+    assert table.operands_of(b"other") == [(0.25, 0.5, -1.0)]

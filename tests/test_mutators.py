@@ -1107,8 +1107,8 @@ def test_compared_scales_a_leaf_so_a_value_in_proportion_to_it_lands_past_the_th
 
 def test_compared_scales_by_no_value_0() -> None:
     """``gap > 1e-6`` that compared 0.0 (an oracle's exact agreement) beside ``ratio < 1.001``
-    at 2.0: no factor takes 0.0 past 1e-6, so the scaling step always uses the ratio, three
-    times in four as with the ratio alone."""
+    at 2.0: no factor takes 0.0 past 1e-6, so 0.0 is no operand and the scaling step always uses
+    the ratio, three times in four as with the ratio alone."""
     table = ComparedValues()
     table.watch(8, 0.5, 1e-6, True)
     table.watch(9, 3.0, 1.001, False)
@@ -1117,7 +1117,7 @@ def test_compared_scales_by_no_value_0() -> None:
     table.watch(9, 2.0, 1.001, False)
     table.end(b"parent")
     table.select(b"parent")
-    assert {t for t, _, _ in table.operands()} == {1e-6, 1.001}
+    assert {t for t, _, _ in table.operands()} == {1.001}  # no operand of value 0
     assert abs(_scaled_to_the_ratio_threshold(table) - 0.75) < 0.07
 
 

@@ -319,8 +319,8 @@ def apply_compared(message: Message, ctx: MutationContext) -> Message:
 def _scaled(message: Message, ctx: MutationContext) -> bool:
     """When no leaf holds a value an unsolved comparison saw: a float leaf (not 0) of the
     message multiplied by ``t' / v``, for ``v`` a value this input compared at an unsolved site
-    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``; never a
-    ``v`` of 0, which no factor moves). A value computed from the input in proportion to that
+    and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``, which
+    never gives a ``v`` of 0: no factor moves it). A value computed from the input in proportion to that
     leaf (a ratio of a scaling factor and a squared one, a distance from home) then lands right
     past the threshold; one that is not, moves toward it. Whether one was written.
 
@@ -329,7 +329,7 @@ def _scaled(message: Message, ctx: MutationContext) -> bool:
     1e-3..1e3 (edc5fe9) lost ``plan_start_band`` in 10 of 10 one-minute trials against 4 of 10
     without (p = 0.035, BENCHMARKS.md): such far values are mutations of their own."""
     assert ctx.compared is not None
-    operands = [operand for operand in ctx.compared.operands() if operand[1] != 0.0]  # 0 scales nothing
+    operands = ctx.compared.operands()  # never a value of 0, which no factor moves
     if not operands:
         return False
     leaves = [

@@ -156,7 +156,9 @@ class ComparedValues:
         """For the input being mutated (:meth:`select`), each still unsolved threshold site it
         reached off its threshold: (threshold, the value it compared there, the way from that
         value to the branch never taken: +1.0 up, -1.0 down), in the order that input reached
-        them (a value on the threshold is left to :meth:`crossings`, which knows the way).
+        them (a value on the threshold is left to :meth:`crossings`, which knows the way; a
+        value of 0 is left out: no scaling moves it, and it would queue an input for the
+        input-to-state stage, ``fuzzer.selection.i2s``, that the stage cannot change).
         A value computed from the input (a ratio of two scaling factors, a distance) rather than
         held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
         value, which puts a value proportional to that leaf right past the threshold."""
@@ -173,7 +175,7 @@ class ComparedValues:
             if threshold is None or self._state[site][_OUTCOMES] == 3:
                 continue
             value = float(a if self._state[site][_A_VARIES] else b)
-            if value != threshold:
+            if value != threshold and value != 0.0:  # 0 is every field's default; no factor moves it
                 out.append((threshold, value, 1.0 if value < threshold else -1.0))
         return out
 
