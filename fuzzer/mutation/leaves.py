@@ -320,9 +320,10 @@ def _scaled(message: Message, ctx: MutationContext) -> bool:
     """When no leaf holds a value an unsolved comparison saw: a float leaf (not 0) of the
     message multiplied by ``t' / v``, for ``v`` a value this input compared at an unsolved site
     and ``t'`` its threshold or just past it (``ComparedValues.operands``, ``_past``, which
-    never gives a ``v`` of 0: no factor moves it). A value computed from the input in proportion to that
-    leaf (a ratio of a scaling factor and a squared one, a distance from home) then lands right
-    past the threshold; one that is not, moves toward it. Whether one was written.
+    never gives a ``v`` of 0: no factor moves it). A value computed from the input in
+    proportion to that leaf (a ratio of a scaling factor and a squared one, a distance from
+    home) then lands right past the threshold; one that is not, moves toward it. Whether one
+    was written.
 
     The factor is not bounded: an oracle's ``gap > 1e-6`` that saw a rounding error of 2e-16
     scales a leaf by 5e9, a threshold 0 scales one to about 0. Keeping only factors within
