@@ -15,6 +15,14 @@ from fuzzer.selection.guidance import Features
 from tests.test_floatcmp import _instrumented
 
 
+def solve(table: ComparedValues, site: int, a: float, b: float, result: bool, key: bytes = b"solver") -> None:
+    """``SOLVED_AFTER`` inputs (the last one ``key``) each compare ``a`` with ``b`` at ``site``."""
+    for i in range(cv.SOLVED_AFTER):
+        table.begin()
+        table.watch(site, a, b, result)
+        table.end(key if i == cv.SOLVED_AFTER - 1 else b"solver %d" % i)
+
+
 def test_a_fixed_operand_against_a_varying_one_is_a_threshold() -> None:
     table = ComparedValues()
     table.watch(1, 0.5, 0.3, False)  # one observation: nothing known yet
@@ -22,8 +30,29 @@ def test_a_fixed_operand_against_a_varying_one_is_a_threshold() -> None:
     table.watch(1, 0.7, 0.3, False)
     assert table.thresholds == {1: 0.3} and table.unsolved() == [0.3]
     assert 1 not in table.done  # one outcome only: still watched
-    table.watch(1, 0.1, 0.3, True)  # the other branch: solved, no longer watched
+    solve(table, 1, 0.1, 0.3, True)  # the other branch, often enough: solved, no longer watched
     assert table.thresholds == {1: 0.3} and table.unsolved() == [] and 1 in table.done
+
+
+def test_a_site_is_solved_once_enough_inputs_took_the_other_branch() -> None:
+    """The first input into a band may not show what lies behind it (a ``/go`` into the band,
+    then no ``/plan``): the site stays unsolved until ``SOLVED_AFTER`` inputs gave the outcome
+    its first comparison did not, each counted once however often it compared there."""
+    table = ComparedValues()
+    for x in (0.9, 1.2):
+        table.watch(3, x, 0.735, x < 0.735)
+    for i in range(cv.SOLVED_AFTER - 1):
+        table.begin()
+        for x in (0.734, 0.7341, 0.7342):  # one input, three comparisons in the band
+            table.watch(3, x, 0.735, x < 0.735)
+        table.end(b"into the band %d" % i)
+        assert table.unsolved() == [0.735] and 3 not in table.done
+        assert table.crossings(0.9) == [(0.735, 0.0)]  # values on both sides: away from the leaf's
+    assert table.operands_of(b"into the band 0") == [(0.735, 0.734, 1.0)]
+    table.begin()
+    table.watch(3, 0.2, 0.735, True)
+    table.end(b"the last one")
+    assert table.unsolved() == [] and 3 in table.done and table.crossings(0.9) == []
 
 
 def test_two_varying_operands_or_none_make_no_threshold() -> None:
@@ -46,8 +75,9 @@ def test_a_non_finite_fixed_operand_is_no_threshold() -> None:
 def test_pick_prefers_the_unsolved_sites() -> None:
     table = ComparedValues()
     for x in (0.0, 1.0):
-        table.watch(1, x, 0.5, x < 0.5)  # solved
+        table.watch(1, x, 0.5, x < 0.5)
         table.watch(2, x, 4.05, x < 4.05)  # unsolved
+    solve(table, 1, 0.7, 0.5, False)  # solved
     rng = random.Random(5)
     picks = [table.pick(rng) for _ in range(4000)]
     share = picks.count(4.05) / len(picks)
@@ -61,12 +91,15 @@ def test_the_guard_learns_a_chained_comparison_past_the_budget() -> None:
     tracer = FloatCompareTracer(Features(enabled=False), compared=table)
     tracer.install(budget=0)  # the guard alone, as after an input's first comparisons
     try:
-        for x in (0.0, 0.5, 1.0):
+        for x in (0.0, 0.5, 1.0, 0.6, 0.7):  # 0.3 <= x crossed by four inputs: solved
+            table.begin()
             assert module.band(x) is False
         assert tracer.traced == 0  # no feature: the guard only
         assert sorted(table.thresholds.values()) == [0.3, 0.31]
         assert table.unsolved() == [0.31]  # x < 0.31 was only ever reached with x >= 0.31
-        assert module.band(0.305) is True
+        for _ in range(cv.SOLVED_AFTER):
+            table.begin()
+            assert module.band(0.305) is True
         assert table.unsolved() == []
     finally:
         atheris._trace_cmp = tracer.inner
@@ -101,7 +134,7 @@ def test_an_unsolved_site_names_the_values_its_varying_operand_took() -> None:
     table.watch(8, 0.0, 4.05, True)
     table.watch(8, 1.0, 4.05, True)
     assert table.crossing(1.0) == [4.05] and table.crossing(0.0) == []  # 0.0 matches by coincidence
-    table.watch(7, 0.305, 0.31, True)  # solved: nothing left to cross
+    solve(table, 7, 0.305, 0.31, True)  # solved: nothing left to cross
     assert table.crossing(2.0) == [] and 7 in table.done
 
 
@@ -140,9 +173,7 @@ def test_each_input_s_own_compared_values_are_remembered_for_when_it_is_mutated(
     assert table.operands() == [(1.001, 3.0, -1.0)]
     table.select(b"unknown")
     assert table.operands() == []
-    table.begin()
-    table.watch(9, 1.0005, 1.001, True)  # solved: nothing left to cross
-    table.end(b"d")
+    solve(table, 9, 1.0005, 1.001, True, b"d")  # solved: nothing left to cross
     table.select(b"a")
     assert table.operands() == []
 
@@ -159,9 +190,7 @@ def test_the_first_input_to_reach_a_site_has_its_operand_there_too() -> None:
     for key, ratio in ((b"first", 6.2), (b"second", 6.2), (b"third", 1.7)):
         table.select(key)
         assert table.operands() == [(1.001, ratio, -1.0)], key
-    table.begin()
-    table.watch(9, 1.0005, 1.001, True)  # solved: no operand left, and nothing kept for it
-    table.end(b"fourth")
+    solve(table, 9, 1.0005, 1.001, True, b"fourth")  # solved: no operand left, and nothing kept for it
     table.select(b"first")
     assert table.operands() == []
     table.select(b"fourth")

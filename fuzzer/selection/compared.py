@@ -12,9 +12,10 @@ Python targets and the oracle, ``fuzzer.selection.instrument``). A site is a *th
 one operand has kept one value while the other has taken two or more: the fixed one is the
 threshold, whether it is a literal, a module constant or computed once (Atheris marks literal
 operands, ``is_const``, but not in a chained comparison such as ``a <= x < b``). A site where
-both operands vary, or that has given both outcomes, is settled and no longer watched, so the
-steady cost is one set lookup per float comparison. A threshold site whose comparison has only
-ever given one outcome is *unsolved*: the branch behind it has never been taken.
+both operands vary, or that is solved, is settled and no longer watched, so the steady cost is
+one set lookup per float comparison. A threshold site is *unsolved* until :data:`SOLVED_AFTER`
+inputs have given the outcome its first comparison did not: the branch behind it has never been
+taken, or only by a few inputs, which may not have shown what lies behind it.
 :meth:`ComparedValues.pick` draws an unsolved site's threshold 3 times out of 4 (when there is
 one), else any threshold; ``fuzzer.mutation.leaves`` writes it, or a value just either side of
 it, into a float field of the input.
@@ -47,11 +48,17 @@ MAX_SITES: Final = 4096
 RECENT: Final = 256
 """Distinct values of its varying operand an unsolved site remembers (the newest): enough to
 still hold the values of most corpus inputs when one of them is mutated."""
+SOLVED_AFTER: Final = 4
+"""Inputs that must have given a site's other outcome (not the one its first comparison gave)
+before the site is solved and no longer watched. The first input to take a branch often does
+not show what lies behind it (a start state in a band reached by a ``/go``, whose trajectory
+the oracle never sees, then no ``/plan``); the site's threshold keeps guiding the search a
+little longer, as libFuzzer's hit-count buckets keep rewarding an edge taken more often."""
 MEMORY: Final = 4096
 """Inputs whose operands at the unsolved sites are remembered (the most recently run or
 mutated), for :meth:`ComparedValues.operands`."""
 
-_FIRST_A, _FIRST_B, _A_VARIES, _B_VARIES, _OUTCOMES, _COUNT = range(6)
+_FIRST_A, _FIRST_B, _A_VARIES, _B_VARIES, _FIRST_OUTCOME, _COUNT, _FLIPS = range(7)
 
 
 class ComparedValues:
@@ -74,6 +81,8 @@ class ComparedValues:
         self._running: dict[int, tuple[float, float]] = {}
         self._memory: OrderedDict[bytes, dict[int, tuple[float, float]]] = OrderedDict()
         self._parent: dict[int, tuple[float, float]] = {}
+        self._flipped: set[int] = set()
+        """Sites where the running input gave the other outcome (counted once per input)."""
 
     def watch(self, site: int, a: float, b: float, result: object) -> None:
         """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
@@ -83,7 +92,7 @@ class ComparedValues:
             self._running[site] = (a, b)
         if state is None:
             if len(self._state) < MAX_SITES:
-                self._state[site] = [a, b, False, False, outcome, 1]
+                self._state[site] = [a, b, False, False, outcome, 1, 0]
             else:
                 self.done.add(site)
             return
@@ -91,7 +100,9 @@ class ComparedValues:
             state[_A_VARIES] = True
         if not state[_B_VARIES] and b != state[_FIRST_B]:
             state[_B_VARIES] = True
-        state[_OUTCOMES] = int(state[_OUTCOMES]) | outcome
+        if outcome != state[_FIRST_OUTCOME] and site not in self._flipped:
+            self._flipped.add(site)
+            state[_FLIPS] = int(state[_FLIPS]) + 1
         state[_COUNT] = int(state[_COUNT]) + 1
         a_varies, b_varies = state[_A_VARIES], state[_B_VARIES]
         if a_varies and b_varies:  # both operands move with the input: no threshold here
@@ -101,7 +112,7 @@ class ComparedValues:
             fixed = float(state[_FIRST_B] if a_varies else state[_FIRST_A])
             if math.isfinite(fixed):
                 self.thresholds[site] = fixed
-            if state[_OUTCOMES] == 3:  # both branches taken: solved
+            if int(state[_FLIPS]) >= SOLVED_AFTER:  # both branches taken, often enough: solved
                 self._settle(site)
                 return
             recent = self._recent.get(site)
@@ -117,8 +128,11 @@ class ComparedValues:
         self._recent.pop(site, None)
 
     def unsolved(self) -> list[float]:
-        """Thresholds of the sites whose comparison has given one outcome only."""
-        return [value for site, value in self.thresholds.items() if self._state[site][_OUTCOMES] != 3]
+        """Thresholds of the sites not yet solved (:data:`SOLVED_AFTER`)."""
+        return [value for site, value in self.thresholds.items() if not self._solved(site)]
+
+    def _solved(self, site: int) -> bool:
+        return int(self._state[site][_FLIPS]) >= SOLVED_AFTER
 
     def crossing(self, value: float) -> list[float]:
         """Thresholds of the unsolved sites that recently compared ``value`` (one of the last
@@ -129,6 +143,7 @@ class ComparedValues:
     def begin(self) -> None:
         """An input starts running: what the unsolved sites compare from now on is its own."""
         self._running = {}
+        self._flipped = set()
 
     def end(self, key: bytes) -> None:
         """The input ``key`` (a digest of its bytes) has run: remember the operands of the
@@ -145,6 +160,7 @@ class ComparedValues:
         else:
             self._memory.pop(key, None)
         self._running = {}
+        self._flipped = set()
 
     def select(self, key: bytes) -> None:
         """The input ``key`` is about to be mutated: :meth:`operands` are now its."""
@@ -172,7 +188,7 @@ class ComparedValues:
         out = []
         for site, (a, b) in entry.items():
             threshold = self.thresholds.get(site)
-            if threshold is None or self._state[site][_OUTCOMES] == 3:
+            if threshold is None or self._solved(site):
                 continue
             value = float(a if self._state[site][_A_VARIES] else b)
             if value != threshold and value != 0.0:  # 0 is every field's default; no factor moves it
@@ -181,17 +197,20 @@ class ComparedValues:
 
     def crossings(self, value: float) -> list[tuple[float, float]]:
         """``crossing``'s thresholds, each with the way (+1.0 up, -1.0 down) from it to the side
-        its site never compared a value on: an unsolved ``<``, ``<=``, ``>`` or ``>=`` gave one
-        outcome, so the values it saw lie on one side of the threshold, or on it. From a value
+        its site never compared a value on: an unsolved ``<``, ``<=``, ``>`` or ``>=`` that no
+        input has crossed yet gave one outcome, so the values it saw lie on one side of the
+        threshold, or on it. From a value
         *on* the threshold that side is the one away from the site's other values (``x < t``
         seen false with x = t and x = 1.5: down), which the value alone cannot tell; 0.0 when
-        the site saw no value off its threshold, or values on both sides (``==``, ``!=``)."""
+        the site saw no value off its threshold, or values on both sides (``==``, ``!=``, a
+        site fewer than :data:`SOLVED_AFTER` inputs crossed): ``_past`` then goes away from
+        the leaf's value."""
         if value == 0.0:
             return []
         out = []
         for site, threshold in self.thresholds.items():
             recent = self._recent.get(site, ())
-            if value in recent and self._state[site][_OUTCOMES] != 3:
+            if value in recent and not self._solved(site):
                 below = any(v < threshold for v in recent)
                 above = any(v > threshold for v in recent)
                 out.append((threshold, 0.0 if below == above else (1.0 if below else -1.0)))
