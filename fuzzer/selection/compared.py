@@ -199,12 +199,11 @@ class ComparedValues:
         """``crossing``'s thresholds, each with the way (+1.0 up, -1.0 down) from it to the side
         its site never compared a value on: an unsolved ``<``, ``<=``, ``>`` or ``>=`` that no
         input has crossed yet gave one outcome, so the values it saw lie on one side of the
-        threshold, or on it. From a value
-        *on* the threshold that side is the one away from the site's other values (``x < t``
-        seen false with x = t and x = 1.5: down), which the value alone cannot tell; 0.0 when
-        the site saw no value off its threshold, or values on both sides (``==``, ``!=``, a
-        site fewer than :data:`SOLVED_AFTER` inputs crossed): ``_past`` then goes away from
-        the leaf's value."""
+        threshold, or on it. From a value *on* the threshold that side is the one away from the
+        site's other values (``x < t`` seen false with x = t and x = 1.5: down), which the value
+        alone cannot tell; 0.0 when the site saw no value off its threshold, or values on both
+        sides (``==``, ``!=``, a site fewer than :data:`SOLVED_AFTER` inputs crossed):
+        ``_past`` then goes away from the leaf's value."""
         if value == 0.0:
             return []
         out = []
