@@ -201,7 +201,8 @@ def test_the_upper_edge_of_a_band_in_a_condition_becomes_a_threshold(table: Comp
     """Without the pass the table only ever learned 0.3 (the ``ik_seed_band`` zoo bug)."""
     copy = _copy(seed_band)
     instrument_functions([copy], atheris, None)
-    for x in (0.0, 0.5, 1.0, 2.0):
+    for x in (0.0, 0.5, 1.0, 2.0, 3.0):  # one input each: 0.3 <= x crossed by four, solved
+        table.begin()
         copy([x])
     assert sorted(table.thresholds.values()) == [0.3, 0.31]
     assert table.unsolved() == [0.31]  # x < 0.31 only ever reached with x >= 0.31
