@@ -122,8 +122,8 @@ class Harness:
             self.sources.reward(case.strategy, paid)
         compared = self.float_tracer.compared if self.float_tracer is not None else None
         new = len(self.features.seen) > seen
-        if self.i2s is not None and compared is not None and new and compared.operands_of(_digest(data)):
-            self.i2s.offer(data)  # its input-to-state stage (fuzzer.selection.i2s)
+        if self.i2s is not None and compared is not None and new:
+            self.i2s.offer(data, compared.sites_of(_digest(data)))  # input-to-state (fuzzer.selection.i2s)
         if self.sweep is not None and self.sweep.due():
             self.run_sweep()
         if self.log is not None and (first or not self.stats.execs & 255):
@@ -337,8 +337,9 @@ class Harness:
         a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
         try:
             rng = random.Random(seed)
-            queued = self.i2s.take(rng) if self.i2s is not None and partner is None else None
-            parent = self._parent(queued or data, rng, pool=partner is None and queued is None, select=True)
+            taken = self.i2s.take(rng) if self.i2s is not None and partner is None else None
+            queued, focus = taken if taken is not None else (None, None)  # an input and the site it aims at
+            parent = self._parent(queued or data, rng, partner is None and queued is None, True, focus)
             fresh = self._fresh(parent, rng) if queued is None else None
             if fresh is not None:
                 return self._emit(parent.child(*fresh), parent, max_size, data)
@@ -363,16 +364,24 @@ class Harness:
         except Exception:  # noqa: BLE001 - must never raise into libFuzzer
             return data[:max_size]
 
-    def _parent(self, data: bytes, rng: random.Random, pool: bool = True, select: bool = False) -> TestCase:
+    def _parent(
+        self,
+        data: bytes,
+        rng: random.Random,
+        pool: bool = True,
+        select: bool = False,
+        focus: int | None = None,
+    ) -> TestCase:
         """The test case of ``data`` (or, ``pool``, sometimes a high-difference input instead);
-        ``select``: the one to mutate, whose compared values ``ComparedValues.operands`` gives."""
+        ``select``: the one to mutate, whose compared values ``ComparedValues.operands`` gives
+        (those at the site ``focus`` only, when given)."""
         if pool and rng.random() < POOL_PARENT_CHANCE:
             preferred = self.pool.pick(rng)
             if preferred is not None:
                 data = preferred
         case, _ = self._decode(data)
         if select and self.float_tracer is not None and self.float_tracer.compared is not None:
-            self.float_tracer.compared.select(_digest(data))
+            self.float_tracer.compared.select(_digest(data), focus)
         if case is None:
             # not a test case (a foreign or damaged file): restart from a generated seed
             base = rng.choice(self.seeds)

@@ -232,3 +232,29 @@ def test_a_value_of_0_is_no_operand() -> None:
         table.end(key)
     assert table.operands_of(b"zero") == []
     assert table.operands_of(b"other") == [(0.25, 0.5, -1.0)]
+
+
+def test_a_focus_aims_a_mutation_at_one_site() -> None:
+    """The input-to-state stage hands an input over with the site it waits at: operands,
+    crossings and picks then name that site alone, until the next selection."""
+    table = ComparedValues()
+    for i, x in enumerate((0.6, 1.3)):  # two inputs, each comparing x at two unsolved sites
+        table.begin()
+        table.watch(1, x, 0.31, x < 0.31)  # ``x < 0.31``
+        table.watch(2, 2 * x, 1.001, 2 * x < 1.001)  # ``ratio < 1.001``, the ratio computed from x
+        table.end(b"input %d" % i)
+    assert table.sites_of(b"input 1") == [1, 2]
+    table.select(b"input 1")
+    assert table.operands() == [(0.31, 1.3, -1.0), (1.001, 2.6, -1.0)]
+    assert [t for t, _ in table.crossings(1.3)] == [0.31] and [t for t, _ in table.crossings(2.6)] == [1.001]
+    table.select(b"input 1", focus=2)
+    assert table.operands() == [(1.001, 2.6, -1.0)]
+    assert table.crossings(1.3) == [] and [t for t, _ in table.crossings(2.6)] == [1.001]
+    assert {table.pick(random.Random(s)) for s in range(50)} == {1.001}
+    assert table.operands_of(b"input 1") == [(0.31, 1.3, -1.0), (1.001, 2.6, -1.0)]  # whatever the focus
+    table.select(b"input 0")  # the next selection has none
+    assert table.operands() == [(0.31, 0.6, -1.0), (1.001, 1.2, -1.0)]
+    solve(table, 2, 1.0005, 1.001, True)
+    assert not table.is_unsolved(2) and table.is_unsolved(1) and not table.is_unsolved(99)
+    table.select(b"input 1", focus=2)  # solved since: picks go back to the unsolved sites
+    assert table.operands() == [] and {table.pick(random.Random(s)) for s in range(50)} <= {0.31, 1.001}

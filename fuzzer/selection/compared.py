@@ -81,6 +81,8 @@ class ComparedValues:
         self._running: dict[int, tuple[float, float]] = {}
         self._memory: OrderedDict[bytes, dict[int, tuple[float, float]]] = OrderedDict()
         self._parent: dict[int, tuple[float, float]] = {}
+        self._focus: int | None = None
+        """The one site the input being mutated aims at (the input-to-state stage's), or None."""
         self._flipped: set[int] = set()
         """Sites where the running input gave the other outcome (counted once per input)."""
 
@@ -134,6 +136,10 @@ class ComparedValues:
     def _solved(self, site: int) -> bool:
         return int(self._state[site][_FLIPS]) >= SOLVED_AFTER
 
+    def is_unsolved(self, site: int) -> bool:
+        """Whether ``site`` is a threshold site not yet solved (:data:`SOLVED_AFTER`)."""
+        return site in self.thresholds and not self._solved(site)
+
     def crossing(self, value: float) -> list[float]:
         """Thresholds of the unsolved sites that recently compared ``value`` (one of the last
         :data:`RECENT` values of their varying operand), in the order the sites were first seen.
@@ -162,8 +168,12 @@ class ComparedValues:
         self._running = {}
         self._flipped = set()
 
-    def select(self, key: bytes) -> None:
-        """The input ``key`` is about to be mutated: :meth:`operands` are now its."""
+    def select(self, key: bytes, focus: int | None = None) -> None:
+        """The input ``key`` is about to be mutated: :meth:`operands` are now its. With
+        ``focus`` (a site, from the input-to-state stage, ``fuzzer.selection.i2s``) the mutation
+        aims at that site alone: :meth:`operands`, :meth:`crossings` and :meth:`pick` give only
+        its threshold, until the next :meth:`select`."""
+        self._focus = focus
         self._parent = self._memory.get(key, {})
         if self._parent:
             self._memory.move_to_end(key)
@@ -178,13 +188,18 @@ class ComparedValues:
         A value computed from the input (a ratio of two scaling factors, a distance) rather than
         held by a leaf: ``fuzzer.mutation.leaves.apply_compared`` scales a leaf by threshold /
         value, which puts a value proportional to that leaf right past the threshold."""
-        return self._operands(self._parent)
+        return [(t, v, w) for site, t, v, w in self._operands(self._parent) if self._focus in (None, site)]
 
     def operands_of(self, key: bytes) -> list[tuple[float, float, float]]:
-        """:meth:`operands` of the remembered input ``key``, without selecting it."""
-        return self._operands(self._memory.get(key, {}))
+        """:meth:`operands` of the remembered input ``key``, without selecting it (whatever the
+        focus)."""
+        return [(t, v, w) for _, t, v, w in self._operands(self._memory.get(key, {}))]
 
-    def _operands(self, entry: dict[int, tuple[float, float]]) -> list[tuple[float, float, float]]:
+    def sites_of(self, key: bytes) -> list[int]:
+        """The sites of :meth:`operands_of`, in the order the input reached them."""
+        return [site for site, *_ in self._operands(self._memory.get(key, {}))]
+
+    def _operands(self, entry: dict[int, tuple[float, float]]) -> list[tuple[int, float, float, float]]:
         out = []
         for site, (a, b) in entry.items():
             threshold = self.thresholds.get(site)
@@ -192,7 +207,7 @@ class ComparedValues:
                 continue
             value = float(a if self._state[site][_A_VARIES] else b)
             if value != threshold and value != 0.0:  # 0 is every field's default; no factor moves it
-                out.append((threshold, value, 1.0 if value < threshold else -1.0))
+                out.append((site, threshold, value, 1.0 if value < threshold else -1.0))
         return out
 
     def crossings(self, value: float) -> list[tuple[float, float]]:
@@ -208,6 +223,8 @@ class ComparedValues:
             return []
         out = []
         for site, threshold in self.thresholds.items():
+            if self._focus is not None and site != self._focus:
+                continue
             recent = self._recent.get(site, ())
             if value in recent and not self._solved(site):
                 below = any(v < threshold for v in recent)
@@ -219,10 +236,12 @@ class ComparedValues:
         return len(self.thresholds)
 
     def pick(self, rng: Random) -> float | None:
-        """A threshold (an unsolved one with probability :data:`UNSOLVED_PROBABILITY`), or None
-        before any site has one."""
+        """A threshold (an unsolved one with probability :data:`UNSOLVED_PROBABILITY`; the
+        focus site's, :meth:`select`, while it is unsolved), or None before any site has one."""
         if not self.thresholds:
             return None
+        if self._focus is not None and self.is_unsolved(self._focus):
+            return self.thresholds[self._focus]
         unsolved = self.unsolved()
         if unsolved and rng.random() < UNSOLVED_PROBABILITY:
             return rng.choice(unsolved)

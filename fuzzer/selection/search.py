@@ -46,7 +46,8 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
 
         weights = dict(SEQ_WEIGHTS)
     limits = session.reference.joint_limits
-    tracer = FloatCompareTracer(features, compared=ComparedValues())
+    compared = ComparedValues()
+    tracer = FloatCompareTracer(features, compared=compared)
     if not limits:  # a chain without joint variables (a tip on the root's rigid body): no joint space
         return {"float_tracer": tracer}
     facts = session.facts()
@@ -64,7 +65,11 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     aligned = maker(Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED), name=ALIGNED)
     sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
     arm = "seq_compared" if config.op == "scenario" else "compared"
-    search: dict[str, Any] = {"sources": sources, "float_tracer": tracer, "i2s": I2SQueue(arm)}
+    search: dict[str, Any] = {
+        "sources": sources,
+        "float_tracer": tracer,
+        "i2s": I2SQueue(arm, compared.is_unsolved),
+    }
     if config.op == "fk" and config.transport == "inprocess":
         from fuzzer.generation.sweep import Sweep
 
