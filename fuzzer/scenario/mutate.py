@@ -24,8 +24,8 @@ Mutators
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
 * ``seq_compared``: one float of one step set to a comparison threshold of the targets, or a
-  value just either side of it (the value mutator ``compared``); often the ``/go`` steps after
-  it are observed too (``seq_compared:observe``).
+  value just either side of it (the value mutator ``compared``); the ``/go`` steps after it
+  are observed too (``seq_compared:observe``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
 The dispatcher that draws one by weight and the crossover are ``fuzzer.scenario.dispatch``.
@@ -74,9 +74,11 @@ MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
 SPLICE_ATTEMPTS: Final = 8
 OBSERVE: Final = "observe"
 """Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed."""
-OBSERVE_PROBABILITY: Final = 0.5
+OBSERVE_PROBABILITY: Final = 1.0
 """``seq_compared``: chance that each ``/go`` after the changed step becomes ``/plan`` +
-``/execute`` (when there is one; the earlier ones while there is room)."""
+``/execute`` (when there is one; the earlier ones while there is room). 0.5 until 2026-11-28:
+``profile_switch_band``'s band was reached by children that moved with ``/go``, whose
+trajectory the oracle never sees (BENCHMARKS.md, seventeenth session)."""
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -276,7 +278,7 @@ def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     either side of it (the value mutator ``compared``; its own bandit arm, as it needs no other
     value mutator to come up first).
 
-    With probability :data:`OBSERVE_PROBABILITY` every ``/go`` after that step also becomes
+    With probability :data:`OBSERVE_PROBABILITY` (1.0: always) every ``/go`` after that step also becomes
     ``/plan`` + ``/execute`` (as ``seq_observe``; lineage ``seq_compared:observe``), the
     earlier ones while ``max_steps`` leaves room: the comparison this step aims to flip
     changes a later move's trajectory, and a ``/go`` shows the oracle where the move ended,
