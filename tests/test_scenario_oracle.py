@@ -879,6 +879,23 @@ def test_a_path_after_an_execute_that_left_the_arms_apart_is_compared_by_how_far
     assert (correct.kind, correct.step) == (Kind.KNOWN_LIMITATION, 0)
 
 
+def test_a_rejected_path_leaves_the_plan_an_execute_then_runs() -> None:
+    """A control campaign's false positive (unmodified twin, PROBOT Anno, seed 6, f5d26f1,
+    2026-11-28), minimized: the path to NEAR_TOP (IK answers 1.05e-6 rad apart, a known
+    limitation), a path with no poses (rejected on both: each target keeps its last plan), then
+    the /execute of that plan, after which the arms stand 1.07e-6 rad apart. A path that agreed
+    counted as replacing the plan even when both rejected it, and that /execute was reported as
+    a value divergence of execute.joint_values."""
+    steps = [
+        live("cartesian_path", header=HEADER, poses=[NEAR_TOP]),
+        live("cartesian_path", header=HEADER, poses=[]),
+        live("execute"),
+    ]
+    case = TestCase("rrosfuzz/Scenario", {"steps": steps})
+    c = evaluator("scenario", "python").evaluate(case, validated=True).comparison
+    assert (c.kind, c.step, c.field.split(".")[0]) == (Kind.KNOWN_LIMITATION, 0, "cartesian_path"), c
+
+
 HOME_AHEAD = {
     "position": {"x": 0.22885535000000004, "y": -1.471118577552194e-06, "z": 0.4319999999972982},
     "orientation": {

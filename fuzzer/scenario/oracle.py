@@ -272,13 +272,13 @@ def first_differential(
 
     A ``known_limitation`` at a ``cartesian_path`` step does not end the comparison: that step
     changes nothing on the group but each target's last plan, so the steps after it are
-    compared as well (a later ``/plan`` that succeeds on both, or a later path that agrees,
-    replaces that plan). After an ``/execute`` of the plans it left the two arms may stand
-    apart (two IK answers of one pose, beyond the tolerance): from there on only how far each
-    later path got is compared (``COARSE``: its status, success, error code, fraction and point
-    count), which such a gap does not explain; the evaluator's nudge check then moves the state
-    by the gap too. A counted divergence found later is the verdict; otherwise the first
-    ``known_limitation`` is.
+    compared as well (a later ``/plan`` that succeeds on both, or a later path that agrees
+    and is not rejected on either, replaces that plan). After an ``/execute`` of the plans it
+    left the two arms may stand apart (two IK answers of one pose, beyond the tolerance): from
+    there on only how far each later path got is compared (``COARSE``: its status, success,
+    error code, fraction and point count), which such a gap does not explain; the evaluator's
+    nudge check then moves the state by the gap too. A counted divergence found later is the
+    verdict; otherwise the first ``known_limitation`` is.
     """
     largest = 0.0
     pending: Comparison | None = None
@@ -304,7 +304,9 @@ def first_differential(
             if not (c.kind is Kind.KNOWN_LIMITATION and kind == "cartesian_path"):
                 return c
             pending, tainted = pending or c, True
-        elif kind == "cartesian_path" or (kind == "plan" and _succeeded(a.steps[i], b.steps[i])):
+        elif (kind == "cartesian_path" and _replaced(a.steps[i], b.steps[i])) or (
+            kind == "plan" and _succeeded(a.steps[i], b.steps[i])
+        ):
             tainted = False
     if pending is not None:
         return pending
@@ -317,6 +319,12 @@ def first_differential(
 
 def _succeeded(*steps: Outcome) -> bool:
     return all(tuple(step.values.get("success", ())) == (1.0,) for step in steps)
+
+
+def _replaced(*steps: Outcome) -> bool:
+    """Whether each of these path steps made a new last plan: a rejected or failed path leaves
+    the old one, which a later ``/execute`` runs (``fuzzer.scenario.execute``)."""
+    return all(step.status is Status.OK for step in steps)
 
 
 def compare_scenario(
