@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from fuzzer.artifacts.divlog import CampaignLog, closer_to_command, near_zero_count
+from fuzzer.artifacts.divlog import CampaignLog, divergence_record, near_zero_count
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.evaluate import Evaluation, Evaluator, Verdict
 from fuzzer.generation.spacefill import configuration_message
@@ -256,7 +256,7 @@ class Harness:
         stats.by_strategy[case.strategy] += 1
         key = ev.signature.key
         if self.log is not None:
-            self._log_divergence(case, data, ev, values)
+            self.log.divergence(divergence_record(ev, case.strategy, data, values, self.joint_names))
         if key not in stats.signatures:
             # claim and write together (the store's record); None: another process has it.
             # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.
@@ -276,40 +276,6 @@ class Harness:
             labels = [step.label for step in outcome.steps]
             for name in step_bigrams(kinds[: len(labels)], labels):
                 self.features.hit(f"q:{side}:{name}")
-
-    def _log_divergence(self, case: TestCase, data: bytes, ev: Evaluation, values: tuple[float, ...]) -> None:
-        a, b = ev.outcomes
-        command = None
-        if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == self.joint_names):
-            command = ev.call.positions
-        cmp = ev.comparison
-        assert self.log is not None and ev.signature is not None
-        self.log.divergence(
-            {
-                "sig": ev.signature.key,
-                "kind": str(cmp.kind),
-                "field": cmp.field,
-                "bucket": cmp.bucket,
-                "sign_flip": cmp.sign_flip,
-                "difference": cmp.difference,
-                "unit": cmp.unit,
-                "raw": cmp.raw,
-                "joints": list(cmp.joints),
-                "joint_names": [self.joint_names[j] for j in cmp.joints if j < len(self.joint_names)],
-                "target": cmp.target,
-                "step": cmp.step,
-                "step_kind": cmp.step_kind,
-                "unchecked": cmp.unchecked,
-                "outcome_a": a.label,
-                "outcome_b": b.label,
-                "strategy": case.strategy,
-                "near_zero": near_zero_count(values) if values else None,
-                "closer": closer_to_command(
-                    command, a.values.get("joint_values", ()), b.values.get("joint_values", ())
-                ),
-                "sha1": hashlib.sha1(data).hexdigest(),
-            }
-        )
 
     def _sidecar(self, case: TestCase, data: bytes, ev: Evaluation) -> dict[str, Any]:
         """The sidecar, with the call history of a ``state_dependent`` divergence (replay

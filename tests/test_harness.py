@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import random
@@ -10,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from fuzzer import campaign
+from fuzzer.artifacts.divlog import CampaignLog, read_lines
 from fuzzer.artifacts.store import ArtifactStore, load_sidecar
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation import corpus
@@ -110,6 +112,26 @@ def test_a_divergence_writes_one_crash_file_per_signature(tmp_path: Path) -> Non
     assert decode(files[0].read_bytes()).message["position"][0] == 3.1416 + 5e-5
     assert [o["target"] for o in sidecar["outcomes"]] == ["native", "tests.plugins.faults:tight_tolerance"]
     json.dumps(sidecar)  # JSON all the way down
+
+
+def test_every_divergent_execution_is_a_line_of_the_campaign_log(tmp_path: Path) -> None:
+    h = make_harness(tmp_path, targets=("native", "tests.plugins.faults:tight_tolerance"))
+    h.log = CampaignLog(tmp_path)
+    h.joint_names = tuple(f"joint_{i}" for i in range(1, 7))
+    base = h.seeds[0].message
+    inputs = []
+    for delta in (5e-5, 6e-5):
+        message = dict(base, name=[], position=[3.1416 + delta, 0.0, 0.0, 0.0, 0.0, 0.0])
+        inputs.append(TestCase("sensor_msgs/JointState", message, lineage=("planted",)).encode())
+        h.test_one_input(inputs[-1])
+    h.test_one_input(h.seeds[0].encode())  # no divergence: no line
+    lines = list(read_lines(tmp_path / "divergences.jsonl"))
+    assert [line["sha1"] for line in lines] == [hashlib.sha1(data).hexdigest() for data in inputs]
+    first = lines[0]
+    assert first["sig"] in h.stats.signatures and first["kind"] == "status"
+    assert (first["outcome_a"], first["outcome_b"]) == ("ok", "rejected:OutOfBoundsError:30")
+    assert first["strategy"] == "planted" and first["near_zero"] == 5  # five joints at 0.0
+    assert first["closer"] == "n/a"  # one target has no final state
 
 
 def test_stop_on_divergence_raises_after_writing_the_sidecar(tmp_path: Path) -> None:

@@ -18,13 +18,19 @@ skips a line it cannot parse.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from fuzzer.input.mapping import MoveCall
+
+if TYPE_CHECKING:
+    from fuzzer.execution.evaluate import Evaluation
 
 DIVERGENCES = "divergences.jsonl"
 STATS = "stats.jsonl"
@@ -72,6 +78,55 @@ def closer_to_command(command: Sequence[float] | None, a: Sequence[float], b: Se
     if not (math.isfinite(da) and math.isfinite(db)) or abs(da - db) <= 1e-12:
         return "tie"
     return "a" if da < db else "b"
+
+
+def divergence_record(
+    ev: Evaluation, strategy: str, data: bytes, values: Sequence[float], joint_names: Sequence[str]
+) -> dict[str, Any]:
+    """The ``divergences.jsonl`` line of a divergent evaluation of the input ``data``.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        A divergent evaluation (its ``signature`` set).
+    strategy : str
+        The lineage name that made the input.
+    data : bytes
+        The input's bytes (their SHA-1 names the crash file).
+    values : sequence of float, shape (n_joints,)
+        The joint values of a ``move`` or ``fk`` call (rad or m), empty otherwise.
+    joint_names : sequence of str
+        The robot's joint names, in the order of the comparison's joint indices.
+    """
+    a, b = ev.outcomes
+    finals = a.values.get("joint_values", ()), b.values.get("joint_values", ())
+    command = None
+    if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == tuple(joint_names)):
+        command = ev.call.positions
+    cmp = ev.comparison
+    assert ev.signature is not None
+    return {
+        "sig": ev.signature.key,
+        "kind": str(cmp.kind),
+        "field": cmp.field,
+        "bucket": cmp.bucket,
+        "sign_flip": cmp.sign_flip,
+        "difference": cmp.difference,
+        "unit": cmp.unit,
+        "raw": cmp.raw,
+        "joints": list(cmp.joints),
+        "joint_names": [joint_names[j] for j in cmp.joints if j < len(joint_names)],
+        "target": cmp.target,
+        "step": cmp.step,
+        "step_kind": cmp.step_kind,
+        "unchecked": cmp.unchecked,
+        "outcome_a": a.label,
+        "outcome_b": b.label,
+        "strategy": strategy,
+        "near_zero": near_zero_count(values) if values else None,
+        "closer": closer_to_command(command, *finals),
+        "sha1": hashlib.sha1(data).hexdigest(),
+    }
 
 
 class CampaignLog:
