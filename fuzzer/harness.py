@@ -256,7 +256,11 @@ class Harness:
         stats.by_strategy[case.strategy] += 1
         key = ev.signature.key
         if self.log is not None:
-            self.log.divergence(divergence_record(ev, case.strategy, data, values, self.joint_names))
+            command = None  # the paper's Table IV: a move naming every joint, in order
+            if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == self.joint_names):
+                command = ev.call.positions
+            record = divergence_record(ev, case.strategy, data, values, self.joint_names, command)
+            self.log.divergence(record)
         if key not in stats.signatures:
             # claim and write together (the store's record); None: another process has it.
             # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.

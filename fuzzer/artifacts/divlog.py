@@ -27,8 +27,6 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from fuzzer.input.mapping import MoveCall
-
 if TYPE_CHECKING:
     from fuzzer.execution.evaluate import Evaluation
 
@@ -81,7 +79,12 @@ def closer_to_command(command: Sequence[float] | None, a: Sequence[float], b: Se
 
 
 def divergence_record(
-    ev: Evaluation, strategy: str, data: bytes, values: Sequence[float], joint_names: Sequence[str]
+    ev: Evaluation,
+    strategy: str,
+    data: bytes,
+    values: Sequence[float],
+    joint_names: Sequence[str],
+    command: Sequence[float] | None,
 ) -> dict[str, Any]:
     """The ``divergences.jsonl`` line of a divergent evaluation of the input ``data``.
 
@@ -97,12 +100,12 @@ def divergence_record(
         The joint values of a ``move`` or ``fk`` call (rad or m), empty otherwise.
     joint_names : sequence of str
         The robot's joint names, in the order of the comparison's joint indices.
+    command : sequence of float or None, shape (n_joints,)
+        The commanded joint values of a ``move`` naming every joint in order (rad or m), for
+        ``closer`` (the paper's Table IV); None otherwise.
     """
     a, b = ev.outcomes
     finals = a.values.get("joint_values", ()), b.values.get("joint_values", ())
-    command = None
-    if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == tuple(joint_names)):
-        command = ev.call.positions
     cmp = ev.comparison
     assert ev.signature is not None
     return {
