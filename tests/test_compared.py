@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import random
 import types
 
@@ -53,6 +54,83 @@ def test_a_site_is_solved_once_enough_inputs_took_the_other_branch() -> None:
     table.watch(3, 0.2, 0.735, True)
     table.end(b"the last one")
     assert table.unsolved() == [] and 3 in table.done and table.crossings(0.9) == []
+
+
+def test_inputs_that_cross_an_ordering_threshold_only_at_its_edge_do_not_solve_it() -> None:
+    """``ik_seed_band``'s ``seed[0] < 0.31`` crossed by 0.30999999999999994 (the next float) or
+    by 1e-6: the scenario oracle judges a divergence there ill-conditioned (a nudge of the state
+    carries it out of the band), so such inputs show nothing behind the branch and the site
+    stays unsolved until inputs clear of the edge (``EDGE``) take it."""
+    table = ComparedValues()
+    for x in (0.9, 1.2):
+        table.watch(6, x, 0.31, x < 0.31)
+    edge = (math.nextafter(0.31, 0.0), 0.31 - 1e-6, 0.31 - 0.5 * cv.EDGE)
+    for i in range(2 * cv.SOLVED_AFTER):
+        table.begin()
+        x = edge[i % len(edge)]
+        table.watch(6, x, 0.31, x < 0.31)
+        table.end(b"at the edge %d" % i)
+    assert table.unsolved() == [0.31] and 6 not in table.done
+    for i in range(cv.SOLVED_AFTER):
+        table.begin()
+        table.watch(6, 0.305, 0.31, True)
+        table.end(b"inside %d" % i)
+    assert table.unsolved() == [] and 6 in table.done
+
+
+def test_past_an_edge_the_way_still_leads_deeper_into_the_new_side() -> None:
+    """Values within ``EDGE`` of the threshold count on neither side: after crossings by a float,
+    input-to-state still writes values past ``x < 0.31`` going down, from the edge value too
+    (before, it went up from there, back out of the band), and the scaled crossing of an input
+    that compared the edge value goes down too."""
+    table = ComparedValues()
+    at_edge = math.nextafter(0.31, 0.0)
+    for x in (0.9, 1.2):
+        table.watch(6, x, 0.31, x < 0.31)
+    table.begin()
+    table.watch(6, at_edge, 0.31, True)
+    table.end(b"at the edge")
+    assert table.crossings(0.9) == [(0.31, -1.0)]
+    assert table.crossings(at_edge) == [(0.31, -1.0)]
+    table.select(b"at the edge")
+    assert table.operands() == [(0.31, at_edge, -1.0)]
+    table.begin()
+    table.watch(6, 0.305, 0.31, True)  # clear of the edge: both sides seen
+    table.end(b"inside")
+    assert table.crossings(0.9) == [(0.31, 0.0)]
+    table.select(b"inside")
+    assert table.operands() == [(0.31, 0.305, 1.0)]
+
+
+def test_an_equality_is_solved_by_inputs_on_its_threshold() -> None:
+    """``==`` and ``!=`` give their other outcome only on the threshold: no edge to clear."""
+    table = ComparedValues()
+    for x in (0.9, 1.2):
+        table.watch(7, x, 0.25, x == 0.25, ordered=False)
+    for i in range(cv.SOLVED_AFTER):
+        table.begin()
+        table.watch(7, 0.25, 0.25, True, ordered=False)
+        table.end(b"equal %d" % i)
+    assert table.unsolved() == [] and 7 in table.done
+
+
+def test_the_guard_tells_orderings_from_equalities() -> None:
+    module = _instrumented()
+    table = ComparedValues()
+    tracer = FloatCompareTracer(Features(enabled=False), compared=table)
+    tracer.install(budget=0)
+    try:
+        for x in (0.0, 0.5, 1.0, 0.6, 0.7):  # 0.3 <= x solved; x < 0.31 reached with x >= 0.31
+            table.begin()
+            module.band(x)
+            module.exactly(x)
+        for _ in range(cv.SOLVED_AFTER):
+            table.begin()
+            assert module.band(math.nextafter(0.31, 0.0)) is True  # at the edge: no count
+            assert module.exactly(0.25) is True  # an equality's other outcome: counts
+        assert table.unsolved() == [0.31]
+    finally:
+        atheris._trace_cmp = tracer.inner
 
 
 def test_two_varying_operands_or_none_make_no_threshold() -> None:

@@ -14,8 +14,9 @@ threshold, whether it is a literal, a module constant or computed once (Atheris 
 operands, ``is_const``, but not in a chained comparison such as ``a <= x < b``). A site where
 both operands vary, or that is solved, is settled and no longer watched, so the steady cost is
 one set lookup per float comparison. A threshold site is *unsolved* until :data:`SOLVED_AFTER`
-inputs have given the outcome its first comparison did not: the branch behind it has never been
-taken, or only by a few inputs, which may not have shown what lies behind it.
+inputs have given the outcome its first comparison did not, each with a value more than
+:data:`EDGE` past the threshold: the branch behind it has never been taken, or only by a few
+inputs, or only at its very edge, which may not have shown what lies behind it.
 :meth:`ComparedValues.pick` draws an unsolved site's threshold 3 times out of 4 (when there is
 one), else any threshold; ``fuzzer.mutation.leaves`` writes it, or a value just either side of
 it, into a float field of the input.
@@ -54,6 +55,16 @@ before the site is solved and no longer watched. The first input to take a branc
 not show what lies behind it (a start state in a band reached by a ``/go``, whose trajectory
 the oracle never sees, then no ``/plan``); the site's threshold keeps guiding the search a
 little longer, as libFuzzer's hit-count buckets keep rewarding an edge taken more often."""
+EDGE: Final = 1e-5
+"""Relative distance (times ``max(1, |threshold|)``) within which an input that gave an ordering
+comparison's site (``<``, ``<=``, ``>``, ``>=``) its other outcome does not count toward
+:data:`SOLVED_AFTER`. The scenario oracle judges an IK
+step's divergence ill-conditioned when moving the state by up to the campaign tolerance (1e-6)
+changes a target's answer (``Evaluator._scenario_ik``), so an input that crossed a band's edge
+by a float or by 1e-6 (two of ``fuzzer.mutation.leaves._past``'s three crossings) shows nothing
+behind it: ``ik_seed_band``'s site ``seed[0] < 0.31`` was solved by four inputs at
+0.30999999999999994, each judged ill-conditioned, and its campaign (seed 28) never detected
+the bug, although the same inputs with 0.305 do (BENCHMARKS.md, nineteenth session)."""
 MEMORY: Final = 4096
 """Inputs whose operands at the unsolved sites are remembered (the most recently run or
 mutated), for :meth:`ComparedValues.operands`."""
@@ -86,8 +97,10 @@ class ComparedValues:
         self._flipped: set[int] = set()
         """Sites where the running input gave the other outcome (counted once per input)."""
 
-    def watch(self, site: int, a: float, b: float, result: object) -> None:
-        """Record one comparison ``a <op> b`` at ``site`` that gave ``result``."""
+    def watch(self, site: int, a: float, b: float, result: object, ordered: bool = True) -> None:
+        """Record one comparison ``a <op> b`` at ``site`` that gave ``result``; ``ordered``:
+        ``<op>`` is ``<``, ``<=``, ``>`` or ``>=`` (else ``==`` or ``!=``, whose other outcome
+        lies only on the threshold: :data:`EDGE` does not apply)."""
         state = self._state.get(site)
         outcome = 2 if result else 1
         if site not in self._running:  # this input's first comparison there, whichever operand varies
@@ -102,11 +115,12 @@ class ComparedValues:
             state[_A_VARIES] = True
         if not state[_B_VARIES] and b != state[_FIRST_B]:
             state[_B_VARIES] = True
-        if outcome != state[_FIRST_OUTCOME] and site not in self._flipped:
+        a_varies, b_varies = state[_A_VARIES], state[_B_VARIES]
+        flipped = outcome != state[_FIRST_OUTCOME] and site not in self._flipped
+        if flipped and (not ordered or _clear(state, a, b)):  # a flip at an ordering's edge: no count
             self._flipped.add(site)
             state[_FLIPS] = int(state[_FLIPS]) + 1
         state[_COUNT] = int(state[_COUNT]) + 1
-        a_varies, b_varies = state[_A_VARIES], state[_B_VARIES]
         if a_varies and b_varies:  # both operands move with the input: no threshold here
             self.thresholds.pop(site, None)
             self._settle(site)
@@ -181,7 +195,9 @@ class ComparedValues:
     def operands(self) -> list[tuple[float, float, float]]:
         """For the input being mutated (:meth:`select`), each still unsolved threshold site it
         reached off its threshold: (threshold, the value it compared there, the way from that
-        value to the branch never taken: +1.0 up, -1.0 down), in the order that input reached
+        value to the branch never taken: +1.0 up, -1.0 down; from a value within :data:`EDGE`
+        of the threshold, the way to the side no value clear of it was compared on, when there is
+        one: past a band's edge by a float, deeper into the band), in the order that input reached
         them (a value on the threshold is left to :meth:`crossings`, which knows the way; a
         value of 0 is left out: no scaling moves it, and it would queue an input for the
         input-to-state stage, ``fuzzer.selection.i2s``, that the stage cannot change).
@@ -207,7 +223,10 @@ class ComparedValues:
                 continue
             value = float(a if self._state[site][_A_VARIES] else b)
             if value != threshold and value != 0.0:  # 0 is every field's default; no factor moves it
-                out.append((site, threshold, value, 1.0 if value < threshold else -1.0))
+                way = 1.0 if value < threshold else -1.0
+                if abs(value - threshold) <= EDGE * max(1.0, abs(threshold)):
+                    way = self._new_side(site, threshold) or way  # at the edge: deeper past it
+                out.append((site, threshold, value, way))
         return out
 
     def crossings(self, value: float) -> list[tuple[float, float]]:
@@ -216,21 +235,32 @@ class ComparedValues:
         input has crossed yet gave one outcome, so the values it saw lie on one side of the
         threshold, or on it. From a value *on* the threshold that side is the one away from the
         site's other values (``x < t`` seen false with x = t and x = 1.5: down), which the value
-        alone cannot tell; 0.0 when the site saw no value off its threshold, or values on both
-        sides (``==``, ``!=``, a site fewer than :data:`SOLVED_AFTER` inputs crossed):
-        ``_past`` then goes away from the leaf's value."""
+        alone cannot tell. Values within :data:`EDGE` of the threshold count on neither side (a
+        site crossed only at its edge is not solved either): ``x < 0.31`` seen false with 0.9 and
+        true with 0.30999999999999994 still gives down, from either value. 0.0 when the site saw
+        no value clear of its threshold, or such values on both sides (``==``, ``!=``, a site
+        fewer than :data:`SOLVED_AFTER` inputs crossed): ``_past`` then goes away from the leaf's
+        value."""
         if value == 0.0:
             return []
         out = []
         for site, threshold in self.thresholds.items():
             if self._focus is not None and site != self._focus:
                 continue
-            recent = self._recent.get(site, ())
-            if value in recent and not self._solved(site):
-                below = any(v < threshold for v in recent)
-                above = any(v > threshold for v in recent)
-                out.append((threshold, 0.0 if below == above else (1.0 if below else -1.0)))
+            if value in self._recent.get(site, ()) and not self._solved(site):
+                out.append((threshold, self._new_side(site, threshold)))
         return out
+
+    def _new_side(self, site: int, threshold: float) -> float:
+        """The way (+1.0 up, -1.0 down) from ``threshold`` to the side on which ``site`` compared
+        no recent value clear of it (farther than :data:`EDGE`), or 0.0 (values clear of it on
+        both sides, or on neither). A value at the edge counts on neither side, as it does not
+        count toward :data:`SOLVED_AFTER`: past a band's edge by a float, the side is still new."""
+        recent = self._recent.get(site, ())
+        edge = EDGE * max(1.0, abs(threshold))
+        below = any(v < threshold - edge for v in recent)
+        above = any(v > threshold + edge for v in recent)
+        return 0.0 if below == above else (1.0 if below else -1.0)
 
     def __len__(self) -> int:
         return len(self.thresholds)
@@ -246,6 +276,15 @@ class ComparedValues:
         if unsolved and rng.random() < UNSOLVED_PROBABILITY:
             return rng.choice(unsolved)
         return rng.choice(list(self.thresholds.values()))
+
+
+def _clear(state: list[float | bool | int], a: float, b: float) -> bool:
+    """Whether the varying operand of a comparison ``a <op> b`` lies more than :data:`EDGE`
+    (relative) from the site's fixed one; True while neither has varied (nothing to measure)."""
+    if state[_A_VARIES] == state[_B_VARIES]:
+        return True
+    fixed, value = (float(state[_FIRST_B]), a) if state[_A_VARIES] else (float(state[_FIRST_A]), b)
+    return not abs(value - fixed) <= EDGE * max(1.0, abs(fixed))
 
 
 def _remember(recent: dict[float, None], value: float) -> None:

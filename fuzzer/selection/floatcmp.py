@@ -33,7 +33,7 @@ import math
 import operator
 import sys
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -144,6 +144,8 @@ _OPS: tuple[Callable[[Any, Any], Any], ...] = (
     operator.ge,
 )
 """COMPARE_OP's operators in ``dis.cmp_op`` order."""
+_EQUALITY: Final = frozenset({2, 3})
+"""Indices of ``==`` and ``!=`` in ``_OPS``."""
 
 
 def make_guard(
@@ -163,7 +165,7 @@ def make_guard(
 
     if compared is None:
         return guard
-    floats, numbers, done, watch = _FLOATS, _NUMBERS, compared.done, compared.watch
+    floats, numbers, done, watch, equality = _FLOATS, _NUMBERS, compared.done, compared.watch, _EQUALITY
 
     def watching(obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
         t1, t2 = type(obj1), type(obj2)
@@ -171,7 +173,7 @@ def make_guard(
             return inner(obj1, obj2, opid, site, is_const)
         result = ops[opid >> shift](obj1, obj2)
         if site not in done and ((t1 in floats and t2 in numbers) or (t2 in floats and t1 in numbers)):
-            watch(site, obj1, obj2, result)
+            watch(site, obj1, obj2, result, opid >> shift not in equality)
         return result
 
     return watching

@@ -12,3 +12,8 @@ def branch(x: float, y: float) -> int:
 def band(x: float) -> bool:
     """A chained comparison (Atheris does not mark its constants ``is_const``)."""
     return 0.3 <= x < 0.31
+
+
+def exactly(x: float) -> bool:
+    """An equality (its other outcome lies only on the threshold)."""
+    return x == 0.25
