@@ -25,14 +25,8 @@ enough (``DRY_RUN_OPS``).
 
 from __future__ import annotations
 
-import contextlib
-import math
 import os
 import random
-import select
-import signal
-import sys
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -54,6 +48,7 @@ from fuzzer.generation.sweep import Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
+from fuzzer.processes import DryRun
 from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import SPACEFILL
 
@@ -122,10 +117,6 @@ DEFAULT_BUDGET = 60.0
 
 ENV = "RROSFUZZ_DRY_RUN"
 """``RROSFUZZ_DRY_RUN=0`` turns the dry run off (libFuzzer then runs the seeds first, alone)."""
-
-KILL_GRACE = 2.0
-"""Seconds past the child's budget before ``DryRun.wait`` kills a child that outlived its alarm
-(one that ignores ``SIGALRM``)."""
 
 
 def applies(config: RunConfig, mutator: str, several_processes: bool, stop_on_divergence: bool) -> bool:
@@ -341,72 +332,3 @@ def _cpus() -> int:
     if hasattr(os, "sched_getaffinity"):
         return len(os.sched_getaffinity(0))
     return os.cpu_count() or 1
-
-
-class DryRun:
-    """A child process that evaluates a stage's inputs (``start``), and its end (``wait``)."""
-
-    def __init__(self, pid: int, budget: float) -> None:
-        self.pid = pid
-        self.deadline = time.monotonic() + budget + KILL_GRACE
-        self.status: int | None = None
-        """The child's wait status once reaped (``os.waitstatus_to_exitcode`` reads it)."""
-
-    @classmethod
-    def start(cls, work: Callable[[], object], budget: float) -> DryRun | None:
-        """Fork a child that runs ``work`` and exits (0, or 1 if it raised); None if the system
-        cannot fork. The child ends after ``budget`` seconds whatever it is doing (``SIGALRM``,
-        whose default action ends a process even inside compiled code)."""
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(Exception):
-                stream.flush()  # what is buffered would be written twice
-        try:
-            pid = os.fork()
-        except OSError:
-            return None
-        if pid:
-            return cls(pid, budget)
-        code = 1
-        try:  # the child: no exit hooks of the campaign, no buffered output of its own to flush
-            signal.signal(signal.SIGALRM, signal.SIG_DFL)
-            signal.alarm(max(1, math.ceil(budget)))
-            work()
-            code = 0
-        finally:
-            os._exit(code)
-
-    def wait(self) -> int | None:
-        """Reap the child: wait until it ends or its budget and ``KILL_GRACE`` are spent (then
-        kill it). Returns its exit code (negative: the signal that ended it), None if it was
-        already reaped."""
-        if self.status is not None:
-            return None
-        while True:
-            try:
-                pid, status = os.waitpid(self.pid, os.WNOHANG)
-            except ChildProcessError:  # reaped elsewhere (a SIGCHLD handler)
-                self.status = 0
-                return None
-            if pid:
-                self.status = status
-                return os.waitstatus_to_exitcode(status)
-            remaining = self.deadline - time.monotonic()
-            if remaining <= 0:
-                with contextlib.suppress(ProcessLookupError):
-                    os.kill(self.pid, signal.SIGKILL)
-                self.deadline = remaining = math.inf  # its death is reaped next
-            _until_exit(self.pid, min(remaining, 1.0))
-
-
-def _until_exit(pid: int, seconds: float) -> None:
-    """Sleep until process ``pid`` exits or ``seconds`` pass: woken at its exit through a pidfd
-    (Linux), else polled every 10 ms."""
-    try:
-        fd = os.pidfd_open(pid)
-    except (AttributeError, OSError):  # not Linux, or already gone (waitpid reaps it next)
-        time.sleep(min(seconds, 0.01))
-        return
-    try:
-        select.select([fd], [], [], seconds)
-    finally:
-        os.close(fd)

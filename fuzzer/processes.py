@@ -5,14 +5,21 @@ module holds what the parent and its children agree on: the time budget of a
 ``-fork`` campaign (its children stop at the parent's deadline, since libFuzzer
 checks ``-max_total_time`` only between jobs and merges), the paths a ``-jobs``
 campaign makes absolute before it moves into its artifacts folder, and the
-campaign's exit status from what it wrote.
+campaign's exit status from what it wrote; and a forked child with a time budget
+(``DryRun``, the dry run's, ``fuzzer.dry_run``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import select
+import signal
+import sys
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -153,3 +160,77 @@ def absolute_option(option: str) -> str:
     if sep and name in ("--robot", "--msg-path") and os.path.exists(value):
         return f"{name}={os.path.abspath(value)}"
     return option
+
+
+KILL_GRACE = 2.0
+"""Seconds past the child's budget before ``DryRun.wait`` kills a child that outlived its alarm
+(one that ignores ``SIGALRM``)."""
+
+
+class DryRun:
+    """A child process that evaluates a stage's inputs (``start``), and its end (``wait``)."""
+
+    def __init__(self, pid: int, budget: float) -> None:
+        self.pid = pid
+        self.deadline = time.monotonic() + budget + KILL_GRACE
+        self.status: int | None = None
+        """The child's wait status once reaped (``os.waitstatus_to_exitcode`` reads it)."""
+
+    @classmethod
+    def start(cls, work: Callable[[], object], budget: float) -> DryRun | None:
+        """Fork a child that runs ``work`` and exits (0, or 1 if it raised); None if the system
+        cannot fork. The child ends after ``budget`` seconds whatever it is doing (``SIGALRM``,
+        whose default action ends a process even inside compiled code)."""
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()  # what is buffered would be written twice
+        try:
+            pid = os.fork()
+        except OSError:
+            return None
+        if pid:
+            return cls(pid, budget)
+        code = 1
+        try:  # the child: no exit hooks of the campaign, no buffered output of its own to flush
+            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+            signal.alarm(max(1, math.ceil(budget)))
+            work()
+            code = 0
+        finally:
+            os._exit(code)
+
+    def wait(self) -> int | None:
+        """Reap the child: wait until it ends or its budget and ``KILL_GRACE`` are spent (then
+        kill it). Returns its exit code (negative: the signal that ended it), None if it was
+        already reaped."""
+        if self.status is not None:
+            return None
+        while True:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:  # reaped elsewhere (a SIGCHLD handler)
+                self.status = 0
+                return None
+            if pid:
+                self.status = status
+                return os.waitstatus_to_exitcode(status)
+            remaining = self.deadline - time.monotonic()
+            if remaining <= 0:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(self.pid, signal.SIGKILL)
+                self.deadline = remaining = math.inf  # its death is reaped next
+            _until_exit(self.pid, min(remaining, 1.0))
+
+
+def _until_exit(pid: int, seconds: float) -> None:
+    """Sleep until process ``pid`` exits or ``seconds`` pass: woken at its exit through a pidfd
+    (Linux), else polled every 10 ms."""
+    try:
+        fd = os.pidfd_open(pid)
+    except (AttributeError, OSError):  # not Linux, or already gone (waitpid reaps it next)
+        time.sleep(min(seconds, 0.01))
+        return
+    try:
+        select.select([fd], [], [], seconds)
+    finally:
+        os.close(fd)

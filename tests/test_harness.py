@@ -134,6 +134,21 @@ def test_every_divergent_execution_is_a_line_of_the_campaign_log(tmp_path: Path)
     assert first["closer"] == "n/a"  # one target has no final state
 
 
+def test_the_log_says_which_final_state_is_nearer_the_command(tmp_path: Path) -> None:
+    """The paper's Table IV: a ``move`` naming every joint, both targets succeeding, the faulty
+    twin wrapping a revolute target in [4.0, 4.05) rad into (-pi, pi] (``wrap_past_pi``, on the
+    UR5, whose joints reach 2 pi): the native target ends nearer the command."""
+    h = make_harness(tmp_path, targets=("native", "benchmarks.zoo.deep:wrap_past_pi"), robot="ur5")
+    h.log = CampaignLog(tmp_path)
+    names = [str(n) for n in h.evaluator.runners[0].model.joint_names]
+    h.joint_names = tuple(names)
+    message = dict(h.seeds[0].message, name=names, position=[4.02, 0.0, 0.0, 0.0, 0.0, 0.0])
+    h.test_one_input(TestCase("sensor_msgs/JointState", message).encode())
+    (line,) = read_lines(tmp_path / "divergences.jsonl")
+    assert (line["outcome_a"], line["outcome_b"]) == ("ok", "ok")
+    assert line["closer"] == "a"
+
+
 def test_stop_on_divergence_raises_after_writing_the_sidecar(tmp_path: Path) -> None:
     h = make_harness(tmp_path, targets=("native", "tests.plugins.faults:tight_tolerance"))
     h.stop_on_divergence = True

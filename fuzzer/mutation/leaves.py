@@ -39,6 +39,7 @@ from fuzzer.mutation.fields import (
     _to_float32,
     _wrap,
 )
+from fuzzer.mutation.thresholds import _compared, _has_thresholds, _past
 
 # ----------------------------------------------------------------------------------------------------------
 # Leaf operations: the building blocks of the leaf mutators and of comb1..comb4
@@ -269,11 +270,6 @@ def _libfuzzer(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -
     raise NotApplicable("libFuzzer produced only NaN/inf")
 
 
-def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> bool:
-    """Guard: the campaign has learned a comparison threshold."""
-    return ctx.compared is not None and len(ctx.compared) > 0
-
-
 CROSSING_PROBABILITY: Final = 0.75
 """:func:`apply_compared`: chance of writing past a threshold into the leaf a target compared
 with it (when the message has one)."""
@@ -346,42 +342,6 @@ def _scaled(message: Message, ctx: MutationContext) -> bool:
         return False
     _set(message, leaf.loc, _coerce(new, leaf.spec, ctx))
     return True
-
-
-def _past(threshold: float, value: float, rng: Random, way: float = 0.0) -> float:
-    """``threshold``, or the next float, a relative 1e-6 or 1e-3 (at least that much absolute)
-    beyond it, on the side ``way`` (+1.0 up, -1.0 down; 0.0: away from ``value``, and either
-    way, drawn, from a value on the threshold)."""
-    if way == 0.0:
-        way = -1.0 if value > threshold else 1.0 if value < threshold else rng.choice((-1.0, 1.0))
-    step = max(1.0, abs(threshold))
-    near = (
-        threshold,
-        math.nextafter(threshold, way * math.inf),
-        threshold + way * 1e-6 * step,
-        threshold + way * 1e-3 * step,
-    )
-    return rng.choice([v for v in near if v != value])
-
-
-def _compared(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> Any:
-    """A comparison threshold of the targets or a value just either side of it: the next float
-    either way, or a relative step of 1e-6 or 1e-3 (at least that much absolute)."""
-    assert ctx.compared is not None
-    threshold = ctx.compared.pick(ctx.rng)
-    if threshold is None:
-        raise NotApplicable("no comparison threshold known yet")
-    step = max(1.0, abs(threshold))
-    near = (
-        threshold,
-        math.nextafter(threshold, math.inf),
-        math.nextafter(threshold, -math.inf),
-        threshold + 1e-6 * step,
-        threshold - 1e-6 * step,
-        threshold + 1e-3 * step,
-        threshold - 1e-3 * step,
-    )
-    return ctx.rng.choice([v for v in near if v != value])  # never the value it has
 
 
 _NUMBERS: Final = frozenset({"int", "float"})

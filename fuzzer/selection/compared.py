@@ -61,7 +61,7 @@ comparison's site (``<``, ``<=``, ``>``, ``>=``) its other outcome does not coun
 :data:`SOLVED_AFTER`. The scenario oracle judges an IK
 step's divergence ill-conditioned when moving the state by up to the campaign tolerance (1e-6)
 changes a target's answer (``Evaluator._scenario_ik``), so an input that crossed a band's edge
-by a float or by 1e-6 (two of ``fuzzer.mutation.leaves._past``'s three crossings) shows nothing
+by a float or by 1e-6 (two of ``fuzzer.mutation.thresholds._past``'s three crossings) shows nothing
 behind it: ``ik_seed_band``'s site ``seed[0] < 0.31`` was solved by four inputs at
 0.30999999999999994, each judged ill-conditioned, and its campaign (seed 28) never detected
 the bug, although the same inputs with 0.305 do (BENCHMARKS.md, nineteenth session)."""
