@@ -1069,6 +1069,27 @@ def test_compared_crosses_from_a_leaf_on_the_threshold_to_the_side_never_reached
     assert down >= 0.7 * 200 and up <= 0.15 * 200, (down, up)
 
 
+def test_compared_takes_a_leaf_at_a_band_edge_deeper_into_the_band() -> None:
+    """``x < 0.31`` saw 1.2 (false), then 0.30999999999999994 (true, within ``EDGE``: not
+    counted): the leaf at the edge gets 0.31 - 1e-3 whenever input-to-state picks it, never the
+    threshold, the next float or 1e-6 below it (each of which left it at the edge, judged
+    ill-conditioned by the scenario oracle, or undid the crossing)."""
+    at_edge = math.nextafter(0.31, -math.inf)
+    table = ComparedValues()
+    for x in (1.2, at_edge):
+        table.watch(1, x, 0.31, x < 0.31)
+    written = []
+    for seed in range(200):
+        out = MUTATORS["compared"](
+            joint_state(position=(0.1, at_edge)), make_ctx(seed, JS_TYPES, compared=table)
+        )
+        if out["position"][0] == 0.1:
+            written.append(out["position"][1])
+    deeper = sum(v == 0.31 - 1e-3 for v in written)
+    at_the_edge = sum(v in (at_edge, 0.31 - 1e-6) for v in written)  # the random leaf's draws only
+    assert deeper >= 0.7 * len(written) and at_the_edge <= 0.1 * len(written), (deeper, at_the_edge)
+
+
 def _scaled_to_the_ratio_threshold(table: ComparedValues) -> float:
     """Share of 400 ``compared`` mutations of a (0.4, 0.8) message that scale a leaf by 1.001 /
     2.0 or just below it (the selected input compared a ratio of 2.0 with 1.001)."""

@@ -9,6 +9,7 @@ from typing import Any
 
 from fuzzer.mutation.base import Message, MutationContext, NotApplicable
 from fuzzer.mutation.fields import Leaf
+from fuzzer.selection.compared import EDGE
 
 
 def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> bool:
@@ -19,10 +20,15 @@ def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationConte
 def _past(threshold: float, value: float, rng: Random, way: float = 0.0) -> float:
     """``threshold``, or the next float, a relative 1e-6 or 1e-3 (at least that much absolute)
     beyond it, on the side ``way`` (+1.0 up, -1.0 down; 0.0: away from ``value``, and either
-    way, drawn, from a value on the threshold)."""
+    way, drawn, from a value on the threshold). A ``value`` already past it on that side, by
+    no more than ``EDGE`` (``fuzzer.selection.compared``: an input there does not solve the
+    site), gets the 1e-3 step: the next float and 1e-6 would leave it at the edge, where the
+    scenario oracle judges a divergence ill-conditioned, and the threshold itself undoes it."""
     if way == 0.0:
         way = -1.0 if value > threshold else 1.0 if value < threshold else rng.choice((-1.0, 1.0))
     step = max(1.0, abs(threshold))
+    if 0.0 < (value - threshold) * way <= EDGE * step:
+        return threshold + way * 1e-3 * step
     near = (
         threshold,
         math.nextafter(threshold, way * math.inf),
