@@ -18,8 +18,8 @@ inputs have given the outcome its first comparison did not, each with a value mo
 :data:`EDGE` past the threshold: the branch behind it has never been taken, or only by a few
 inputs, or only at its very edge, which may not have shown what lies behind it.
 :meth:`ComparedValues.pick` draws an unsolved site's threshold 3 times out of 4 (when there is
-one), else any threshold; ``fuzzer.mutation.leaves`` writes it, or a value just either side of
-it, into a float field of the input.
+one), else any threshold; ``fuzzer.mutation.thresholds`` writes it, or a value just either side
+of it, into a float field of the input.
 
 Which field? Redqueen's input-to-state correspondence (Aschermann et al., NDSS 2019): an
 operand a target compares is often a value of the input itself (a joint target the arm went
@@ -58,13 +58,13 @@ little longer, as libFuzzer's hit-count buckets keep rewarding an edge taken mor
 EDGE: Final = 1e-5
 """Relative distance (times ``max(1, |threshold|)``) within which an input that gave an ordering
 comparison's site (``<``, ``<=``, ``>``, ``>=``) its other outcome does not count toward
-:data:`SOLVED_AFTER`. The scenario oracle judges an IK
-step's divergence ill-conditioned when moving the state by up to the campaign tolerance (1e-6)
-changes a target's answer (``Evaluator._scenario_ik``), so an input that crossed a band's edge
-by a float or by 1e-6 (two of ``fuzzer.mutation.thresholds._past``'s three crossings) shows nothing
-behind it: ``ik_seed_band``'s site ``seed[0] < 0.31`` was solved by four inputs at
-0.30999999999999994, each judged ill-conditioned, and its campaign (seed 28) never detected
-the bug, although the same inputs with 0.305 do (BENCHMARKS.md, nineteenth session)."""
+:data:`SOLVED_AFTER`. The scenario oracle judges an IK step's divergence ill-conditioned when
+moving the state by up to the campaign tolerance (1e-6) changes a target's answer
+(``Evaluator._scenario_ik``), so an input that crossed a band's edge by a float or by 1e-6 (two
+of the three crossings of ``fuzzer.mutation.thresholds._past``) shows nothing behind it:
+``ik_seed_band``'s site ``seed[0] < 0.31`` was solved by four inputs at 0.30999999999999994,
+each judged ill-conditioned, and its campaign (seed 28) never detected the bug, although the
+same inputs with 0.305 do (BENCHMARKS.md, nineteenth session)."""
 MEMORY: Final = 4096
 """Inputs whose operands at the unsolved sites are remembered (the most recently run or
 mutated), for :meth:`ComparedValues.operands`."""
