@@ -9,7 +9,7 @@ from typing import Any
 
 from fuzzer.mutation.base import Message, MutationContext, NotApplicable
 from fuzzer.mutation.fields import Leaf
-from fuzzer.selection.compared import EDGE
+from fuzzer.selection.compared import edge
 
 
 def _has_thresholds(value: Any, leaf: Leaf, message: Message, ctx: MutationContext) -> bool:
@@ -27,7 +27,7 @@ def _past(threshold: float, value: float, rng: Random, way: float = 0.0) -> floa
     if way == 0.0:
         way = -1.0 if value > threshold else 1.0 if value < threshold else rng.choice((-1.0, 1.0))
     step = max(1.0, abs(threshold))
-    if 0.0 < (value - threshold) * way <= EDGE * step:
+    if 0.0 < (value - threshold) * way <= edge(threshold):
         return threshold + way * 1e-3 * step
     near = (
         threshold,

@@ -224,7 +224,7 @@ class ComparedValues:
             value = float(a if self._state[site][_A_VARIES] else b)
             if value != threshold and value != 0.0:  # 0 is every field's default; no factor moves it
                 way = 1.0 if value < threshold else -1.0
-                if abs(value - threshold) <= EDGE * max(1.0, abs(threshold)):
+                if abs(value - threshold) <= edge(threshold):
                     way = self._new_side(site, threshold) or way  # at the edge: deeper past it
                 out.append((site, threshold, value, way))
         return out
@@ -257,9 +257,9 @@ class ComparedValues:
         both sides, or on neither). A value at the edge counts on neither side, as it does not
         count toward :data:`SOLVED_AFTER`: past a band's edge by a float, the side is still new."""
         recent = self._recent.get(site, ())
-        edge = EDGE * max(1.0, abs(threshold))
-        below = any(v < threshold - edge for v in recent)
-        above = any(v > threshold + edge for v in recent)
+        near = edge(threshold)
+        below = any(v < threshold - near for v in recent)
+        above = any(v > threshold + near for v in recent)
         return 0.0 if below == above else (1.0 if below else -1.0)
 
     def __len__(self) -> int:
@@ -278,13 +278,20 @@ class ComparedValues:
         return rng.choice(list(self.thresholds.values()))
 
 
+def edge(threshold: float) -> float:
+    """How close to ``threshold`` a value is at its edge: :data:`EDGE` times
+    ``max(1, |threshold|)``."""
+    return EDGE * max(1.0, abs(threshold))
+
+
 def _clear(state: list[float | bool | int], a: float, b: float) -> bool:
-    """Whether the varying operand of a comparison ``a <op> b`` lies more than :data:`EDGE`
-    (relative) from the site's fixed one; True while neither has varied (nothing to measure)."""
+    """Whether the varying operand of a comparison ``a <op> b`` lies farther than :func:`edge`
+    from the site's fixed one; True while neither or both have varied (no one threshold to
+    measure from)."""
     if state[_A_VARIES] == state[_B_VARIES]:
         return True
     fixed, value = (float(state[_FIRST_B]), a) if state[_A_VARIES] else (float(state[_FIRST_A]), b)
-    return not abs(value - fixed) <= EDGE * max(1.0, abs(fixed))
+    return not abs(value - fixed) <= edge(fixed)
 
 
 def _remember(recent: dict[float, None], value: float) -> None:
