@@ -201,65 +201,6 @@ def test_seq_compared_observes_every_go_after_the_changed_step_while_there_is_ro
     assert shapes == {1, 2}
 
 
-def compared_by_parent(seed: int, value: float) -> MutationContext:
-    """A context whose table (``thresholds``) saw the parent compare ``value`` at the site."""
-    ctx = context(seed, known=True)
-    table = ctx.compared
-    assert table is not None
-    table.begin()
-    table.watch(7, THRESHOLD, value, value >= THRESHOLD)
-    table.end(b"parent")
-    table.select(b"parent")
-    return ctx
-
-
-def test_seq_compared_reach_moves_the_arm_past_a_threshold_the_parent_compared() -> None:
-    """A branch on the state (an IK's seed) compares what an earlier step left, an IK's answer
-    that no field holds: ``seq_compared:reach`` inserts a joint target whose joints are past the
-    threshold, and a move there (observed: ``/plan`` + ``/execute``). A joint whose limits
-    exclude the value keeps the value the fresh target gave it."""
-    box = ((-1.0,) * 6, (1.0, 1.0, 0.2, 1.0, 1.0, 1.0))  # joint 2 cannot take 0.3
-    mutate, _ = for_registry(REGISTRY, MAX, box)
-    target = joint_target(0.1, 0.2, 0.15, 0.4, 0.5, 0.6)
-    parent = {"steps": [target, PLAN, EXECUTE, other_scenario()["steps"][0], GO]}
-    past = {THRESHOLD, math.nextafter(THRESHOLD, math.inf), THRESHOLD + 1e-6, THRESHOLD + 1e-3}
-    reached, places, values = 0, set(), set()
-    for seed in range(200):
-        child, name = mutate(parent, compared_by_parent(seed, 0.25), "seq_compared")
-        validate(child, REGISTRY, MAX)
-        if not name.startswith("seq_compared:reach"):
-            continue
-        reached += 1
-        moves = (GO, PLAN, EXECUTE)  # every /go after the joint target is observed
-        old = [s for s in parent["steps"] if s not in moves]
-        new = [s for s in child["steps"] if s not in moves]
-        at = next(i for i in range(len(new)) if i >= len(old) or new[i] != old[i])
-        inserted = new[at]
-        assert inserted["topic"] == "/joint_target" and new[at + 1 :] == old[at:]
-        i = child["steps"].index(inserted)
-        assert child["steps"][i + 1 : i + 3] == [PLAN, EXECUTE] and name == "seq_compared:reach:observe"
-        assert GO not in child["steps"][i:]  # its move and every later /go observed
-        later = 1 - child["steps"][:i].count(GO)  # the parent's /go, when it comes after
-        assert len(child["steps"]) == len(parent["steps"]) + 3 + later
-        position = inserted["msg"]["position"]
-        value = position[0]
-        assert value in past and all(position[j] == value for j in (0, 1, 3, 4, 5))
-        assert position[2] in (0.15, *INTERESTING)  # as the fresh target made it (copied, or interesting)
-        places.add(at)
-        values.add(value)
-    assert 20 <= reached <= 80  # REACH_PROBABILITY = 0.25 of 200
-    assert places == {0, 1, 2} and len(values) > 2  # before, between and after the two targets
-
-
-def test_seq_compared_changes_a_field_when_no_joint_target_can_be_made() -> None:
-    """Without a joint target to copy and without the robot's limits, the child changes a
-    field as before (never ``seq_compared:reach``)."""
-    parent = {"steps": [step("/velocity_scaling", data=0.5), GO]}
-    for seed in SEEDS:
-        _, name = MUTATE(parent, compared_by_parent(seed, 0.25), "seq_compared")
-        assert name == "seq_compared:observe"
-
-
 def test_seq_step_names_its_value_mutator_and_keeps_the_topic() -> None:
     parent = {"steps": [GO, joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), PLAN]}
     child, name = MUTATE(parent, context(3), "seq_step:arithmetic")

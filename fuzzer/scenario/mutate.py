@@ -24,9 +24,8 @@ Mutators
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
   with that step type's field types; lineage name ``seq_step:<inner>`` (``seq_step:arithmetic``).
 * ``seq_compared``: one float of one step set to a comparison threshold of the targets, or a
-  value just either side of it (the value mutator ``compared``), or a move inserted to a joint
-  target at a value past one (``seq_compared:reach``); the ``/go`` steps after it are observed
-  too (``seq_compared:observe``).
+  value just either side of it (the value mutator ``compared``); the ``/go`` steps after it
+  are observed too (``seq_compared:observe``).
 * ``seq_splice`` (also the crossover): a prefix of one scenario + a suffix of the other.
 
 The dispatcher that draws one by weight and the crossover are ``fuzzer.scenario.dispatch``.
@@ -46,7 +45,6 @@ from typing import Any, Final
 from fuzzer.mutation import mutators
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
-from fuzzer.mutation.thresholds import _past
 from fuzzer.scenario.fresh import (
     GO,
     SequenceContext,
@@ -76,15 +74,6 @@ MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
 SPLICE_ATTEMPTS: Final = 8
 OBSERVE: Final = "observe"
 """Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed."""
-REACH: Final = "reach"
-"""Lineage suffix of a ``seq_compared`` child that moves the arm to a value past a threshold."""
-REACH_PROBABILITY: Final = 0.25
-"""``seq_compared``, when the parent compared a value at an unsolved site
-(``ComparedValues.operands``): chance that the child, instead of changing a field, moves the
-arm to a joint target whose joints are at a value past that site's threshold, inserted before a
-step (``seq_compared:reach``). A branch on the state (the seed of an IK, the start of a plan)
-compares what an earlier step left, often a value no field holds (an IK's answer), so no field
-can be set to it, and scaling one (``fuzzer.mutation.leaves._scaled``) does not move the state."""
 OBSERVE_PROBABILITY: Final = 1.0
 """``seq_compared``: chance that each ``/go`` after the changed step becomes ``/plan`` +
 ``/execute`` (when there is one; the earlier ones while there is room). 0.5 until 2026-11-28:
@@ -287,9 +276,7 @@ def seq_step(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Set one float of one step to a comparison threshold of the targets, or a value just
     either side of it (the value mutator ``compared``; its own bandit arm, as it needs no other
-    value mutator to come up first). With probability :data:`REACH_PROBABILITY`, when the
-    parent compared a value at an unsolved site, a move to a joint target past that site's
-    threshold is inserted instead (:func:`_reach`; lineage ``seq_compared:reach``).
+    value mutator to come up first).
 
     With probability :data:`OBSERVE_PROBABILITY` (1.0: always) every ``/go`` after that step also becomes
     ``/plan`` + ``/execute`` (as ``seq_observe``; lineage ``seq_compared:observe``), the
@@ -301,49 +288,16 @@ def seq_compared(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     the first)."""
     if ctx.value.compared is None or not len(ctx.value.compared):
         raise NotApplicable("no comparison threshold known yet")
-    operands = ctx.value.compared.operands()
-    index = None
-    if operands and _can_reach(steps, ctx) and ctx.rng.random() < REACH_PROBABILITY:
-        index, name = _reach(steps, ctx, operands), f"{SEQ_COMPARED}:{REACH}"
-    if index is None:
-        steps, name, index = _one_step(
-            steps, ctx, lambda step, inner: (mutators.MUTATORS["compared"](step["msg"], inner), SEQ_COMPARED)
-        )
+    steps, name, index = _one_step(
+        steps, ctx, lambda step, inner: (mutators.MUTATORS["compared"](step["msg"], inner), SEQ_COMPARED)
+    )
     gos = [i for i in range(index + 1, len(steps)) if steps[i]["topic"] == "/go"]
     room = ctx.max_steps - len(steps)
     if gos and room > 0 and ctx.rng.random() < OBSERVE_PROBABILITY:
         for go in reversed(gos[:room]):  # from the last, so the indices before it hold
             _observe(steps, go)
-        return steps, f"{name}:{OBSERVE}"
+        return steps, f"{SEQ_COMPARED}:{OBSERVE}"
     return steps, name
-
-
-def _can_reach(steps: Steps, ctx: SequenceContext) -> bool:
-    """Whether a joint target and a ``/go`` fit in (room, and the topic exists)."""
-    return len(steps) + 2 <= ctx.max_steps and "/joint_target" in ctx.tables.types
-
-
-def _reach(steps: Steps, ctx: SequenceContext, operands: list[tuple[float, float, float]]) -> int | None:
-    """Insert, before a step drawn at random, a move to a joint target (``fresh_message``'s)
-    whose every joint that may take it is at ``_past(threshold, value, way)`` for one of
-    ``operands`` (``ComparedValues.operands``): which joint the site compared is not known, and
-    the others do not matter to it. A joint whose limits (``Tables.box``) exclude the value keeps
-    its own, so the target stays valid. Returns the joint target's index (None, nothing
-    inserted, when no joint target can be made)."""
-    threshold, value, way = ctx.rng.choice(operands)
-    new = _past(threshold, value, ctx.rng, way)
-    at = ctx.rng.randint(0, len(steps))
-    try:
-        message = fresh_message("/joint_target", steps, ctx, at)
-    except NotApplicable:  # no joint target to copy and no limits: change a field instead
-        return None
-    positions = message["position"]
-    box = ctx.tables.box
-    for j in range(len(positions)):
-        if box is None or (j < len(box[0]) and box[0][j] <= new <= box[1][j]):
-            positions[j] = new
-    steps[at:at] = [{"topic": "/joint_target", "msg": message}, clone(GO)]
-    return at
 
 
 def splice_steps(a: Steps, b: Steps, rng: Random, max_steps: int) -> Steps:
