@@ -219,6 +219,30 @@ print(dry.wait(), os.getpid(), flush=True)
     assert marker.read_text().split() == [parent], "the exit hooks ran once, in the parent"
 
 
+@pytest.mark.parametrize("op", sorted(dry_run.DRY_RUN_OPS))
+def test_the_dry_run_forks_before_hypothesis_is_imported(tmp_path: Path, op: str) -> None:
+    """Importing Hypothesis takes about 0.12 s on one CPU, which only the seeds need: the first
+    stage's child is forked before it (``fuzzer.input.mapping`` imports it in the functions that
+    build strategies), so the first input comes that much sooner (BENCHMARKS.md, twenty-first
+    session). The campaign runs as ``fuzz_diff.py`` does, up to the fork."""
+    art = f"--artifacts={tmp_path / 'art'}"
+    argv = [str(tmp_path / "corpus"), "-runs=0", f"--op={op}", art, "--no-progress"]
+    program = f"""
+import os, sys
+from fuzzer import dry_run
+from fuzzer.cli import main
+def launch(self, work):
+    print("forked with hypothesis" if "hypothesis" in sys.modules else "forked without hypothesis")
+    sys.stdout.flush()
+    os._exit(0)
+dry_run.Stages._launch = launch
+main({argv!r})
+"""
+    done = python(program)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.splitlines() == ["forked without hypothesis"], done.stdout + done.stderr[-3000:]
+
+
 def test_targets_opened_before_atheris_are_instrumented_all_the_same() -> None:
     """The campaign now opens its session before importing Atheris (the dry run needs the
     targets first); ``instrument`` rewrites their functions in place afterwards, so every

@@ -26,12 +26,13 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, cast
-
-from hypothesis import strategies as st
-from hypothesis.strategies import SearchStrategy
+from typing import TYPE_CHECKING, Any, cast
 
 from fuzzer.scenario.steps import MAX_STEPS_LIMIT, MSG_TYPE, ScenarioCall, to_call, to_message
+
+if TYPE_CHECKING:  # Hypothesis is imported where strategies are built: it costs about 0.12 s, which
+    # only the seeds need, and the dry run's first child is forked before them (fuzzer/dry_run.py)
+    from hypothesis.strategies import SearchStrategy
 
 OPS = ("move", "fk", "ik", "scenario")
 DEFAULT_MSG_TYPE = {
@@ -216,18 +217,24 @@ class RobotFacts:
 
 
 def _joint_value(lo: float, hi: float) -> SearchStrategy[float]:
+    from hypothesis import strategies as st
+
     lo = -2 * math.pi if math.isinf(lo) else lo
     hi = 2 * math.pi if math.isinf(hi) else hi
     return st.one_of(st.floats(lo, hi), st.sampled_from([lo, hi, 0.0, min(max(0.0, lo), hi)]))
 
 
 def _configuration(facts: RobotFacts) -> SearchStrategy[tuple[float, ...]]:
+    from hypothesis import strategies as st
+
     return st.tuples(*(_joint_value(lo, hi) for lo, hi in zip(facts.lower, facts.upper, strict=True)))
 
 
 def seed_hints(msg_type: str, facts: RobotFacts) -> dict[str, SearchStrategy[Any]]:
     """Robot-aware strategies for the fields that matter (Table I's generic strategies
     would almost never produce a joint name or a reachable pose)."""
+    from hypothesis import strategies as st
+
     configuration = _configuration(facts)
     if msg_type == "sensor_msgs/JointState":
         return {
@@ -295,6 +302,8 @@ def scenario_strategy(
     Each step's message is drawn from the registry's strategy of its type
     (``fuzzer.generation.strategies.strategy_for``) with the robot hints of :func:`seed_hints`.
     """
+    from hypothesis import strategies as st
+
     from fuzzer.generation.strategies import strategy_for
     from fuzzer.scenario.steps import KINDS, TOPICS
 
