@@ -13,9 +13,9 @@ killing pytest:
 
 A fixed ``-runs`` count and ``-seed`` keep the campaign bounded and repeatable. ``-reload=0``
 keeps the count exact: by default libFuzzer re-reads its corpus folder every second and runs
-any file there it does not hold in memory (such as one a REDUCE replaced), outside the
-``-runs`` budget, so how many of those it ran depended on the machine's speed (CI once
-printed ``Done 40002 runs``).
+any file there it does not hold in memory (such as one a REDUCE replaced). That reload comes at
+the top of its loop, before the ``-runs`` check, so one there can run units past the budget,
+depending on the machine's speed (CI once printed ``Done 40002 runs``).
 """
 
 from __future__ import annotations
