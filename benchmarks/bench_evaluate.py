@@ -6,7 +6,8 @@
 A campaign spends each input on libFuzzer, the mutator, the encoding, the features and the
 evaluation. This measures the last part alone, in one process without libFuzzer: the 64
 Hypothesis seeds of the default robot (``corpus.make_seeds(session, 64, seed)``) evaluated
-round after round (``Evaluator.evaluate``: the mapping, both targets, the oracle), with the
+round after round (``Evaluator.evaluate``: the mapping, both targets, the oracle; the twin's
+IK memory emptied before each pass over them, so that ``ik`` measures solving), with the
 twin and the oracle instrumented by Atheris as in a campaign and the float-comparison tracer's
 per-input budget, or without instrumentation (``--plain``). No campaign can run more single
 inputs a second than this. Prints the median over ``--rounds`` rounds of ``--seconds`` each.
@@ -21,6 +22,7 @@ import time
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
+from python_impl.kinematics import IK_MEMO
 
 
 def rate(op: str, instrumented: bool, rounds: int, seconds: float, seed: int) -> list[float]:
@@ -39,6 +41,7 @@ def rate(op: str, instrumented: bool, rounds: int, seconds: float, seed: int) ->
     cases = corpus.make_seeds(session, 64, seed)
 
     def one_pass() -> None:
+        IK_MEMO.clear()  # each pass solves its IK problems, as the first did
         for case in cases:
             if tracer is not None:
                 tracer.install()  # a fresh budget per input, as the harness does

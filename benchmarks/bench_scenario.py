@@ -7,7 +7,9 @@ Two measurements, each repeated ``--runs`` times (run ``i`` uses seed ``i``), me
 
 (a) the executor alone: ``run_scenario`` (through ``Runner.run``) over the scenarios the
     campaign generates from that seed (``fuzzer.generation.corpus.make_seeds``, as many as a fresh
-    campaign writes), on each target separately; steps are the step outcomes returned;
+    campaign writes), on each target separately; steps are the step outcomes returned. The
+    twin's IK memory (``python_impl.kinematics.IK_MEMO``) is emptied before each pass, so a
+    pass solves every IK problem it poses the first time, as a campaign would;
 (b) a whole campaign: ``fuzz_diff.py --op scenario`` for ``--seconds``, execs and elapsed
     time from its ``stats.jsonl``; steps per second estimated as execs/s x the mean number
     of steps of the corpus it kept (the campaign does not count executed steps).
@@ -45,6 +47,7 @@ from fuzzer.generation.corpus import make_seeds
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.scenario import execute
 from fuzzer.scenario.steps import ScenarioCall, to_call
+from python_impl.kinematics import IK_MEMO
 
 RESULTS = ROOT / "benchmarks" / "results"
 MARKS = ("<!-- bench_scenario:begin -->", "<!-- bench_scenario:end -->")
@@ -82,6 +85,7 @@ def time_executor(session: Session, calls: list[ScenarioCall]) -> dict[str, dict
     """
     out = {}
     for runner in session.runners:
+        IK_MEMO.clear()
         steps = 0
         started = time.perf_counter()
         for call in calls:
@@ -114,6 +118,7 @@ def step_costs(session: Session, calls: list[ScenarioCall]) -> dict[str, dict[st
     """Per target and step kind: count, total seconds, mean microseconds, mean trajectory points."""
     out: dict[str, dict[str, dict[str, float]]] = {}
     for runner in session.runners:
+        IK_MEMO.clear()
         durations: dict[str, list[float]] = defaultdict(list)
         points: dict[str, list[int]] = defaultdict(list)
         with _timed_steps(durations):
@@ -137,6 +142,7 @@ def profile_evaluation(session: Session, cases: list[TestCase], top: int = 12) -
     """cProfile of the evaluation (both targets and the oracle) of ``cases``: top entries by
     own time, as ``own s | cumulative s | calls | function``."""
     evaluator = session.evaluator()
+    IK_MEMO.clear()
     profiler = cProfile.Profile()
     profiler.enable()
     for case in cases:

@@ -10,8 +10,9 @@ prismatic one and ``(0, 0)`` for a fixed one (Rodrigues' formula).
 
 from __future__ import annotations
 
+import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,6 +57,10 @@ class Chain:
         Joint frame of each segment relative to its parent link.
     axis : ndarray, shape (S, 3)
         Unit joint axis in the joint frame (zero for fixed segments).
+    key : bytes
+        A digest of every field above (16 bytes), computed on construction: equal chains
+        (the same robot loaded twice) have equal keys. The arrays are made read-only then, so
+        the key stays true; a changed chain is a new one (``dataclasses.replace``).
     """
 
     name: str
@@ -77,6 +82,21 @@ class Chain:
     a2: NDArray[np.float64]
     origin: NDArray[np.float64]
     axis: NDArray[np.float64]
+    key: bytes = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        digest = hashlib.blake2b(digest_size=16)
+        for f in fields(self):
+            if f.name == "key":
+                continue
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+                digest.update(f"{f.name} {value.dtype.str} {value.shape}".encode())
+                digest.update(np.ascontiguousarray(value).tobytes())
+            else:
+                digest.update(f"{f.name} {value!r}".encode())
+        object.__setattr__(self, "key", digest.digest())
 
     @property
     def dof(self) -> int:

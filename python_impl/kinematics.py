@@ -7,12 +7,18 @@ enforced by clamping after every step (docs/api.md, "Inverse kinematics"). An
 iteration is a function of its iterate alone, so an iterate seen before (clamped joints
 or steps that undo each other, common when the target is out of reach) starts a cycle:
 the loop then skips to the iterate its last iteration would leave (``_cycle_end``), bit
-for bit the answer of running every iteration.
+for bit the answer of running every iteration. ``ik`` is a function of its problem alone
+(the chain, the target, the seed, the link), so it answers a problem it solved recently from
+memory (``IK_MEMO``): scripts of calls repeat them (a scenario re-run to confirm a divergence,
+a corpus' scripts that share their first steps).
 """
 
 from __future__ import annotations
 
 import math
+import struct
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import reduce
 
@@ -165,6 +171,10 @@ def error_twist(current: Array, target: Array) -> Array:
     return np.concatenate([target[:3, 3] - current[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
 
 
+_ERROR_TWIST = error_twist
+"""The module's own ``error_twist`` (``IK_MEMO`` is not consulted while it is replaced)."""
+
+
 def is_small(twist: Array) -> bool:
     """Every component within ``[-IK_EPS, IK_EPS]``."""
     return all(x <= IK_EPS and x + IK_EPS >= 0.0 for x in twist.tolist())
@@ -177,6 +187,66 @@ def pinv_step(jac: Array, twist: Array) -> Array:
     inv = [0.0 if abs(v) < IK_PINV_EPS else w / v for v, w in zip(s.tolist(), ut_twist, strict=True)]
     step: Array = vt.T @ np.array(inv)
     return step
+
+
+IkAnswer = tuple[bool, tuple[float, ...], float, float]
+
+
+class IkMemo:
+    """The answers of recent IK problems, so that ``ik`` solves each only once.
+
+    A problem is the chain (``Chain.key``: its content, so the same robot loaded again by a
+    fresh model shares answers), the target's 16 floats, the seed's values, the link and the
+    number of variables solved for, all by their bytes (``-0.0`` and ``0.0`` are different
+    problems). Newton-Raphson is deterministic, so an answer from memory is the one solving
+    again would give, bit for bit. The least recently used answer goes past ``size``
+    problems. ``hits`` and ``misses`` count lookups since the last ``clear``.
+
+    Not consulted while the module's ``error_twist`` is replaced (the oracle's model of KDL's
+    rotation dead zone, ``fuzzer.execution.dead_zone``), nor for a call that records a trace.
+    """
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.hits = 0
+        self.misses = 0
+        self._answers: OrderedDict[bytes, IkAnswer] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def __len__(self) -> int:
+        return len(self._answers)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._answers.clear()
+            self.hits = self.misses = 0
+
+    def get(self, problem: bytes) -> IkAnswer | None:
+        with self._lock:
+            answer = self._answers.get(problem)
+            if answer is None:
+                self.misses += 1
+            else:
+                self.hits += 1
+                self._answers.move_to_end(problem)
+            return answer
+
+    def put(self, problem: bytes, answer: IkAnswer) -> None:
+        with self._lock:
+            self._answers[problem] = answer
+            self._answers.move_to_end(problem)
+            while len(self._answers) > self.size:
+                self._answers.popitem(last=False)
+
+
+IK_MEMO = IkMemo(8192)
+"""Answers of the last 8,192 IK problems (about 5 MB: 640 bytes each for a 6-joint arm)."""
+
+
+def _problem(chain: Chain, target: Array, seed: list[float], link: int, nvars: int) -> bytes:
+    q = np.asarray(seed, dtype=np.float64)
+    head = struct.pack("<qqq", link, nvars, q.size)
+    return b"".join((chain.key, head, np.asarray(target, dtype=np.float64).tobytes(), q.tobytes()))
 
 
 def ik(
@@ -192,9 +262,19 @@ def ik(
     ``seed`` is already clamped into the limits; variables from ``nvars`` on keep their seed values.
     A non-finite iterate (an absurd target) ends as not converged, with the seed's values.
     ``trace``, when given, receives the rotation error (rad, in [0, pi]) of every iterate, in order.
+    A problem solved recently is answered from ``IK_MEMO``.
     """
+    memo = IK_MEMO if trace is None and error_twist is _ERROR_TWIST else None
+    problem = _problem(chain, target, seed, link, nvars) if memo is not None else b""
+    known = memo.get(problem) if memo is not None else None
+    if known is not None:
+        converged, values, position_error, orientation_error = known
+        return converged, list(values), position_error, orientation_error
     with np.errstate(all="ignore"):  # absurd targets overflow; handled below, not warned about
-        return _ik(chain, target, seed, link, nvars, trace)
+        answer = _ik(chain, target, seed, link, nvars, trace)
+    if memo is not None:
+        memo.put(problem, (answer[0], tuple(answer[1]), answer[2], answer[3]))
+    return answer
 
 
 def _ik(
