@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from typing import Any
 
 import pytest
 
@@ -14,6 +15,7 @@ from fuzzer.execution import evaluate
 from fuzzer.execution.evaluate import SEEN_BEFORE
 from fuzzer.execution.records import Kind
 from fuzzer.input.testcase import TestCase
+from fuzzer.scenario.nudge import Explainers, Moved, Retry
 from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live, seed_band_go
 
 CUT = re.compile(r"^(\d+) of (\d+) ill-conditioning re-runs not run: the input's time budget")
@@ -116,3 +118,40 @@ def test_the_re_runs_stop_after_the_divergent_step() -> None:
     assert found == alone.comparison
     assert lengths[:2] == [7, 7]  # the input, then the flakiness re-run on new targets: whole
     assert len(lengths) >= 19 and set(lengths[2:]) == {4}  # every nudge and the dead-zone run: to step 3
+
+
+def test_the_re_run_that_explained_last_goes_first() -> None:
+    """Move to front: the re-run that explained a divergence is tried first for the next one, the
+    others keep their documented order."""
+    tries = [Retry(label, Moved.STATE, 1e-9) for label in ("a", "b", "c", "d")]
+    explainers = Explainers()
+    assert [t.label for t in explainers.ordered(tries)] == ["a", "b", "c", "d"]
+    explainers.explained("c")
+    explainers.explained("d")
+    explainers.explained("c")
+    assert [t.label for t in explainers.ordered(tries)] == ["c", "d", "a", "b"]
+
+
+def test_a_divergence_explained_again_takes_fewer_re_runs_and_the_same_verdict() -> None:
+    """The second input an ill-conditioning re-run explains starts with that re-run: one nudged
+    run, where the first input took more; the verdict is the one a new evaluator gives."""
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    nudged: list[Any] = []
+    run_both = ev.run_both
+
+    def spy(call, seeds=(None, None), runners=None, nudge=None):  # type: ignore[no-untyped-def]
+        if nudge is not None:
+            nudged.append(nudge)
+        return run_both(call, seeds, runners, nudge)
+
+    ev.run_both = spy  # type: ignore[method-assign]
+    first = ev.evaluate(seed_band_go(0.3), validated=True).comparison
+    runs_first = len(nudged)
+    later = ev.evaluate(seed_band_go(0.3), validated=True).comparison
+    alone = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band").evaluate(
+        seed_band_go(0.3), validated=True
+    )
+    assert first.kind is Kind.ILL_CONDITIONED and later == first == alone.comparison
+    assert runs_first > 1, "the case must need more than the first re-run to show the point"
+    assert len(nudged) - runs_first == 1
+    assert nudged[-1] == nudged[runs_first - 1]  # the one that explained the first

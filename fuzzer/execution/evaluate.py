@@ -55,7 +55,7 @@ from fuzzer.input.filtering import is_reasonable
 from fuzzer.input.mapping import IkCall
 from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.execute import NUDGE_FAILED, scenario_outcome
-from fuzzer.scenario.nudge import AXIS, Moved, Nudge
+from fuzzer.scenario.nudge import Explainers, Moved, Nudge, Retry
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, state_gap
@@ -116,6 +116,8 @@ class Evaluator:
     """Live signatures whose ill-conditioning re-runs kept the divergence (all of them, or as
     many as ``check_seconds`` allowed): a later input with one is not re-run again (its bucket
     is reported already; a replay re-runs)."""
+    _explainers: Explainers = field(default_factory=Explainers)
+    """The ill-conditioning re-runs that explained divergences lately: tried first."""
     _facts: ScenarioFacts | None = None
     _replay: Any = None
     check_seconds: float | None = None
@@ -329,7 +331,8 @@ class Evaluator:
         divergence: a path timed differently from the same answers is not the dead zone's), the
         documented dead zone is the whole difference, ``known_limitation``. Every re-run stops
         after that step: only its answer is judged, and each scenario runs on a new
-        ``MoveGroup``, so the steps after it cannot change it."""
+        ``MoveGroup``, so the steps after it cannot change it. The nudges that explained earlier
+        divergences go first (``Explainers``): the verdict is the same, from fewer re-runs."""
         step = comparison.step
         facts = self.scenario_facts
         assert step is not None
@@ -345,29 +348,22 @@ class Evaluator:
                 tol = replace(tol, metres=tol.metres + slack, radians=tol.radians + slack)
             return ik_answer_changed(kind, first, second, tol, facts)
 
-        tries = [(Moved.STATE, shift, AXIS, 0.0) for shift in ik_check.IK_PERTURBATIONS]
-        equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
-        # moved by the tolerance, an answer that follows the state (the IK seed) as far as the
-        # state moved is continuous in it, not ill-conditioned: an IK that answers with its seed
-        # wherever the goal is would otherwise always pass for ill-conditioned (docs/engine.md)
-        tries += [(Moved.STATE, shift, AXIS, equal) for shift in (equal, -equal)]
-        gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
-        tries += [(Moved.STATE, shift, AXIS, 0.0) for shift in (2.0 * gap, -2.0 * gap) if shift]
-        goal = (Moved.POSITION, Moved.ORIENTATION)
-        tries += [(moved, shift, axis, 0.0) for moved in goal for shift, axis in ik_check.GOAL_NUDGES]
+        tries = self._explainers.ordered(self._tries(outcomes, step))
         longest = 0.0
-        for done, (moved, shift, axis, slack) in enumerate(tries):
+        for done, attempt in enumerate(tries):
             if self._out_of_time(longest):
                 return replace(comparison, unchecked=self._cut_short(done, len(tries) + 1))
             began = time.monotonic()
-            nudged = self.run_both(call, runners=runners, nudge=Nudge(step, shift, moved, axis))
+            nudge = Nudge(step, attempt.shift, attempt.moved, attempt.axis)
+            nudged = self.run_both(call, runners=runners, nudge=nudge)
             longest = max(longest, time.monotonic() - began)
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way
             for first, second in zip(outcomes, nudged, strict=True):
                 if step >= len(first.steps):
                     continue
-                if step >= len(second.steps) or changed(first.steps[step], second.steps[step], slack):
+                if step >= len(second.steps) or changed(first.steps[step], second.steps[step], attempt.slack):
+                    self._explainers.explained(attempt.label)
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         if self._out_of_time(longest):
             return replace(comparison, unchecked=self._cut_short(len(tries), len(tries) + 1))
@@ -379,6 +375,23 @@ class Evaluator:
             if not (still.divergent and still.kind not in UNCOUNTED):
                 return replace(comparison, kind=Kind.KNOWN_LIMITATION)
         return comparison
+
+    def _tries(self, outcomes: tuple[Outcome, ...], step: int) -> list[Retry]:
+        """The nudged re-runs of ``_scenario_ik``, in their documented order."""
+        tries = [Retry(f"state{i}", Moved.STATE, s) for i, s in enumerate(ik_check.IK_PERTURBATIONS)]
+        equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
+        # moved by the tolerance, an answer that follows the state (the IK seed) as far as the
+        # state moved is continuous in it, not ill-conditioned: an IK that answers with its seed
+        # wherever the goal is would otherwise always pass for ill-conditioned (docs/engine.md)
+        tries += [Retry(f"equal{s:+g}", Moved.STATE, s * equal, slack=equal) for s in (1, -1)]
+        gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
+        tries += [Retry(f"gap{s:+g}", Moved.STATE, 2.0 * s * gap) for s in (1, -1) if gap]
+        for moved in (Moved.POSITION, Moved.ORIENTATION):
+            tries += [
+                Retry(f"{moved.value}{i}", moved, shift, axis)
+                for i, (shift, axis) in enumerate(ik_check.GOAL_NUDGES)
+            ]
+        return tries
 
     def _out_of_time(self, longest: float) -> bool:
         """A re-run as long as ``longest`` (s) would end past ``check_seconds``."""

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from fuzzer.execution.oracle import wrap
@@ -50,6 +51,43 @@ class Nudge:
     moved: Moved = Moved.STATE
     axis: Axis = AXIS
     """Direction of a goal nudge (``Moved.POSITION``, ``Moved.ORIENTATION``)."""
+
+
+@dataclass(frozen=True)
+class Retry:
+    """One of the oracle's ill-conditioning re-runs (``Evaluator._scenario_ik``): the nudge
+    before the divergent step and the slack (rad, m) added to the campaign tolerance when its
+    answer is compared with the divergent run's. ``label`` names it across inputs."""
+
+    label: str
+    moved: Moved
+    shift: float
+    axis: Axis = AXIS
+    slack: float = 0.0
+
+
+@dataclass
+class Explainers:
+    """Labels of the re-runs that explained a divergence, most recent first (move to front).
+
+    A divergence is ``ill_conditioned`` when any one re-run moves a target's answer; which one
+    does decides only how many run before it. In a campaign one re-run tends to explain
+    divergence after divergence (in a 30-s ``ik_seed_band`` campaign, 65 of 69 were explained
+    by the fourth, the state moved by the tolerance), so the last one to explain goes first:
+    the same verdicts from fewer re-runs (docs/engine.md, "Ill-conditioning")."""
+
+    recent: list[str] = field(default_factory=list)
+
+    def ordered(self, tries: Sequence[Retry]) -> list[Retry]:
+        """``tries`` with the recent explainers first (most recent first), the rest as given."""
+        rank = {label: i for i, label in enumerate(self.recent)}
+        return sorted(tries, key=lambda t: rank.get(t.label, len(rank)))
+
+    def explained(self, label: str) -> None:
+        """The re-run named ``label`` explained a divergence: it goes first next time."""
+        if label in self.recent:
+            self.recent.remove(label)
+        self.recent.insert(0, label)
 
 
 def turned(q: tuple[float, ...], angle: float, axis: Axis = AXIS) -> tuple[float, ...]:
