@@ -24,6 +24,7 @@ from __future__ import annotations
 import hashlib
 import math
 import random
+import sys
 import time
 from collections import OrderedDict
 from collections.abc import Callable
@@ -207,6 +208,10 @@ class Harness:
                     "traced": self.float_tracer.traced,
                     "sites": len(self.float_tracer.sites),
                 }
+            twin = sys.modules.get("python_impl.kinematics")  # loaded by a target; never imported here
+            if twin is not None:
+                memo = twin.IK_MEMO
+                data["ik_memo"] = {"hits": memo.hits, "misses": memo.misses, "kept": len(memo)}
             self.log.snapshot(data)
 
     def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:

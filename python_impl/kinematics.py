@@ -16,6 +16,7 @@ a corpus' scripts that share their first steps).
 from __future__ import annotations
 
 import math
+import os
 import struct
 import threading
 from collections import OrderedDict
@@ -221,6 +222,12 @@ class IkMemo:
             self._answers.clear()
             self.hits = self.misses = 0
 
+    def forked(self) -> None:
+        """In a child just forked: its lookups are its own (the parent's lock may be held by a
+        thread the child does not have, so the child gets a new one)."""
+        self._lock = threading.Lock()
+        self.hits = self.misses = 0
+
     def get(self, problem: bytes) -> IkAnswer | None:
         with self._lock:
             answer = self._answers.get(problem)
@@ -241,6 +248,8 @@ class IkMemo:
 
 IK_MEMO = IkMemo(8192)
 """Answers of the last 8,192 IK problems (about 5 MB: 640 bytes each for a 6-joint arm)."""
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=IK_MEMO.forked)
 
 
 def _problem(chain: Chain, target: Array, seed: list[float], link: int, nvars: int) -> bytes:

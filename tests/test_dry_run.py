@@ -136,6 +136,9 @@ def test_an_ik_dry_run_evaluates_the_orientation_probes_first(tmp_path: Path) ->
     stages = [[r for r in child if r["pid"] == pid] for pid in dict.fromkeys(r["pid"] for r in child)]
     # the four orientation probes and the reach probe, then the seeds
     assert [stage[-1]["executed_by_strategy"] for stage in stages] == [{BOUNDARY: 5}, {"seed": 32}]
+    # the twin's IK memory, counted per process (the oracle's checks look problems up too)
+    memos = [last["ik_memo"] for last in (*(stage[-1] for stage in stages), stats[-1])]
+    assert all(m["misses"] > 0 and m["hits"] >= 0 and m["kept"] > 0 for m in memos), memos
     first = _records(artifacts / "divergences.jsonl")[0]
     assert first["pid"] == child[0]["pid"] and first["strategy"] == BOUNDARY
 

@@ -113,3 +113,26 @@ def test_the_memory_keeps_the_most_recent_problems() -> None:
     assert memo.get(b"a") is not None  # now the most recent
     memo.put(b"c", (True, (3.0,), 0.0, 0.0))
     assert len(memo) == 2 and memo.get(b"b") is None and memo.get(b"a") is not None
+
+
+def test_a_forked_child_keeps_the_answers_and_counts_its_own_lookups() -> None:
+    """``stats.jsonl`` snapshots are per process and the report sums them: a dry-run stage
+    (a forked child) must not report the lookups its parent made before the fork."""
+    import os
+
+    _, chain, target, seed, tip, nvars = _problems("ur5", 1, seed=11)[0]
+    first = kinematics.ik(chain, target, seed, tip, nvars)
+    kinematics.ik(chain, target, seed, tip, nvars)
+    assert (kinematics.IK_MEMO.hits, kinematics.IK_MEMO.misses) == (1, 1)
+    pid = os.fork()
+    if pid == 0:  # the child: one lookup, answered from the memory it inherited
+        code = 1
+        try:
+            again = kinematics.ik(chain, target, seed, tip, nvars)
+            memo = kinematics.IK_MEMO
+            code = 0 if (again == first and (memo.hits, memo.misses) == (1, 0)) else 3
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0, "the child counted its parent's lookups or lost answers"
+    assert (kinematics.IK_MEMO.hits, kinematics.IK_MEMO.misses) == (1, 1), "the parent's counts are its own"
