@@ -15,7 +15,7 @@ from fuzzer.execution import evaluate
 from fuzzer.execution.evaluate import SEEN_BEFORE
 from fuzzer.execution.records import Kind
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.nudge import Explainers, Moved, Retry
+from fuzzer.scenario.nudge import Explainers, Nudge, Retry
 from tests.test_scenario_oracle import FAR_WAYPOINT, HEADER, evaluator, live, seed_band_go
 
 CUT = re.compile(r"^(\d+) of (\d+) ill-conditioning re-runs not run: the input's time budget")
@@ -123,7 +123,7 @@ def test_the_re_runs_stop_after_the_divergent_step() -> None:
 def test_the_re_run_that_explained_last_goes_first() -> None:
     """Move to front: the re-run that explained a divergence is tried first for the next one, the
     others keep their documented order."""
-    tries = [Retry(label, Moved.STATE, 1e-9) for label in ("a", "b", "c", "d")]
+    tries = [Retry(label, Nudge(0, 1e-9)) for label in ("a", "b", "c", "d")]
     explainers = Explainers()
     assert [t.label for t in explainers.ordered(tries)] == ["a", "b", "c", "d"]
     explainers.explained("c")

@@ -354,8 +354,7 @@ class Evaluator:
             if self._out_of_time(longest):
                 return replace(comparison, unchecked=self._cut_short(done, len(tries) + 1))
             began = time.monotonic()
-            nudge = Nudge(step, attempt.shift, attempt.moved, attempt.axis)
-            nudged = self.run_both(call, runners=runners, nudge=nudge)
+            nudged = self.run_both(call, runners=runners, nudge=attempt.nudge)
             longest = max(longest, time.monotonic() - began)
             if any(NUDGE_FAILED in o.values for o in nudged):
                 continue  # a target refused the nudge itself: no evidence either way
@@ -378,17 +377,18 @@ class Evaluator:
 
     def _tries(self, outcomes: tuple[Outcome, ...], step: int) -> list[Retry]:
         """The nudged re-runs of ``_scenario_ik``, in their documented order."""
-        tries = [Retry(f"state{i}", Moved.STATE, s) for i, s in enumerate(ik_check.IK_PERTURBATIONS)]
+        perturbations = enumerate(ik_check.IK_PERTURBATIONS)
+        tries = [Retry(f"state{i}", Nudge(step, s)) for i, s in perturbations]
         equal = min(self.tolerance.radians, self.tolerance.metres)  # states the oracle calls equal
         # moved by the tolerance, an answer that follows the state (the IK seed) as far as the
         # state moved is continuous in it, not ill-conditioned: an IK that answers with its seed
         # wherever the goal is would otherwise always pass for ill-conditioned (docs/engine.md)
-        tries += [Retry(f"equal{s:+g}", Moved.STATE, s * equal, slack=equal) for s in (1, -1)]
+        tries += [Retry(f"equal{s:+g}", Nudge(step, s * equal), slack=equal) for s in (1, -1)]
         gap = state_gap(outcomes, step)  # arms an earlier step left apart: as far as that too
-        tries += [Retry(f"gap{s:+g}", Moved.STATE, 2.0 * s * gap) for s in (1, -1) if gap]
+        tries += [Retry(f"gap{s:+g}", Nudge(step, 2.0 * s * gap)) for s in (1, -1) if gap]
         for moved in (Moved.POSITION, Moved.ORIENTATION):
             tries += [
-                Retry(f"{moved.value}{i}", moved, shift, axis)
+                Retry(f"{moved.value}{i}", Nudge(step, shift, moved, axis))
                 for i, (shift, axis) in enumerate(ik_check.GOAL_NUDGES)
             ]
         return tries

@@ -60,9 +60,7 @@ class Retry:
     answer is compared with the divergent run's. ``label`` names it across inputs."""
 
     label: str
-    moved: Moved
-    shift: float
-    axis: Axis = AXIS
+    nudge: Nudge
     slack: float = 0.0
 
 
