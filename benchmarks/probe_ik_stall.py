@@ -33,6 +33,7 @@ from python_impl.chain import Chain
 from python_impl.model import RobotModel
 from robot_api import robots
 from robot_api.constants import IK_MAX_ITERATIONS
+from robot_api.errors import RobotAPIError
 
 STEP = 1e-12
 WINDOW = 5
@@ -134,8 +135,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--problems", type=int, default=3000)
     parser.add_argument("--seed", type=int, default=7)
     args = parser.parse_args(argv)
+    if args.problems < 1:
+        parser.error(f"--problems must be at least 1, got {args.problems}")
     for robot in args.robots:
-        print(json.dumps(probe(robot, args.problems, args.seed)), flush=True)
+        try:
+            result = probe(robot, args.problems, args.seed)
+        except RobotAPIError as exc:  # a named robot whose package is missing
+            parser.error(f"robot {robot!r}: {exc}")
+        print(json.dumps(result), flush=True)
     return 0
 
 
