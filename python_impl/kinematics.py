@@ -7,7 +7,7 @@ enforced by clamping after every step (docs/api.md, "Inverse kinematics"). An
 iteration is a function of its iterate alone, so an iterate seen before (clamped joints
 or steps that undo each other, common when the target is out of reach) starts a cycle:
 the loop then skips to the iterate its last iteration would leave (``_cycle_end``), bit
-for bit the answer of running every iteration. It is the only shortcut: a solve that stalls
+for bit the answer of running every iteration. It is the loop's only shortcut: a solve that stalls
 (steps of a few ulps, far from the target) runs on to the last iteration as KDL's does, since
 a stall can be an unstable fixed point that the iterate leaves later (BENCHMARKS.md, "A stall
 rule for the twin's IK measured and rejected"). ``ik`` is a function of its problem alone
