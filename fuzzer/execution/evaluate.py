@@ -23,6 +23,9 @@ A scenario (``--op scenario``) is one call: the whole scenario is run again on f
 targets, and its ``state_dependent`` history is earlier scenarios. Its oracle is
 ``fuzzer.scenario.oracle.compare_scenario``; its signature is built from the divergent
 step's outcomes (the field names the step kind, the step index is not in the key). A status
+or value divergence at a step the two arms began apart beyond the tolerance (an uncounted
+earlier step left them so) is re-run from each target's state in turn
+(``fuzzer.scenario.common_start``): ``known_limitation`` if the step agrees from both. A status
 or value divergence at a step that solves IK (``go``/``plan`` with a pose or position
 target, ``cartesian_path``) is re-run on fresh targets with the state moved by 1e-9 (both
 ways) and 1e-7 just before that step, then with the goal's positions moved, then its
@@ -54,6 +57,7 @@ from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.filtering import is_reasonable
 from fuzzer.input.mapping import IkCall
 from fuzzer.input.testcase import TestCase
+from fuzzer.scenario import common_start
 from fuzzer.scenario.execute import NUDGE_FAILED, scenario_outcome
 from fuzzer.scenario.nudge import Explainers, Moved, Nudge, Retry
 from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed, prefer, solves_ik
@@ -265,6 +269,13 @@ class Evaluator:
                 return replace(comparison, kind=Kind.STATE_DEPENDENT if same else Kind.FLAKY), outcomes
             self._stateless.add(live_key)
         if isinstance(call, ScenarioCall):
+            facts, pair = self.scenario_facts, (outcomes[0], outcomes[1])
+            rerun = lambda c, n: self.run_both(c, runners=fresh or self.fresh(), nudge=n)  # noqa: E731
+            split = common_start.judge(
+                call, pair, comparison, facts, self.tolerance, rerun, self._out_of_time
+            )
+            if split.kind is Kind.KNOWN_LIMITATION:  # the arms began the step apart: that explains it
+                return prefer(split, first_property(call, pair, facts)), outcomes
             if self._at_ik_step(call, outcomes, comparison):
                 if live_key in self._checked:
                     return replace(comparison, unchecked=f"{SEEN_BEFORE} ({live_key})"), outcomes

@@ -110,6 +110,17 @@ class _Run:
         trajectory = RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy())
         self.group.execute(trajectory)
 
+    def move_to(self, state: tuple[float, ...]) -> None:
+        """Move the state to ``state`` with a two-point trajectory from the current state (1 s
+        later; ``execute`` checks only the first point against the state, and every point
+        against the limits)."""
+        current = list(self.group.get_current_joint_values())
+        if len(state) != len(current):
+            raise ValueError(f"a state of {len(state)} values for {len(current)} joint variables")
+        zeros = np.zeros((2, len(current)))
+        times, positions = np.array([0.0, 1.0]), np.array([current, list(state)], dtype=float)
+        self.group.execute(RobotTrajectory(self.joint_names, times, positions, zeros, zeros.copy()))
+
     def nudge_goal(self, shift: float, moved: Moved, axis: Axis) -> None:
         """Set the pose or position target in effect again, moved (``nudge.shifted_goal``);
         raises ``LookupError`` when no pose goal is in effect or it has nothing to move."""
@@ -249,7 +260,8 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
         For ill-conditioning checks of the oracle. Just before step ``nudge.index``:
         ``Moved.STATE`` moves the current state by ``shift`` (rad, m) on every joint, minus
         on odd joint indices, clamped into the limits (continuous joints normalized into
-        (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.POSITION`` moves a
+        (-pi, pi]), by executing a one-point trajectory (time 0); ``Moved.TO`` moves it to
+        ``nudge.state`` (a two-point trajectory from it); ``Moved.POSITION`` moves a
         ``/cartesian_path`` step's waypoints by ``shift * axis`` (m), or sets the pose or
         position target in effect again moved so; ``Moved.ORIENTATION`` turns their
         orientations by ``shift`` (rad) about ``axis`` (``nudge.turned``). A nudge that
@@ -277,6 +289,8 @@ def run_scenario(runner: Any, call: ScenarioCall, nudge: Nudge | None = None) ->
             try:
                 if nudge.moved is Moved.STATE:
                     run.nudge(nudge.shift)
+                elif nudge.moved is Moved.TO:
+                    run.move_to(nudge.state)
                 elif step.kind == "cartesian_path":
                     step = shifted_goal(step, nudge.shift, nudge.moved, nudge.axis)
                 else:

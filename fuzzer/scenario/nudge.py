@@ -29,6 +29,9 @@ class Moved(enum.Enum):
     ORIENTATION = "orientation"
     """The goal's orientations, turned by the shift (rad, :func:`turned`): a ``/cartesian_path``
     step's waypoints, or else the pose target in effect, set again turned."""
+    TO = "to"
+    """The current state, moved to the nudge's ``state`` (the shift is not used): both targets
+    then start the step from one state (``fuzzer.scenario.common_start``)."""
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,8 @@ class Nudge:
     moved: Moved = Moved.STATE
     axis: Axis = AXIS
     """Direction of a goal nudge (``Moved.POSITION``, ``Moved.ORIENTATION``)."""
+    state: tuple[float, ...] = ()
+    """Where ``Moved.TO`` puts the state (rad, m; one value per joint variable)."""
 
 
 @dataclass(frozen=True)

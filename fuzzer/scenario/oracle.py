@@ -277,7 +277,9 @@ def first_differential(
     left the two arms may stand apart (two IK answers of one pose, beyond the tolerance): from
     there on only how far each later path got is compared (``COARSE``: its status, success,
     error code, fraction and point count), which such a gap does not explain; the evaluator's
-    nudge check then moves the state by the gap too. A counted divergence found later is the
+    nudge check then moves the state by the gap too, and a gap beyond the tolerance has the
+    step re-run from each arm's state (``fuzzer.scenario.common_start``, as for arms one
+    state apart by 2pi, which this oracle compares as one). A counted divergence found later is the
     verdict; otherwise the first ``known_limitation`` is.
     """
     largest = 0.0

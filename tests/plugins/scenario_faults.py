@@ -13,6 +13,9 @@ Each is the Python twin with one behaviour changed, exposed as an object with
   trapezoid (``t == ta`` or ``t == total - ta``) reports the acceleration of the phase before
   it, where the twin reports the phase after it (``t < ta``); both are right.
 * ``early_switch``: each phase's acceleration is reported one sample early (the fault).
+* ``short_path_from_far_joints``: a Cartesian path from a state with a joint beyond 3 rad
+  reports half the fraction it achieved (a fault a state split by 2pi would otherwise hide:
+  ``fuzzer.scenario.common_start``).
 """
 
 from __future__ import annotations
@@ -100,8 +103,20 @@ class _EarlySwitchGroup(python_impl.MoveGroup):
         return dataclasses.replace(trajectory, accelerations=acc)
 
 
+class _ShortPathGroup(python_impl.MoveGroup):
+    """A path from a state with a joint beyond 3 rad reports half its fraction (the fault)."""
+
+    def compute_cartesian_path(
+        self, waypoints: Any, eef_step: float, jump_threshold: float = 0.0
+    ) -> tuple[RobotTrajectory, float]:
+        trajectory, fraction = super().compute_cartesian_path(waypoints, eef_step, jump_threshold)
+        far = any(abs(q) > 3.0 for q in self.get_current_joint_values())
+        return trajectory, fraction / 2.0 if far else fraction
+
+
 stale_second_go = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_StaleGroup)
 seed_parity_ik = SimpleNamespace(RobotModel=_ParityModel, MoveGroup=python_impl.MoveGroup)
 no_pose_goal = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_NoPoseGoalGroup)
 left_side_at_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_LeftSideGroup)
 early_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_EarlySwitchGroup)
+short_path_from_far_joints = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_ShortPathGroup)
