@@ -33,7 +33,7 @@ test: setup
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
 ## then every deep bug x 6 engines x 10 trials x 60 s (about 3.5 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (31 minutes). Each step keeps
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25-34 minutes). Each step keeps
 ## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md $$(test -f benchmarks/results/zoo-full.jsonl && echo --resume)

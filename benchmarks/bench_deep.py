@@ -89,8 +89,8 @@ too: 780 trials (690 for the first 12 bugs, about 2.7 hours on 2 cores at 4.2 tr
 the three deep scenario bugs add 90 trials that mostly run their whole minute, about 45
 minutes), run in pieces with the journal.
 zoo: the 22 shallow zoo bugs (``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x
-10 s; the 8 of the scenario op under ``full`` and ``libfuzzer`` only: 860 trials, 34 minutes on
-2 cores."""
+10 s; the 8 of the scenario op under ``full`` and ``libfuzzer`` only: 860 trials, 25 to 34 minutes
+on 2 cores (25 on 0586935, 34 on an earlier, slower machine)."""
 
 
 def main(argv: list[str] | None = None) -> list[Run]:
