@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     import atheris
 
     from fuzzer.campaign import _scenario_mutators
-    from fuzzer.execution.evaluate import UNCOUNTED
+    from fuzzer.execution.records import UNCOUNTED
     from fuzzer.execution.session import RunConfig, Session
     from fuzzer.execution.tolerance import default_tolerance
     from fuzzer.generation.corpus import tutorial_seeds

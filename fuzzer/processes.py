@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzer.artifacts.store import oversized, sidecar_path
+from fuzzer.execution.records import UNCOUNTED
 
 CHILD_ENV = "RROSFUZZ_CHILD"
 DEADLINE_ENV = "RROSFUZZ_DEADLINE"
@@ -81,7 +82,7 @@ class Found:
     timeouts: list[Path]
 
 
-NOT_FINDINGS = frozenset({"known_limitation", "ill_conditioned"})
+NOT_FINDINGS = frozenset(str(kind) for kind in UNCOUNTED)
 """Kinds that are written as crash files for triage but do not make a campaign fail: a
 documented limitation of a target, and IK seeds where the answer is chaotic (docs/engine.md)."""
 

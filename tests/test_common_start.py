@@ -4,12 +4,15 @@
 from __future__ import annotations
 
 import math
+import shutil
 from collections.abc import Sequence
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.session import RunConfig
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.testcase import TestCase
@@ -19,6 +22,8 @@ from fuzzer.scenario.nudge import Moved, Nudge
 from fuzzer.scenario.oracle import compare_scenario
 from fuzzer.scenario.oracle_facts import JointSpec, ScenarioFacts
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
+from fuzzer.triage.regressions import PromoteError, promote
+from fuzzer.triage.replay import Result, replay_file
 from robot_api import robots
 from tests.test_scenario_oracle import evaluator
 
@@ -190,3 +195,23 @@ def test_states_within_the_tolerance_are_not_re_run() -> None:
     assert common_start.split_states(CALL, near, 1, FACTS, TOL) is None
     assert common_start.split_states(CALL, SPLIT_PAIR, 1, FACTS, TOL) == ((0.0, -3.0), (0.0, 3.0))
     assert common_start.split_states(CALL, SPLIT_PAIR, 0, FACTS, TOL) is None  # home: one state
+
+
+KEPT = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "control-fp-0586935"
+CRASH = "crash-a57f012a7ad5de16dd146ec3744e2a82b0ff32f6"
+
+
+def test_the_controls_crash_file_now_replays_as_no_finding(tmp_path: Path) -> None:
+    """The file the controls wrote on 0586935 (16 steps; a value divergence then) replays as
+    known_limitation: "now explained (not a finding)", exit 0, and the suite will not take it
+    either way."""
+    for name in (CRASH, CRASH + ".json"):
+        shutil.copyfile(KEPT / name, tmp_path / name)
+    result = replay_file(tmp_path / CRASH, RunConfig(), {}, trust=True)  # the zoo's control: ours
+    assert result.result is Result.EXPLAINED and not result.diverges
+    assert result.evaluation is not None
+    c = result.evaluation.comparison
+    assert (c.kind, c.step, c.field) == (Kind.KNOWN_LIMITATION, 15, "cartesian_path.fraction")
+    for fixed in (True, False):
+        with pytest.raises(PromoteError, match="now explained"):
+            promote(tmp_path / CRASH, fixed=fixed, suite=tmp_path / "suite", trust=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from fuzzer.execution.evaluate import UNCOUNTED
+from fuzzer.execution.records import UNCOUNTED
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation.corpus import tutorial_seeds

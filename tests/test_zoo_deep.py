@@ -15,8 +15,7 @@ import python_impl
 from benchmarks import bench_deep, deep_stats
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import DEEP, STATEFUL, ZOO, deep
-from fuzzer.execution.evaluate import UNCOUNTED
-from fuzzer.execution.records import Comparison
+from fuzzer.execution.records import UNCOUNTED, Comparison
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation.corpus import tutorial_seeds

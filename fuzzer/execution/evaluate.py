@@ -51,7 +51,7 @@ from typing import Any
 from fuzzer.execution import ik_check, oracle
 from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
 from fuzzer.execution.history import HISTORY, AnyCall, stored_call
-from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status, signature_of
+from fuzzer.execution.records import UNCOUNTED, Comparison, Kind, Outcome, Signature, Status, signature_of
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.filtering import is_reasonable
@@ -68,11 +68,6 @@ from fuzzer.scenario.steps import ScenarioCall
 from robot_api.records import JointType
 
 Seeds = tuple[tuple[float, ...] | None, ...]
-
-UNCOUNTED = frozenset({Kind.KNOWN_LIMITATION, Kind.ILL_CONDITIONED})
-"""Kinds the oracle gives a divergence it explains; ``Evaluator._confirm`` does not re-run
-those on fresh targets (a scenario at a step in KDL's dead zone: a quarter of a scenario
-campaign's runs on the default robot went to confirming them)."""
 SEEN_BEFORE = "ill-conditioning re-runs not run: an earlier input of this signature kept the divergence"
 
 
@@ -255,7 +250,9 @@ class Evaluator:
     ) -> tuple[Comparison, tuple[Outcome, ...]]:
         if comparison.kind in UNCOUNTED:
             # the oracle already explained it (a scenario step's known limitation): re-running
-            # could only relabel it flaky or state-dependent, never make it a finding
+            # could only relabel it flaky or state-dependent, never make it a finding (a scenario
+            # at a step in KDL's dead zone: a quarter of a scenario campaign's runs on the
+            # default robot once went to confirming them)
             return comparison, outcomes
         live_key = self.signature(outcomes[0], outcomes[1], comparison).key
         fresh: tuple[Runner, Runner] | None = None

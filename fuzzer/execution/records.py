@@ -109,6 +109,10 @@ class Kind(enum.StrEnum):
     rotation dead zone near pi: not counted as a detection."""
 
 
+UNCOUNTED = frozenset({Kind.KNOWN_LIMITATION, Kind.ILL_CONDITIONED})
+"""Divergences the oracle explains: written as crash files for triage, never a finding (a
+campaign does not fail on them; a replay that turns a file's divergence into one exits 0)."""
+
 UNITS = {"position": "m", "orientation": "rad", "joint_values": "rad", "residual": "m"}
 
 

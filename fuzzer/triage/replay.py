@@ -26,6 +26,7 @@ from fuzzer.artifacts import manifest
 from fuzzer.artifacts.sidecar import config_from, describe, read_sidecar
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.evaluate import Evaluation, Verdict
+from fuzzer.execution.records import UNCOUNTED
 from fuzzer.execution.session import ConfigError, RunConfig, Session
 from fuzzer.input.paths import crash_inputs
 from fuzzer.input.testcase import TestCase, TestCaseError, decode
@@ -36,6 +37,10 @@ class Result(enum.StrEnum):
     SAME = "still diverges (same signature)"
     DIFFERENT = "diverges differently"
     AGREES = "now agrees"
+    EXPLAINED = "now explained (not a finding)"
+    """Another signature than the sidecar's, of a kind the oracle explains (``known_limitation``,
+    ``ill_conditioned``: ``records.UNCOUNTED``), which a campaign writes for triage but does not
+    count: a divergence an older engine reported that a documented rule now covers."""
     NEW = "diverges (no sidecar to compare with)"
     UNRECORDED_AGREES = "the targets agree (no sidecar to compare with)"
     SKIPPED = "skipped"
@@ -159,8 +164,10 @@ def replay_file(
         result = Result.UNRECORDED_AGREES if unrecorded else Result.AGREES
     elif expected is None:
         result = Result.NEW
+    elif got == expected:
+        result = Result.SAME
     else:
-        result = Result.SAME if got == expected else Result.DIFFERENT
+        result = Result.EXPLAINED if evaluation.comparison.kind in UNCOUNTED else Result.DIFFERENT
     detail = ""
     steps: tuple[str, ...] = ()
     if evaluation.signature is not None:
