@@ -15,7 +15,7 @@ import os
 import random
 import sys
 import time
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -250,8 +250,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             store.recovered = [*store.recovered, *store.recover()]
         found = new_artifacts(artifacts, started)
         if store.recovered:  # completed for a killed run that never reported them: new to the user
-            recovered = [artifacts / name for name in store.recovered]
-            found = replace(found, divergences=sorted({*found.divergences, *recovered}))
+            found = found.with_recovered([artifacts / name for name in store.recovered])
         totals = worker_totals(artifacts, started, os.getpid()) if supervisor else None
         code: int | None = exit_status(status, found, supervisor, timeout_code)
         if status is None and (in_callback[0] or found.crashes or found.timeouts):
@@ -269,6 +268,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             totals=totals,
             timeouts=[shown(p) for p in found.timeouts],
             crashes=[shown(p) for p in found.crashes],
+            explained=found.explained_kinds(),
             exit_code=code,
         )
         return code

@@ -19,8 +19,9 @@ import select
 import signal
 import sys
 import time
+from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzer.artifacts.store import oversized, sidecar_path
@@ -80,6 +81,24 @@ class Found:
     crashes: list[Path]
     """libFuzzer's crash-/oom-/leak- files without a sidecar: the targets crashed."""
     timeouts: list[Path]
+    explained: list[Path] = field(default_factory=list)
+    """Crash files with a sidecar of a kind in ``NOT_FINDINGS``: written for triage, not findings."""
+
+    def explained_kinds(self) -> Counter[str]:
+        """How many of ``explained`` each kind has."""
+        return Counter(_sidecar_kind(sidecar_path(path)) or "unreadable" for path in self.explained)
+
+    def with_recovered(self, recovered: list[Path]) -> Found:
+        """With crash files an interrupted run had claimed (completed by this one: new to the
+        user), each sorted by its sidecar's kind like the others."""
+        explained = [p for p in recovered if _sidecar_kind(sidecar_path(p)) in NOT_FINDINGS]
+        findings = [p for p in recovered if p not in explained]
+        return Found(
+            sorted({*self.divergences, *findings}),
+            self.crashes,
+            self.timeouts,
+            sorted({*self.explained, *explained}),
+        )
 
 
 NOT_FINDINGS = frozenset(str(kind) for kind in UNCOUNTED)
@@ -101,7 +120,7 @@ def _sidecar_kind(path: Path) -> str | None:
 
 
 def new_artifacts(directory: Path, since: float) -> Found:
-    divergences, crashes, timeouts = [], [], []
+    divergences, crashes, timeouts, explained = [], [], [], []
     for path in sorted(directory.iterdir()) if directory.is_dir() else ():
         name = path.name
         if name.endswith(".json") or not path.is_file():
@@ -114,11 +133,13 @@ def new_artifacts(directory: Path, since: float) -> Found:
         if name.startswith("timeout-"):
             timeouts.append(path)
         elif name.startswith("crash-") and sidecar_path(path).is_file():
-            if _sidecar_kind(sidecar_path(path)) not in NOT_FINDINGS:
+            if _sidecar_kind(sidecar_path(path)) in NOT_FINDINGS:
+                explained.append(path)
+            else:
                 divergences.append(path)
         elif name.startswith(("crash-", "oom-", "leak-")):
             crashes.append(path)
-    return Found(divergences, crashes, timeouts)
+    return Found(divergences, crashes, timeouts, explained)
 
 
 def exit_status(status: int | None, found: Found, supervisor: bool, timeout_code: int = TIMEOUT_EXIT) -> int:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
@@ -102,12 +102,15 @@ def summary(
     totals: dict[str, Any] | None = None,
     timeouts: Sequence[str] = (),
     crashes: Sequence[str] = (),
+    explained: Mapping[str, int] | None = None,
     exit_code: int | None = None,
 ) -> None:
     """The end-of-campaign report (stderr). ``new_files``: crash files written since the
     start, by this process or by its -fork/-jobs workers; ``totals``: the workers' counters
     summed (``divlog.worker_totals``) when this process supervised them; ``timeouts`` and
-    ``crashes``: libFuzzer's timeout-/crash- files written since the start."""
+    ``crashes``: libFuzzer's timeout-/crash- files written since the start; ``explained``: the
+    crash files written since the start whose divergence the oracle explains (kinds in
+    ``processes.NOT_FINDINGS``), counted by kind: not findings, but on disk for triage."""
     lines = [
         "campaign summary",
         f"  executions: {stats.execs} in {stats.elapsed:.1f} s "
@@ -143,6 +146,12 @@ def summary(
         lines.append(f"    {path}")
     if len(new_files) > 20:
         lines.append(f"    ... and {len(new_files) - 20} more")
+    if explained:
+        kinds = ", ".join(f"{kind} {n}" for kind, n in sorted(explained.items()))
+        lines.append(
+            f"  explained, not findings: {sum(explained.values())} more crash file(s) new this run "
+            f"({kinds}), written for triage: python fuzz_diff.py triage {artifacts}"
+        )
     lines.append(f"  corpus: {', '.join(corpus)}")
     lines.append("  replay one with: python fuzz_diff.py <crash file>")
     if exit_code is not None:

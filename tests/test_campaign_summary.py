@@ -1,0 +1,73 @@
+"""The end-of-campaign summary names every crash file a run wrote: findings, and the ones whose
+divergence the oracle explains (``known_limitation``, ``ill_conditioned``), which a campaign keeps
+for triage without counting them as findings."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from fuzzer import reporting
+from fuzzer.artifacts.store import sidecar_path
+from fuzzer.processes import NOT_FINDINGS, new_artifacts
+from fuzzer.selection.state import Stats
+from tests.support import fuzz
+
+
+def _crash(folder: Path, name: str, kind: str | None) -> Path:
+    path = folder / f"crash-{name}"
+    path.write_bytes(b"{}")
+    side = {"signature": {"kind": kind}} if kind is not None else "not a sidecar object"
+    sidecar_path(path).write_text(json.dumps(side))
+    return path
+
+
+def test_explained_crash_files_are_listed_apart_from_findings(tmp_path: Path) -> None:
+    value = _crash(tmp_path, "a", "value")
+    known = _crash(tmp_path, "b", "known_limitation")
+    chaotic = _crash(tmp_path, "c", "ill_conditioned")
+    unreadable = _crash(tmp_path, "d", None)  # a sidecar no reader understands: a finding
+    (tmp_path / "crash-e").write_bytes(b"x")  # no sidecar: the target crashed
+    found = new_artifacts(tmp_path, since=0.0)
+    assert found.divergences == [value, unreadable]
+    assert found.explained == [known, chaotic]
+    assert [p.name for p in found.crashes] == ["crash-e"]
+    assert dict(found.explained_kinds()) == {"known_limitation": 1, "ill_conditioned": 1}
+
+
+def test_recovered_files_are_sorted_by_kind_too(tmp_path: Path) -> None:
+    value = _crash(tmp_path, "a", "value")
+    known = _crash(tmp_path, "b", "known_limitation")
+    found = new_artifacts(tmp_path, since=2**40)  # written "before" the run: none is new
+    assert not found.divergences and not found.explained
+    found = found.with_recovered([known, value])
+    assert found.divergences == [value] and found.explained == [known]
+
+
+def test_the_summary_counts_explained_files_by_kind(capsys: pytest.CaptureFixture[str]) -> None:
+    stats = Stats()
+    reporting.summary(stats, 0, "arts", ["c"], [], explained={"known_limitation": 4, "ill_conditioned": 1})
+    err = capsys.readouterr().err
+    assert "crash files (0 new this run) in: arts" in err
+    assert "5 more crash file(s) new this run (ill_conditioned 1, known_limitation 4)" in err
+    assert "fuzz_diff.py triage arts" in err
+    reporting.summary(stats, 0, "arts", ["c"], [], explained={})
+    assert "explained" not in capsys.readouterr().err
+
+
+def test_a_campaign_reports_the_explained_crash_files_it_wrote(tmp_path: Path) -> None:
+    """The default robot's scenario campaign: its seed-1 run of 200 inputs writes known-limitation
+    crash files and no finding; the summary used to say only "0 new"."""
+    artifacts = tmp_path / "a"
+    run = fuzz("--op", "scenario", str(tmp_path / "c"), "-runs=200", "-seed=1", f"--artifacts={artifacts}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    files = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+    kinds = [json.loads(sidecar_path(p).read_text())["signature"]["kind"] for p in files]
+    explained = [k for k in kinds if k in NOT_FINDINGS]
+    assert explained and len(explained) == len(kinds), kinds
+    match = re.search(r"explained, not findings: (\d+) more crash file\(s\) new this run", run.stderr)
+    assert match and int(match.group(1)) == len(explained), run.stderr[-2000:]
+    assert "crash files (0 new this run)" in run.stderr
