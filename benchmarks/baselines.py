@@ -1,16 +1,24 @@
 """Baseline engines without libFuzzer, for the bug-finding comparison.
 
-    python -m benchmarks.baselines {paper,hypothesis,uniform} CORPUS --seconds S --seed N
+    python -m benchmarks.baselines {paper,hypothesis,uniform} --seconds S --seed N
         [--robot R] [--tip-link L] [--op OP] [--targets A,B] --artifacts DIR
 
 * ``paper``: the paper's loop without coverage: Hypothesis seeds, the paper's
   three mutation strategies and four combinations (Table II), parents chosen by
   difference priority (Algorithm 3: the highest-difference inputs, rank
-  weighted) half of the time, else a seed.
+  weighted) half of the time, else a seed. For ``--op scenario`` the strategy
+  mutates the values of one step of the script (the full engine's
+  ``seq_step:<strategy>``), never the order or number of its steps.
 * ``hypothesis``: Hypothesis generation only (Table I strategies with the
-  engine's robot-aware hints), batch after batch, never mutating.
+  engine's robot-aware hints; for ``--op scenario`` the scripts of
+  ``fuzzer.input.mapping.scenario_strategy``), batch after batch, never mutating.
 * ``uniform``: uniform random joint values inside the limits (continuous joints
-  in (-pi, pi]); for IK, the pose of a uniform random configuration.
+  in (-pi, pi]); for IK, the pose of a uniform random configuration. For
+  ``--op scenario``, scripts drawn the same way (:func:`_uniform_scenario`): a
+  uniform number of steps, each kind drawn with the generator's weights
+  (``fuzzer.input.mapping.SCENARIO_WEIGHTS``), joint targets uniform inside the
+  limits, pose and position targets and Cartesian waypoints the poses of uniform
+  configurations, settings uniform in the generator's ranges.
 
 Each evaluates inputs exactly like the engine (the same ``Harness.test_one_input``:
 filtering, oracle, confirmation, crash files, ``divergences.jsonl``/``stats.jsonl``),
@@ -24,7 +32,9 @@ import argparse
 import math
 import random
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from fuzzer import campaign, reporting
 from fuzzer.artifacts.divlog import CampaignLog
@@ -33,8 +43,12 @@ from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
 from fuzzer.harness import Harness
+from fuzzer.input.mapping import REMEMBERED, SCENARIO_WEIGHTS
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators, session_values
+from fuzzer.mutation.mutators import MutationContext
+from fuzzer.scenario.mutate import SEQ_STEP
+from fuzzer.scenario.steps import KINDS
 from fuzzer.selection.guidance import Features
 
 ENGINES = ("paper", "hypothesis", "uniform")
@@ -43,7 +57,9 @@ ENGINES = ("paper", "hypothesis", "uniform")
 def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int) -> Harness:
     ctx = mutators.MutationContext(
         rng=random.Random(seed),
-        field_types=session_values.field_types(session, session.config.message_type),
+        field_types={}
+        if session.config.op == "scenario"
+        else session_values.field_types(session, session.config.message_type),
         interesting_floats=tuple(session_values.interesting_values(session)),
     )
     recorded, digest = versions(), session.robot_digest()
@@ -59,13 +75,82 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
     )
 
 
-def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
+HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+SETTINGS = {
+    "velocity_scaling": (0.05, 1.0),
+    "acceleration_scaling": (0.05, 1.0),
+    "goal_tolerance": (0.0, 1e-2),
+    "eef_step": (0.01, 0.1),
+    "jump_threshold": (0.0, 10.0),
+}
+"""A uniform script's settings: each uniform in the range of ``scenario_strategy``'s values (its
+discrete choices, such as the goal tolerance's five values, spread over their range)."""
+WAYPOINTS = (1, 3)
+"""A uniform script's Cartesian paths have this many waypoints (``scenario_strategy``'s range)."""
+
+
+def _configuration(session: Session, rng: random.Random) -> list[float]:
+    """Uniform joint values inside the limits (rad, m), shape (n_joints,); continuous in (-pi, pi]."""
     q = []
     for lim in session.reference.joint_limits:
         lo = -math.pi if math.isinf(lim.lower) else lim.lower
         hi = math.pi if math.isinf(lim.upper) else lim.upper
         q.append(rng.uniform(lo, hi))
-    header = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+    return q
+
+
+def _pose(session: Session, rng: random.Random) -> dict[str, dict[str, float]]:
+    """The tip's pose (m, unit quaternion) at a uniform configuration, as a geometry_msgs/Pose."""
+    pose = session.reference.forward_kinematics(_configuration(session, rng))
+    return {
+        "position": dict(zip("xyz", pose.position, strict=True)),
+        "orientation": dict(zip("xyzw", pose.orientation, strict=True)),
+    }
+
+
+def _uniform_step(session: Session, rng: random.Random, kind: str, remembered: list[str]) -> dict[str, Any]:
+    """One step's message of a uniform script (``remembered``: the names stored so far)."""
+    if kind == "joint_target":
+        names = list(session.reference.joint_names)
+        return {
+            "header": HEADER,
+            "name": names,
+            "position": _configuration(session, rng),
+            "velocity": [],
+            "effort": [],
+        }
+    if kind == "pose_target":
+        return {"header": HEADER, "pose": _pose(session, rng)}
+    if kind == "position_target":
+        return {"header": HEADER, "point": _pose(session, rng)["position"]}
+    if kind == "cartesian_path":
+        return {"header": HEADER, "poses": [_pose(session, rng) for _ in range(rng.randint(*WAYPOINTS))]}
+    if kind == "remember":
+        remembered.append(rng.choice(REMEMBERED))
+        return {"data": remembered[-1]}
+    if kind == "named_target":
+        return {"data": rng.choice(["home", *remembered])}
+    if kind in SETTINGS:
+        return {"data": rng.uniform(*SETTINGS[kind])}
+    return {}  # std_msgs/Empty: /plan, /execute, /go, /stop, /clear_pose_targets
+
+
+def _uniform_scenario(session: Session, rng: random.Random, sequence: int) -> TestCase:
+    """A uniform script of 1..max_steps steps (the module's docstring)."""
+    kinds, weights = list(SCENARIO_WEIGHTS), list(SCENARIO_WEIGHTS.values())
+    remembered: list[str] = []
+    steps = []
+    for _ in range(rng.randint(1, session.config.max_steps)):
+        kind = rng.choices(kinds, weights)[0]
+        steps.append({"topic": KINDS[kind], "msg": _uniform_step(session, rng, kind, remembered)})
+    return TestCase(session.config.message_type, {"steps": steps}, sequence, "uniform")
+
+
+def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
+    if session.config.op == "scenario":
+        return _uniform_scenario(session, rng, sequence)
+    q = _configuration(session, rng)
+    header = HEADER
     if session.config.op == "ik":
         pose = session.reference.forward_kinematics(q)
         message = {
@@ -80,6 +165,19 @@ def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
     return TestCase(session.config.message_type, message, sequence, "uniform")
 
 
+def _paper_mutate(
+    session: Session,
+) -> Callable[[dict[str, Any], MutationContext, str], tuple[dict[str, Any], str]]:
+    """``mutate(message, ctx, strategy) -> (message, name)``: the paper's strategy on the
+    message, or for a scenario on the values of one of its steps (``seq_step:<strategy>``)."""
+    if session.config.op != "scenario":
+        return mutators.mutate
+    from fuzzer.scenario import dispatch
+
+    scenario_mutate, _ = dispatch.for_registry(session.registry, session.config.max_steps)
+    return lambda message, ctx, strategy: scenario_mutate(message, ctx, f"{SEQ_STEP}:{strategy}")
+
+
 def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: int) -> Harness:
     session = Session.open(config)
     rng = random.Random(seed)
@@ -87,6 +185,8 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     harness = _harness(session, artifacts, seeds, seed)
     deadline = time.monotonic() + seconds
     if engine == "paper":
+        mutate = _paper_mutate(session)
+        prefix = f"{SEQ_STEP}:" if config.op == "scenario" else ""
         for case in seeds:
             harness.test_one_input(case.encode())
         while time.monotonic() < deadline:
@@ -94,10 +194,9 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
             parent = harness._decode(preferred)[0] if preferred else None
             parent = parent or rng.choice(seeds)
             harness.context.rng = rng
-            message, name = mutators.mutate(
-                parent.message, harness.context, rng.choice(mutators.PAPER_STRATEGIES)
-            )
-            if name in mutators.PAPER_STRATEGIES:
+            strategy = rng.choice(mutators.PAPER_STRATEGIES)
+            message, name = mutate(parent.message, harness.context, strategy)
+            if name.removeprefix(prefix) in mutators.PAPER_STRATEGIES and name.startswith(prefix):
                 harness.test_one_input(parent.child(message, name).encode())
     elif engine == "hypothesis":
         batch = 0
@@ -128,7 +227,7 @@ def main() -> None:
     parser.add_argument("--artifacts", type=Path, required=True)
     parser.add_argument("--robot", default="probot_anno")
     parser.add_argument("--tip-link", default=None)
-    parser.add_argument("--op", default="move", choices=("move", "fk", "ik"))
+    parser.add_argument("--op", default="move", choices=("move", "fk", "ik", "scenario"))
     parser.add_argument("--targets", default="native,python")
     args = parser.parse_args()
     a, b = args.targets.split(",")

@@ -10,7 +10,7 @@
 Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of the input
 space), or with ``--mode zoo`` every bug of the shallow zoo (``benchmarks.zoo.ZOO``), runs
 under every engine of ``benchmarks.bench_zoo`` (``full``, ``libfuzzer``, ``paper``,
-``hypothesis``, ``uniform``; a bug of the scenario op only under the engines that have it),
+``hypothesis``, ``uniform``; the baselines run the scenario bugs too since 2026-11-29),
 N trials each (``-seed`` = the trial number), on the same budget, each trial a subprocess
 started the same way (``bench_zoo.run_one``). A trial stops at its first detection
 (``stop_at_detection``): its time to first detection is the engine's own timestamp in its
@@ -42,7 +42,7 @@ from pathlib import Path
 
 from benchmarks import journal, sweeps
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, Run, run_one
-from benchmarks.deep_stats import Mode, markdown, plot, runs_on
+from benchmarks.deep_stats import Mode, markdown, plot
 from benchmarks.zoo import DEEP, ZOO, Bug
 from benchmarks.zoo_tables import ROOT, replace_section
 
@@ -150,13 +150,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
             f"A sweep in progress: the {len(runs)} trials its journal holds so far (a cell counts its own). "
         )
         return _report(runs, mode, args, argv, copy=False, note=so_far if partial else "")
-    jobs = [
-        (BUGS[b], e, t)
-        for b in mode.bugs
-        for e in mode.engines
-        if runs_on(BUGS[b].op, e)
-        for t in range(mode.trials)
-    ]
+    jobs = [(BUGS[b], e, t) for b in mode.bugs for e in mode.engines for t in range(mode.trials)]
     # a seeded random order, as FuzzBench does: a change of machine load during the sweep then
     # falls on every engine alike instead of on the engines that happen to run last
     random.Random(0).shuffle(jobs)

@@ -21,8 +21,8 @@ any divergence, and divergences per minute. Results go to
 ``benchmarks/results/zoo-<mode>.json`` and a plot ``zoo-<mode>.png``; with
 ``--write-md`` the tables replace the marked section of BENCHMARKS.md.
 
-A zoo bug runs with its own op (``--op scenario`` for the stateful ones, which only
-the full and libFuzzer engines run: the baselines have no scenario op). ``--mode ops``
+A zoo bug runs with its own op (``--op scenario`` for the stateful ones; every engine has
+it, the baselines since 2026-11-29: ``benchmarks.baselines``). ``--mode ops``
 runs each stateful bug under both ``--op move`` and ``--op scenario`` (full engine) and
 writes the section "Which ops detect the stateful bugs".
 
@@ -68,8 +68,9 @@ ALL_ENGINES = (*ENGINES, "weights")
 (``--mutator weights``, the engine before issue 11), for ``benchmarks.bench_deep``."""
 CONTROL_ENGINES = ("full",)
 """Engines run on the control configurations (the plain ``control`` entry runs them all)."""
-SCENARIO_ENGINES = ("full", "libfuzzer")
-"""Engines that have ``--op scenario`` (the baselines do not)."""
+SCENARIO_ENGINES = ENGINES
+"""Engines that have ``--op scenario``: all (the baselines of ``benchmarks.baselines`` since
+2026-11-29; results files from before hold no baseline run of a scenario bug)."""
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
-from benchmarks.bench_zoo import SCENARIO_ENGINES, Run
+from benchmarks.bench_zoo import Run
 
 ALPHA = 0.05
 
@@ -29,11 +29,6 @@ class Mode:
     trials: int
     budget: float
     engines: tuple[str, ...] = ("full", "weights", "libfuzzer", "paper", "hypothesis", "uniform")
-
-
-def runs_on(op: str, engine: str) -> bool:
-    """The baselines of ``benchmarks.baselines`` have no scenario op (``weights`` has)."""
-    return op != "scenario" or engine in (*SCENARIO_ENGINES, "weights")
 
 
 def a12(xs: list[float], ys: list[float]) -> float:
@@ -101,7 +96,9 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
             else ""
         )
         + f"Cells: median time to first detection "
-        f"in s (detected within the budget/trials; '-' none; 'n/a': the engine has no scenario op). "
+        f"in s (detected within the budget/trials; '-' none; 'n/a (no trials)': none of that engine on "
+        f"that bug in these results: a sweep in progress, or results from before the baselines had "
+        f"a scenario op). "
         f"p: Mann-Whitney U (two-sided) of the full engine's times against the baseline's, a trial "
         f"without detection counted as the budget; A12: Vargha-Delaney (full engine sooner; 0.5 = "
         f"no difference); verdict at p < {ALPHA}.",
@@ -113,9 +110,8 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
         cells = []
         for engine in mode.engines:
             mine = by_engine[engine]
-            if not mine:  # a journal so far may not hold every (bug, engine) yet
-                op = next(r.op for r in runs if r.bug == bug)
-                cells.append("n/a (no trials yet)" if runs_on(op, engine) else "n/a (no scenario op)")
+            if not mine:  # a journal so far, or results from before the baselines ran scenarios
+                cells.append("n/a (no trials)")
                 continue
             # a detection counts within the budget only: a run overruns it by up to one input
             # (a long scenario: seconds), and what it finds then is not a detection in budget
@@ -182,7 +178,7 @@ def plot(runs: list[Run], mode: Mode, path: Path) -> None:
     for ax, bug in zip(axes.flat, mode.bugs, strict=False):
         for i, engine in enumerate(mode.engines):
             mine = [r for r in runs if r.bug == bug and r.engine == engine]
-            if not mine:  # no scenario op: no curve (not a curve at zero)
+            if not mine:  # no trials: no curve (not a curve at zero)
                 continue
             times, share = survival(mine, mode.budget)
             (lines[engine],) = ax.step(times, share, where="post", color=f"C{i}", label=engine)

@@ -238,14 +238,14 @@ def test_a_journal_so_far_is_tabulated_with_its_gaps_named(tmp_path: Path) -> No
     text = deep_stats.markdown(runs, mode, "cmd")
     first = next(line for line in text.splitlines() if line.startswith("| narrow_band "))
     assert [c.strip() for c in first.strip("|").split("|")][1:] == [
-        "n/a (no trials yet)",
+        "n/a (no trials)",
         "2.0 (3/3)",
-        "n/a (no trials yet)",
+        "n/a (no trials)",
         "n/a",
         "n/a",
     ]
     second = next(line for line in text.splitlines() if line.startswith("| ik_seed_band "))
-    assert "n/a (no scenario op)" in second and "n/a (no trials yet)" in second
+    assert second.count("n/a (no trials)") == 2  # uniform and libFuzzer's mutator ran no trial yet
     deep_stats.plot(runs, mode, tmp_path / "partial.png")
 
 

@@ -47,8 +47,9 @@ def test_time_comparison_margins() -> None:
 
 
 def test_a_baseline_gets_no_verdict_on_a_bug_it_did_not_run() -> None:
-    """The baselines have no scenario op: a scenario bug is no win of the full engine over
-    them (before, the missing cell counted as a baseline that never detected: "faster")."""
+    """A results file from before the baselines had a scenario op: a scenario bug they did not
+    run is no win of the full engine over them (once, the missing cell counted as a baseline
+    that never detected: "faster")."""
     runs = [
         bench_zoo.Run(bug, engine, 1, 10.0, 1.0, 1, 10, 10.0, BY_NAME[bug].op, 0)
         for bug, engines in (

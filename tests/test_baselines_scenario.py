@@ -1,0 +1,96 @@
+"""The baselines' scenario op (``benchmarks.baselines``): uniform scripts, the paper's strategies
+on one step's values, Hypothesis' scripts; each a valid script the engine evaluates."""
+
+from __future__ import annotations
+
+import math
+import random
+from pathlib import Path
+
+import pytest
+
+from benchmarks import baselines
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.execution.tolerance import default_tolerance
+from fuzzer.generation import corpus
+from fuzzer.input.mapping import REMEMBERED
+from fuzzer.mutation import mutators
+from fuzzer.scenario import steps as scenario_steps
+
+
+def _config() -> RunConfig:
+    return RunConfig(op="scenario", targets=("native", "python"), tolerance=default_tolerance("scenario"))
+
+
+@pytest.fixture(scope="module")
+def session() -> Session:
+    return Session.open(_config())
+
+
+def test_uniform_scripts_are_valid_and_uniform_inside_the_limits(session: Session) -> None:
+    rng = random.Random(3)
+    scripts = [baselines._uniform(session, rng, i).message for i in range(200)]
+    again = [baselines._uniform(session, random.Random(3), 0).message]
+    assert again[0] == scripts[0]  # one seed, one script
+    kinds: set[str] = set()
+    lengths = set()
+    for script in scripts:
+        scenario_steps.validate(script, session.registry, session.config.max_steps)
+        lengths.add(len(script["steps"]))
+        remembered = ["home"]
+        for step in script["steps"]:
+            kind = scenario_steps.TOPICS[step["topic"]].kind
+            kinds.add(kind)
+            msg = step["msg"]
+            if kind == "joint_target":
+                assert msg["name"] == list(session.reference.joint_names)
+                for q, lim in zip(msg["position"], session.reference.joint_limits, strict=True):
+                    low = -math.pi if math.isinf(lim.lower) else lim.lower
+                    high = math.pi if math.isinf(lim.upper) else lim.upper
+                    assert low <= q <= high
+            elif kind == "remember":
+                assert msg["data"] in REMEMBERED
+                remembered.append(msg["data"])
+            elif kind == "named_target":
+                assert msg["data"] in remembered  # home, or a name stored earlier in the script
+            elif kind in baselines.SETTINGS:
+                low, high = baselines.SETTINGS[kind]
+                assert low <= msg["data"] <= high
+            elif kind == "cartesian_path":
+                assert baselines.WAYPOINTS[0] <= len(msg["poses"]) <= baselines.WAYPOINTS[1]
+    assert kinds == {scenario_steps.TOPICS[t].kind for t in scenario_steps.TOPICS}  # every kind comes up
+    assert min(lengths) == 1 and max(lengths) == session.config.max_steps
+
+
+def test_a_uniform_pose_target_is_the_pose_of_a_configuration(session: Session) -> None:
+    rng = random.Random(5)
+    step = baselines._uniform_step(session, rng, "pose_target", [])
+    q = baselines._configuration(session, random.Random(5))
+    pose = session.reference.forward_kinematics(q)
+    assert [step["pose"]["position"][k] for k in "xyz"] == pytest.approx(list(pose.position))
+
+
+def test_the_papers_loop_changes_the_values_of_one_step_only(session: Session) -> None:
+    mutate = baselines._paper_mutate(session)
+    parents = corpus.make_seeds(session, 16, 7)
+    ctx = mutators.MutationContext(rng=random.Random(1), field_types={})
+    changed = 0
+    for i in range(200):
+        parent = parents[i % len(parents)].message
+        strategy = mutators.PAPER_STRATEGIES[i % len(mutators.PAPER_STRATEGIES)]
+        child, name = mutate(parent, ctx, strategy)
+        if name != f"seq_step:{strategy}":
+            continue  # the run loop drops a child of another mutator
+        topics = [s["topic"] for s in child["steps"]]
+        assert topics == [s["topic"] for s in parent["steps"]]  # the script's calls stay
+        differ = [a for a, b in zip(child["steps"], parent["steps"], strict=True) if a != b]
+        assert len(differ) == 1
+        changed += 1
+    assert changed > 100
+
+
+@pytest.mark.parametrize("engine", baselines.ENGINES)
+def test_each_baseline_runs_scenarios(engine: str, tmp_path: Path) -> None:
+    harness = baselines.run(engine, _config(), tmp_path, 1.0, 1)
+    assert harness.stats.execs > 0
+    assert harness.stats.malformed == 0
