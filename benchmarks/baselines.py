@@ -21,7 +21,8 @@
   configurations, settings uniform in the generator's ranges.
 
 Each evaluates inputs exactly like the engine (the same ``Harness.test_one_input``:
-filtering, oracle, confirmation, crash files, ``divergences.jsonl``/``stats.jsonl``),
+filtering, oracle, confirmation with the same time budget, crash files,
+``divergences.jsonl``/``stats.jsonl``),
 only without libFuzzer and without coverage features, and prints the same
 summary line, so ``benchmarks/bench_zoo.py`` reads every engine the same way.
 """
@@ -63,8 +64,12 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
         interesting_floats=tuple(session_values.interesting_values(session)),
     )
     recorded, digest = versions(), session.robot_digest()
+    evaluator = session.evaluator()
+    # the oracle's re-runs get the full engine's budget (half its default -timeout): without one,
+    # checking a scenario divergence of a slow target took 90 s of a 10-s trial
+    evaluator.check_seconds = campaign.check_seconds(int(campaign.DEFAULT_FLAGS["-timeout"]))
     return Harness(
-        evaluator=session.evaluator(),
+        evaluator=evaluator,
         store=ArtifactStore(artifacts),
         features=Features(enabled=False),
         context=ctx,

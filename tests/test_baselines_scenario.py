@@ -94,3 +94,12 @@ def test_each_baseline_runs_scenarios(engine: str, tmp_path: Path) -> None:
     harness = baselines.run(engine, _config(), tmp_path, 1.0, 1)
     assert harness.stats.execs > 0
     assert harness.stats.malformed == 0
+
+
+def test_the_baselines_oracle_has_the_full_engines_re_run_budget(session: Session, tmp_path: Path) -> None:
+    """Without it a slow target's scenario divergence took 90 s of re-runs in a 10-s trial."""
+    from fuzzer import campaign
+
+    harness = baselines._harness(session, tmp_path, corpus.make_seeds(session, 2, 1), 1)
+    budget = campaign.check_seconds(int(campaign.DEFAULT_FLAGS["-timeout"]))
+    assert budget is not None and harness.evaluator.check_seconds == budget
