@@ -47,7 +47,7 @@ bench-deep-full: setup
 	$(PY) -m benchmarks.bench_deep --mode full --write-md $$(test -f benchmarks/results/deep-full.jsonl && echo --resume)
 
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
-## (28-33 minutes on 2 cores before the baselines ran the scenario bugs; about 42 with them).
+## (41 minutes on 2 cores on 5821603, every baseline on every bug).
 bench-deep: setup
 	$(PY) -m benchmarks.bench_deep --mode short --write-md $$(test -f benchmarks/results/deep-short.jsonl && echo --resume)
 
