@@ -84,16 +84,15 @@ MODES = {
 """quick: CI-sized (about a minute on 2 cores). short: every deep bug against the baselines the
 goal names, 10 trials x 10 s (32 minutes on 2 cores for the first 12 deep bugs, 55 before
 trials stopped at their first detection; the three deep scenario bugs of 2026-11-27 add 60
-trials of at most 10 s, about 5 minutes; the baselines' 120 trials of the four scenario bugs,
-since 2026-11-29, about 9 more). full: 10 trials x 60 s, the old engine (``weights``) too: 900
-trials (690 for the first 12 bugs, about 2.7 hours on 2 cores at 4.2 trials a minute; the three
-deep scenario bugs add 90 trials that mostly run their whole minute, about 45 minutes; the
-baselines' 120 trials of the four scenario bugs about 40 more, estimated), run in pieces with
-the journal.
+trials of at most 10 s, about 5 minutes; with the baselines' 120 trials of the four scenario
+bugs, since 2026-11-29, all 750 trials took 41 minutes on 5821603). full: 10 trials x 60 s,
+the old engine (``weights``) too: 900 trials (690 for the first 12 bugs, about 2.7 hours on 2
+cores at 4.2 trials a minute; the three deep scenario bugs add 90 trials that mostly run their
+whole minute, about 45 minutes; the baselines' 120 trials of the four scenario bugs about 40
+more, estimated), run in pieces with the journal.
 zoo: the 22 shallow zoo bugs (``benchmarks.zoo.ZOO``) against the same baselines, 10 trials x
-10 s: 1,100 trials, 33 to 42 minutes on 2 cores (860 trials took 25 on 0586935 and 34 on an
-earlier, slower machine before the baselines ran the 8 scenario bugs; their 240 trials add
-about 8, estimated)."""
+10 s: 1,100 trials, 28 minutes on 2 cores on 2e15dd3 (before the baselines ran the 8 scenario
+bugs, 860 trials took 25 on 0586935 and 34 on an earlier, slower machine)."""
 
 
 def main(argv: list[str] | None = None) -> list[Run]:
