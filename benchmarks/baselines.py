@@ -80,7 +80,11 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
     )
 
 
-HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+def _header() -> dict[str, Any]:
+    """An empty std_msgs/Header (a new one per message: messages never share a dict)."""
+    return {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+
+
 SETTINGS = {
     "velocity_scaling": (0.05, 1.0),
     "acceleration_scaling": (0.05, 1.0),
@@ -118,18 +122,18 @@ def _uniform_step(session: Session, rng: random.Random, kind: str, remembered: l
     if kind == "joint_target":
         names = list(session.reference.joint_names)
         return {
-            "header": HEADER,
+            "header": _header(),
             "name": names,
             "position": _configuration(session, rng),
             "velocity": [],
             "effort": [],
         }
     if kind == "pose_target":
-        return {"header": HEADER, "pose": _pose(session, rng)}
+        return {"header": _header(), "pose": _pose(session, rng)}
     if kind == "position_target":
-        return {"header": HEADER, "point": _pose(session, rng)["position"]}
+        return {"header": _header(), "point": _pose(session, rng)["position"]}
     if kind == "cartesian_path":
-        return {"header": HEADER, "poses": [_pose(session, rng) for _ in range(rng.randint(*WAYPOINTS))]}
+        return {"header": _header(), "poses": [_pose(session, rng) for _ in range(rng.randint(*WAYPOINTS))]}
     if kind == "remember":
         remembered.append(rng.choice(REMEMBERED))
         return {"data": remembered[-1]}
@@ -155,7 +159,7 @@ def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
     if session.config.op == "scenario":
         return _uniform_scenario(session, rng, sequence)
     q = _configuration(session, rng)
-    header = HEADER
+    header = _header()
     if session.config.op == "ik":
         pose = session.reference.forward_kinematics(q)
         message = {
@@ -192,6 +196,7 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     if engine == "paper":
         mutate = _paper_mutate(session)
         prefix = f"{SEQ_STEP}:" if config.op == "scenario" else ""
+        accepted = {f"{prefix}{strategy}" for strategy in mutators.PAPER_STRATEGIES}
         for case in seeds:
             harness.test_one_input(case.encode())
         while time.monotonic() < deadline:
@@ -201,7 +206,7 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
             harness.context.rng = rng
             strategy = rng.choice(mutators.PAPER_STRATEGIES)
             message, name = mutate(parent.message, harness.context, strategy)
-            if name.removeprefix(prefix) in mutators.PAPER_STRATEGIES and name.startswith(prefix):
+            if name in accepted:  # a child of the paper's strategies, not of a fallback mutator
                 harness.test_one_input(parent.child(message, name).encode())
     elif engine == "hypothesis":
         batch = 0
