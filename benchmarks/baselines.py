@@ -160,6 +160,7 @@ def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
         return _uniform_scenario(session, rng, sequence)
     q = _configuration(session, rng)
     header = _header()
+    message: dict[str, Any]
     if session.config.op == "ik":
         pose = session.reference.forward_kinematics(q)
         message = {
