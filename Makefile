@@ -13,7 +13,7 @@ BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLis
 	constraints.txt \
 	$(MODULES)
 
-.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-deep-full bench-quick
+.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-deep-full bench-quick profile
 
 setup: $(STAMP)
 
@@ -55,6 +55,14 @@ bench-deep: setup
 bench-quick: setup
 	$(PY) -m benchmarks.bench_zoo --mode quick --restart
 	$(PY) -m benchmarks.bench_deep --mode quick --restart
+
+## Where a campaign's time goes (BENCHMARKS.md): a py-spy profile of one campaign, by part of the
+## engine. PROFILE_OP=fk|move|ik|scenario (default fk), PROFILE_SECONDS (default 30); pinned to
+## core 1 when the machine has two.
+PROFILE_OP ?= fk
+PROFILE_SECONDS ?= 30
+profile: setup
+	$$(test "$$(nproc)" -gt 1 && echo taskset -c 1) $(PY) -m benchmarks.profile --op $(PROFILE_OP) --seconds $(PROFILE_SECONDS)
 
 lint: setup
 	$(PY) -m ruff check . && $(PY) -m ruff format --check . && $(PY) -m mypy robot_api native python_impl fuzzer adapters benchmarks

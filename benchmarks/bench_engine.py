@@ -35,18 +35,23 @@ SUMMARY = re.compile(r"executions: (\d+) in ([0-9.]+) s")
 PAPER_RUNS = 15246
 
 
+def campaign_command(tmp: str, args: list[str]) -> list[str]:
+    """``fuzz_diff.py`` with a fresh corpus and artifacts folder in ``tmp``, no progress bar, and ``args``."""
+    return [
+        sys.executable,
+        str(ROOT / "fuzz_diff.py"),
+        f"{tmp}/corpus",
+        f"--artifacts={tmp}/artifacts",
+        "--no-progress",
+        *args,
+    ]
+
+
 def run(args: list[str]) -> tuple[int, float, float, int]:
     """(executions, fuzzing seconds, wall seconds, sweep rows compared) of one fuzz_diff.py run."""
     compared = 0
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [
-            sys.executable,
-            str(ROOT / "fuzz_diff.py"),
-            f"{tmp}/corpus",
-            f"--artifacts={tmp}/artifacts",
-            "--no-progress",
-            *args,
-        ]
+        cmd = campaign_command(tmp, args)
         start = time.monotonic()
         done = subprocess.run(
             cmd,
