@@ -5,8 +5,9 @@
 
 Runs one campaign (default targets native vs python, default robot, a fresh corpus, as
 ``benchmarks.bench_engine`` does) under ``py-spy record --format raw`` at ``--rate`` samples a
-second, keeps the raw stacks (``--out``), and prints the share of samples per part of the
-engine as a Markdown table: the table "Where the time goes" of BENCHMARKS.md.
+second, keeps the raw stacks (``--out``, default ``build/profiles/``), and prints the share of
+samples per part of the engine as a Markdown table: the table "Where the time goes" of
+BENCHMARKS.md.
 
 A sample counts in the first part found walking its stack from the leaf up (:data:`PARTS`, by
 file): numpy and standard library frames count for the repository code that called them,
@@ -128,7 +129,9 @@ def py_spy() -> str:
 
 
 def record(op: str, seconds: float, seed: int, rate: int, out: Path) -> None:
-    """Profile one ``--op op`` campaign of ``seconds`` with ``-seed=seed`` into ``out`` (raw)."""
+    """Profile one ``--op op`` campaign of ``seconds`` with ``-seed=seed`` into ``out`` (raw; an
+    older file there is removed first, so a failed run never leaves it to be read as this one)."""
+    out.unlink(missing_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         campaign = campaign_command(tmp, [f"--op={op}", f"-max_total_time={seconds:g}", f"-seed={seed}"])
         cmd = [
@@ -144,7 +147,7 @@ def record(op: str, seconds: float, seed: int, rate: int, out: Path) -> None:
             *campaign,
         ]
         done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
-    if not out.is_file():
+    if not out.is_file() or out.stat().st_size == 0:
         raise SystemExit(f"profile: py-spy wrote no profile (exit {done.returncode}):\n{done.stderr[-2000:]}")
 
 
@@ -156,7 +159,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seconds", type=float, default=30.0, help="campaign length (s)")
     parser.add_argument("--seed", type=int, default=1, help="the campaign's -seed")
     parser.add_argument("--rate", type=int, default=200, help="samples a second")
-    parser.add_argument("--out", type=Path, help="where the raw profile goes (default: a file in /tmp)")
+    parser.add_argument("--out", type=Path, help="where the raw profile goes (default: build/profiles/)")
     parser.add_argument("--from", dest="source", type=Path, help="tabulate this raw profile instead")
     args = parser.parse_args(argv)
     if args.seconds <= 0 or args.rate <= 0:
@@ -164,7 +167,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.source is not None:
         path, title = args.source, args.source.name
     else:
-        path = args.out or Path(tempfile.gettempdir()) / f"profile-{args.op}-seed{args.seed}.txt"
+        path = args.out or ROOT / "build" / "profiles" / f"profile-{args.op}-seed{args.seed}.txt"
+        path.parent.mkdir(parents=True, exist_ok=True)
         title = f"{args.op}, {args.seconds:g} s, seed {args.seed}"
         record(args.op, args.seconds, args.seed, args.rate, path)
         print(f"raw profile: {path}", file=sys.stderr)

@@ -90,6 +90,17 @@ def test_a_broken_profile_is_named_not_a_traceback(
     assert "| twin target (python_impl) | 100.0 |" in capsys.readouterr().out
 
 
+def test_a_failed_recording_is_an_error_not_an_old_profile(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "fk.txt"
+    out.write_text(";".join(stack()) + " 9\n")  # a profile of an earlier run
+    monkeypatch.setattr(profile, "py_spy", lambda: shutil.which("false") or "/bin/false")
+    with pytest.raises(SystemExit, match="py-spy wrote no profile"):
+        profile.record("fk", 1.0, 1, 200, out)
+    assert not out.exists()
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(
     shutil.which("py-spy") is None and not (Path(sys.executable).parent / "py-spy").is_file(),
