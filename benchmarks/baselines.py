@@ -14,7 +14,7 @@
   ``fuzzer.input.mapping.scenario_strategy``), batch after batch, never mutating.
 * ``uniform``: uniform random joint values inside the limits (continuous joints
   in (-pi, pi]); for IK, the pose of a uniform random configuration. For
-  ``--op scenario``, scripts drawn the same way (:func:`_uniform_scenario`): a
+  ``--op scenario``, scripts drawn the same way (``fuzzer.generation.scripts``): a
   uniform number of steps, each kind drawn with the generator's weights
   (``fuzzer.input.mapping.SCENARIO_WEIGHTS``), joint targets uniform inside the
   limits, pose and position targets and Cartesian waypoints the poses of uniform
@@ -30,7 +30,6 @@ summary line, so ``benchmarks/bench_zoo.py`` reads every engine the same way.
 from __future__ import annotations
 
 import argparse
-import math
 import random
 import time
 from collections.abc import Callable
@@ -42,14 +41,12 @@ from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
-from fuzzer.generation import corpus
+from fuzzer.generation import corpus, scripts
 from fuzzer.harness import Harness
-from fuzzer.input.mapping import REMEMBERED, SCENARIO_WEIGHTS
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators, session_values
 from fuzzer.mutation.mutators import MutationContext
 from fuzzer.scenario.mutate import SEQ_STEP
-from fuzzer.scenario.steps import KINDS
 from fuzzer.selection.guidance import Features
 
 ENGINES = ("paper", "hypothesis", "uniform")
@@ -80,86 +77,13 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
     )
 
 
-def _header() -> dict[str, Any]:
-    """An empty std_msgs/Header (a new one per message: messages never share a dict)."""
-    return {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
-
-
-SETTINGS = {
-    "velocity_scaling": (0.05, 1.0),
-    "acceleration_scaling": (0.05, 1.0),
-    "goal_tolerance": (0.0, 1e-2),
-    "eef_step": (0.01, 0.1),
-    "jump_threshold": (0.0, 10.0),
-}
-"""A uniform script's settings: each uniform in the range of ``scenario_strategy``'s values (its
-discrete choices, such as the goal tolerance's five values, spread over their range)."""
-WAYPOINTS = (1, 3)
-"""A uniform script's Cartesian paths have this many waypoints (``scenario_strategy``'s range)."""
-
-
-def _configuration(session: Session, rng: random.Random) -> list[float]:
-    """Uniform joint values inside the limits (rad, m), shape (n_joints,); continuous in (-pi, pi]."""
-    q = []
-    for lim in session.reference.joint_limits:
-        lo = -math.pi if math.isinf(lim.lower) else lim.lower
-        hi = math.pi if math.isinf(lim.upper) else lim.upper
-        q.append(rng.uniform(lo, hi))
-    return q
-
-
-def _pose(session: Session, rng: random.Random) -> dict[str, dict[str, float]]:
-    """The tip's pose (m, unit quaternion) at a uniform configuration, as a geometry_msgs/Pose."""
-    pose = session.reference.forward_kinematics(_configuration(session, rng))
-    return {
-        "position": dict(zip("xyz", pose.position, strict=True)),
-        "orientation": dict(zip("xyzw", pose.orientation, strict=True)),
-    }
-
-
-def _uniform_step(session: Session, rng: random.Random, kind: str, remembered: list[str]) -> dict[str, Any]:
-    """One step's message of a uniform script (``remembered``: the names stored so far)."""
-    if kind == "joint_target":
-        names = list(session.reference.joint_names)
-        return {
-            "header": _header(),
-            "name": names,
-            "position": _configuration(session, rng),
-            "velocity": [],
-            "effort": [],
-        }
-    if kind == "pose_target":
-        return {"header": _header(), "pose": _pose(session, rng)}
-    if kind == "position_target":
-        return {"header": _header(), "point": _pose(session, rng)["position"]}
-    if kind == "cartesian_path":
-        return {"header": _header(), "poses": [_pose(session, rng) for _ in range(rng.randint(*WAYPOINTS))]}
-    if kind == "remember":
-        remembered.append(rng.choice(REMEMBERED))
-        return {"data": remembered[-1]}
-    if kind == "named_target":
-        return {"data": rng.choice(["home", *remembered])}
-    if kind in SETTINGS:
-        return {"data": rng.uniform(*SETTINGS[kind])}
-    return {}  # std_msgs/Empty: /plan, /execute, /go, /stop, /clear_pose_targets
-
-
-def _uniform_scenario(session: Session, rng: random.Random, sequence: int) -> TestCase:
-    """A uniform script of 1..max_steps steps (the module's docstring)."""
-    kinds, weights = list(SCENARIO_WEIGHTS), list(SCENARIO_WEIGHTS.values())
-    remembered: list[str] = []
-    steps = []
-    for _ in range(rng.randint(1, session.config.max_steps)):
-        kind = rng.choices(kinds, weights)[0]
-        steps.append({"topic": KINDS[kind], "msg": _uniform_step(session, rng, kind, remembered)})
-    return TestCase(session.config.message_type, {"steps": steps}, sequence, "uniform")
-
-
 def _uniform(session: Session, rng: random.Random, sequence: int) -> TestCase:
     if session.config.op == "scenario":
-        return _uniform_scenario(session, rng, sequence)
-    q = _configuration(session, rng)
-    header = _header()
+        return TestCase(
+            session.config.message_type, scripts.uniform_script(session, rng), sequence, "uniform"
+        )
+    q = scripts.configuration(session, rng)
+    header = scripts.header()
     message: dict[str, Any]
     if session.config.op == "ik":
         pose = session.reference.forward_kinematics(q)

@@ -172,9 +172,12 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
     if dry is not None:
         pids = ", ".join(map(str, dry.pids))
-        reporting.info(
-            f"dry run: processes {pids} evaluate probes, uniform inputs and the seeds before libFuzzer"
+        what = (
+            "MoveIt's tutorial scripts and uniform scripts"
+            if config.op == "scenario"
+            else "probes, uniform inputs and the seeds"
         )
+        reporting.info(f"dry run: processes {pids} evaluate {what} before libFuzzer")
 
     import atheris
 

@@ -2,7 +2,8 @@
 libFuzzer starts (as AFL's dry run of its inputs and its deterministic stage), in two stages
 (``Stages``): before the Hypothesis seeds exist, a pose campaign's orientation and reach probes,
 uniform random sweeps (``fk``) or configurations (``move``), aligned configurations and the
-boundary probes; once they exist, the seeds and the rest of the uniform work.
+boundary probes, or a scenario campaign's tutorial scripts and uniform scripts; once they exist,
+the seeds and the rest of the uniform work (not for ``scenario``).
 
 A campaign's first inputs otherwise wait for what only a libFuzzer-based engine pays: the
 space-filling seeds, importing ``scipy.stats`` for them (0.55 s on one CPU) and Atheris, the
@@ -42,22 +43,39 @@ from fuzzer.generation.corpus import (
     orientation_cases,
     reach_cases,
     space_filling_count,
+    tutorial_seeds,
     uniform_cases,
+    uniform_scripts,
 )
 from fuzzer.generation.sweep import Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
 from fuzzer.processes import DryRun
+from fuzzer.scenario.fresh import GO
 from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import SPACEFILL
 
-DRY_RUN_OPS = frozenset({"fk", "move", "ik"})
-"""Ops whose seeds are run twice: ``fk`` and ``move`` seeds cost well under a millisecond each;
-an ``ik`` seed about 5 ms, but an IK campaign's start-up imports ``scipy.stats`` (0.55 s, for its
+DRY_RUN_OPS = frozenset({"fk", "move", "ik", "scenario"})
+"""Ops with a dry run: ``fk`` and ``move`` seeds cost well under a millisecond each; an ``ik``
+seed about 5 ms, but an IK campaign's start-up imports ``scipy.stats`` (0.55 s, for its
 space-filling seed) after the fork, so its dry run reports what the seeds show that much sooner
-(BENCHMARKS.md, "Orientation probes, and the baselines' scipy.stats import"). Not ``scenario``:
-a scenario seed costs 10 to 100 times more than an ``fk`` one."""
+(BENCHMARKS.md, "Orientation probes, and the baselines' scipy.stats import"). A ``scenario``
+dry run has a first stage only (``SECOND_STAGE_OPS``): MoveIt's tutorial scripts and
+``SCRIPTS`` uniform scripts."""
+
+SECOND_STAGE_OPS = DRY_RUN_OPS - {"scenario"}
+"""Ops whose dry run evaluates the generated seeds once more (its second stage). Not
+``scenario``: a scenario seed costs 10 to 100 times more than an ``fk`` one, and libFuzzer runs
+every seed anyway."""
+
+SCRIPTS = 32
+"""Uniform random scripts (``corpus.uniform_scripts``, the uniform baseline's) a ``scenario``
+dry run evaluates after MoveIt's tutorial scripts: about 5 ms each (median; 12 ms mean, a
+Cartesian path costs more) on the default robot, so the first stage takes about 0.5 s of one
+CPU, confirmations included. A scenario campaign's own first input otherwise waits for its
+seeds, Atheris, the instrumentation and libFuzzer's start (about 0.8 s from the process start
+against 0.35 s; BENCHMARKS.md, "A dry run for scenarios")."""
 
 BOUNDARY_ROUNDS = 2
 """Rounds of boundary probes the dry run's first stage evaluates (``fuzzer.generation.boundary``:
@@ -201,10 +219,11 @@ class Stages:
     a pose campaign's orientation and reach probes, the first ``EARLY`` uniform sweeps (``fk``)
     or ``LEAD`` configurations (``move``), ``ALIGNED`` aligned configurations, the boundary
     probes, ``LITERALS`` configurations at the targets' compared numbers, then the rest of
-    ``EARLY``'s configurations.
-    The second starts once they exist: the seeds, then the rest of the uniform work
-    (``SWEEPS``, ``UNIFORM``). On one CPU the campaign waits for each child before it goes on
-    (``launch``); on two, the children run while the campaign starts up.
+    ``EARLY``'s configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform
+    scripts. The second starts once they exist: the seeds, then the rest of the uniform work
+    (``SWEEPS``, ``UNIFORM``); a scenario has none (``SECOND_STAGE_OPS``). On one CPU the
+    campaign waits for each child before it goes on (``launch``); on two, the children run
+    while the campaign starts up.
 
     Parameters
     ----------
@@ -233,8 +252,11 @@ class Stages:
     _literal_at: int = 0
 
     def _base(self) -> list[TestCase]:
-        """The message a sweep's rows go into: the zero message of the campaign's type."""
+        """The Harness's seed: the message a sweep's rows go into, the zero message of the
+        campaign's type (a scenario's: one ``/go``; a scenario has no registry type of its own)."""
         msg_type = self.session.config.message_type
+        if self.session.config.op == "scenario":
+            return [TestCase(msg_type, {"steps": [dict(GO)]}, 0, SPACEFILL)]
         return [TestCase(msg_type, self.session.registry.default(msg_type), 0, SPACEFILL)]
 
     def first_cases(self) -> list[TestCase]:
@@ -243,6 +265,11 @@ class Stages:
         ``EARLY`` uniform configurations."""
         session, wanted = self.session, self.wanted
         op = session.config.op
+        if op == "scenario":
+            tutorials = tutorial_seeds(session, self.seed, wanted)
+            scripts = uniform_scripts(session, SCRIPTS, self.seed + SWEEP_SEED, wanted + len(tutorials))
+            self._literal_at = self._first_count = len(tutorials) + len(scripts)
+            return tutorials + scripts
         orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
         probes = [] if orientation else boundary_cases(session, BOUNDARY_ROUNDS, wanted)
         count = min(EARLY.get(op, 0), UNIFORM.get(op, 0))
@@ -290,7 +317,10 @@ class Stages:
         self._launch(work)
 
     def second(self, seeds: list[TestCase]) -> None:
-        """Start the second stage, with the campaign's generated ``seeds``."""
+        """Start the second stage, with the campaign's generated ``seeds`` (none for an op
+        outside ``SECOND_STAGE_OPS``)."""
+        if self.session.config.op not in SECOND_STAGE_OPS:
+            return
         rest = SWEEPS - min(EARLY.get(self.session.config.op, 0), SWEEPS)
 
         def work() -> None:

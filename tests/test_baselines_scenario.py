@@ -13,6 +13,7 @@ from benchmarks import baselines
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
+from fuzzer.generation import scripts as uniform
 from fuzzer.input.mapping import REMEMBERED
 from fuzzer.mutation import mutators
 from fuzzer.scenario import steps as scenario_steps
@@ -53,19 +54,19 @@ def test_uniform_scripts_are_valid_and_uniform_inside_the_limits(session: Sessio
                 remembered.append(msg["data"])
             elif kind == "named_target":
                 assert msg["data"] in remembered  # home, or a name stored earlier in the script
-            elif kind in baselines.SETTINGS:
-                low, high = baselines.SETTINGS[kind]
+            elif kind in uniform.SETTINGS:
+                low, high = uniform.SETTINGS[kind]
                 assert low <= msg["data"] <= high
             elif kind == "cartesian_path":
-                assert baselines.WAYPOINTS[0] <= len(msg["poses"]) <= baselines.WAYPOINTS[1]
+                assert uniform.WAYPOINTS[0] <= len(msg["poses"]) <= uniform.WAYPOINTS[1]
     assert kinds == {scenario_steps.TOPICS[t].kind for t in scenario_steps.TOPICS}  # every kind comes up
     assert min(lengths) == 1 and max(lengths) == session.config.max_steps
 
 
 def test_a_uniform_pose_target_is_the_pose_of_a_configuration(session: Session) -> None:
     rng = random.Random(5)
-    step = baselines._uniform_step(session, rng, "pose_target", [])
-    q = baselines._configuration(session, random.Random(5))
+    step = uniform.uniform_step(session, rng, "pose_target", [])
+    q = uniform.configuration(session, random.Random(5))
     pose = session.reference.forward_kinematics(q)
     assert [step["pose"]["position"][k] for k in "xyz"] == pytest.approx(list(pose.position))
 

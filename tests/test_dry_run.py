@@ -37,7 +37,7 @@ def _records(path: Path) -> list[dict[str, Any]]:
         ("fk", "inprocess", "rrosfuzz", False, False, True),
         ("move", "inprocess", "rrosfuzz", False, False, True),
         ("ik", "inprocess", "rrosfuzz", False, False, True),  # its start-up imports scipy after the fork
-        ("scenario", "inprocess", "rrosfuzz", False, False, False),
+        ("scenario", "inprocess", "rrosfuzz", False, False, True),  # a first stage of scripts
         ("move", "ros", "rrosfuzz", False, False, False),
         ("move", "inprocess", "libfuzzer", False, False, False),  # the baselines keep libFuzzer's start
         ("move", "inprocess", "weights", False, False, False),

@@ -5,19 +5,24 @@ made without ``scipy.stats``, most of them before the seeds exist (``Stages``)."
 from __future__ import annotations
 
 import json
+import random
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fuzzer import dry_run
+from fuzzer.artifacts.divlog import CampaignLog
+from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.boundary import REACH_FACTOR, beyond_reach
-from fuzzer.generation.corpus import make_seeds, orientation_cases, reach_cases, uniform_cases
+from fuzzer.generation.corpus import make_seeds, orientation_cases, reach_cases, tutorial_seeds, uniform_cases
+from fuzzer.generation.scripts import uniform_script
 from fuzzer.generation.spacefill import Uniform
 from fuzzer.generation.sweep import ROWS, Sweep
 from fuzzer.harness import Harness
-from fuzzer.input.testcase import decode
+from fuzzer.input.testcase import TestCase, decode
+from fuzzer.scenario import steps as scenario_steps
 from fuzzer.selection.state import ALIGNED, BOUNDARY, SPACEFILL, UNIFORM
 from tests.support import python
 from tests.test_harness import make_harness
@@ -165,6 +170,50 @@ def test_fk_and_ik_dry_runs_have_no_uniform_configurations() -> None:
     assert ik.second_cases(seeds) == seeds
     assert uniform_cases(ik.session, 8, 1) == [], "a pose would cost an FK each"
     assert uniform_cases(Session.open(RunConfig(op="scenario")), 8, 1) == []
+
+
+def test_a_scenario_dry_run_is_the_tutorials_then_uniform_scripts_in_its_first_stage() -> None:
+    stages = _stages("scenario", wanted=8)
+    session = stages.session
+    first = stages.first_cases()
+    tutorials = tutorial_seeds(session, 1, 8)
+    assert tutorials and first[: len(tutorials)] == tutorials, (
+        "the campaign's own tutorial seeds, as numbered there"
+    )
+    scripts = first[len(tutorials) :]
+    assert len(scripts) == dry_run.SCRIPTS
+    assert [c.sequence for c in scripts] == list(
+        range(8 + len(tutorials), 8 + len(tutorials) + dry_run.SCRIPTS)
+    )
+    rng = random.Random(1 + dry_run.SWEEP_SEED)
+    assert [c.message for c in scripts] == [uniform_script(session, rng) for _ in scripts], (
+        "the uniform baseline's"
+    )
+    for case in scripts:
+        assert case.origin == SPACEFILL and case.lineage == (UNIFORM,)
+        scenario_steps.validate(case.message, session.registry, session.config.max_steps)
+    assert stages.literal_cases() == []
+    assert [c.message for c in _stages("scenario", seed=2).first_cases()] != [c.message for c in first]
+
+
+def test_a_scenario_dry_run_evaluates_its_first_stage_and_has_no_second(tmp_path: Path) -> None:
+    session = Session.open(RunConfig(op="scenario"))
+    store, log = ArtifactStore(tmp_path), CampaignLog(tmp_path)
+    names = tuple(session.reference.joint_names)
+    made: list[Harness] = []
+
+    def harness(base: list[TestCase], sweep: Sweep | None) -> Harness:
+        made.append(dry_run.harness(session.evaluator(), store, log, lambda *_: {}, base, names, sweep))
+        return made[-1]
+
+    stages = dry_run.Stages(session, "rrosfuzz", 1, 8, 0, harness)
+    stages._launch = lambda work: work()  # type: ignore[method-assign]  # in this process, no fork
+    stages.first()
+    assert len(made) == 1 and made[0].sweep is None
+    tutorials = len(tutorial_seeds(session, 1, 8))
+    assert made[0].stats.executed_by_strategy == {"tutorial": tutorials, UNIFORM: dry_run.SCRIPTS}
+    stages.second(make_seeds(session, 2, 1))
+    assert len(made) == 1, "libFuzzer runs the seeds; a scenario seed is too dear to run twice"
 
 
 def test_beyond_reach_moves_a_pose_along_its_direction_and_leaves_other_types_alone() -> None:

@@ -158,6 +158,25 @@ def uniform_cases(session: Session, n: int, seed: int, first: int = 0) -> list[T
     return configuration_cases(session, Uniform(facts.lower, facts.upper, seed=seed).block(n), UNIFORM, first)
 
 
+def uniform_scripts(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
+    """``n`` uniform random scripts (``fuzzer.generation.scripts``, the uniform baseline's), origin
+    ``spacefill`` and lineage ``spacefill:uniform``, numbered from ``first``, drawn with ``seed``.
+    None for the other ops or a chain without joints."""
+    import random
+
+    from fuzzer.generation.scripts import uniform_script
+    from fuzzer.selection.state import SPACEFILL, UNIFORM
+
+    config = session.config
+    if n <= 0 or config.op != "scenario" or not session.reference.joint_limits:
+        return []
+    rng = random.Random(seed)
+    return [
+        TestCase(config.message_type, uniform_script(session, rng), first + i, SPACEFILL, (UNIFORM,), 1)
+        for i in range(n)
+    ]
+
+
 def aligned_cases(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
     """``configuration_cases`` of ``n`` aligned configurations (``spacefill.Aligned``: each
     joint at a multiple of pi/2 or a limit), lineage ``aligned``."""
@@ -174,12 +193,13 @@ def aligned_cases(session: Session, n: int, seed: int, first: int = 0) -> list[T
 def literal_cases(session: Session, n: int, first: int = 0) -> list[TestCase]:
     """``configuration_cases`` of up to ``n`` configurations with joints at the numbers the
     Python targets compare against (``fuzzer.generation.literals``; their modules' source is
-    parsed, never run), lineage ``spacefill:literal``."""
+    parsed, never run), lineage ``spacefill:literal``. None for a scenario (as
+    ``configuration_cases``), without reading a source."""
     from fuzzer.execution.targets import module_of
     from fuzzer.generation.literals import literal_configurations, module_numbers
     from fuzzer.selection.state import LITERAL
 
-    if n <= 0 or not session.reference.joint_limits:
+    if n <= 0 or session.config.op == "scenario" or not session.reference.joint_limits:
         return []
     modules = [module_of(spec) for spec in session.config.targets if spec != "native"]
     facts = session.facts()

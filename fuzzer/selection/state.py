@@ -24,7 +24,8 @@ BOUNDARY = f"{SPACEFILL}:boundary"
 the ``spacefill`` arm made it."""
 
 UNIFORM = f"{SPACEFILL}:uniform"
-"""The lineage name of a dry run's uniform random configuration (``corpus.uniform_cases``)."""
+"""The lineage name of a dry run's uniform random configuration (``corpus.uniform_cases``) or
+script (``corpus.uniform_scripts``)."""
 
 LITERAL = f"{SPACEFILL}:literal"
 """The lineage name of a dry run's configuration with a joint at a number a target compares
