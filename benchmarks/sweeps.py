@@ -15,9 +15,11 @@ import os
 import queue
 import random
 import shutil
+import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -72,11 +74,15 @@ class Progress:
         The sweep's trials.
     pace : float
         Wall seconds per trial of this run (trials at a time included).
+    interrupted : bool
+        Stopped by Ctrl-C (``KeyboardInterrupt``): no trial started after it, those running
+        finished and are in ``runs``.
     """
 
     runs: list[Run]
     total: int
     pace: float
+    interrupted: bool = False
 
     @property
     def complete(self) -> bool:
@@ -87,8 +93,9 @@ class Progress:
         is the tool's option that tabulates a journal so far."""
         # misses cost the whole budget and come in a seeded random order: a rough figure
         left = self.total - len(self.runs)
+        why = "interrupted" if self.interrupted or minutes is None else f"stopped after {minutes:g} minutes"
         return (
-            f"stopped after {minutes:g} minutes: {len(self.runs)} of {self.total} trials done, "
+            f"{why}: {len(self.runs)} of {self.total} trials done, "
             f"in {path}; the same command with --resume goes on (about {left * self.pace / 3600:.1f} "
             f"hours at this run's pace; {tabulate} {path} tabulates them so far)"
         )
@@ -159,8 +166,10 @@ def run_sweep(
     for cpu in pins:
         free.put(cpu)
 
+    interrupted = threading.Event()
+
     def one(job: Job) -> Run | None:
-        if deadline is not None and time.monotonic() >= deadline:
+        if interrupted.is_set() or (deadline is not None and time.monotonic() >= deadline):
             return None
         cpu = free.get()  # one per worker: never empty when a worker asks
         try:
@@ -170,13 +179,22 @@ def run_sweep(
         book.add(run)
         return run
 
+    pool = ThreadPoolExecutor(max_workers=max(1, workers))
+    futures: list[Future[Run | None]] = []
     try:
-        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            new = [run for run in pool.map(one, todo) if run is not None]
+        futures += (pool.submit(one, job) for job in todo)
+        for future in futures:
+            future.result()
+    except KeyboardInterrupt:  # Ctrl-C: start no other trial; those running finish and are kept
+        interrupted.set()
+        print("interrupted: the trials running finish and stay in the journal", file=sys.stderr, flush=True)
     finally:
+        pool.shutdown(wait=True, cancel_futures=True)
         book.close()
+    ended = [f.result() for f in futures if f.done() and not f.cancelled()]
+    new = [run for run in ended if run is not None]
     runs = sorted([*held.values(), *new], key=lambda r: order[run_key(r)])
-    return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)))
+    return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)), interrupted.is_set())
 
 
 def sweep_in_journal(
@@ -204,4 +222,6 @@ def sweep_in_journal(
     progress = run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle)
     if not progress.complete:
         print(progress.stopped(path, args.stop_after, tabulate))
+    if progress.interrupted:
+        raise SystemExit(130)  # as a shell reports a process that SIGINT ended
     return progress

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import _thread
+import argparse
 import json
 import os
 import shutil
@@ -366,3 +368,47 @@ def test_each_trial_running_at_a_time_has_a_cpu_of_its_own(
         ).stdout
         assert shown.strip() == str([mine[-1]])
     assert sweeps.pinned(["x"], None) == ["x"]
+
+
+def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C during a sweep (``KeyboardInterrupt`` in the main thread): the trial running ends
+    and is kept, no other starts, and the sweep says how to go on, with a shell's status 130
+    rather than a traceback (it used to wait for every queued trial: hours)."""
+    started: list[int] = []
+
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        bug, engine, seed = job
+        started.append(seed)
+        if seed == 1:
+            _thread.interrupt_main()  # as Ctrl-C would, while the main thread waits for the trials
+            time.sleep(0.2)
+        return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
+
+    bug = bench_deep.BUGS["narrow_band"]
+    jobs = [(bug, "full", seed) for seed in range(6)]
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full",), 6, 1.0, "c" * 40)
+    path = tmp_path / "j.jsonl"
+    book, _ = journal.open_sweep(path, sweep, tmp_path, resume=False, restart=False)
+    progress = sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    assert progress.interrupted and not progress.complete
+    assert started == [0, 1] and [r.seed for r in progress.runs] == [0, 1]
+    assert [r.seed for r in journal.read(path)[1]] == [0, 1], "both finished trials are in the journal"
+    assert progress.stopped(path, None, "--from-json").startswith("interrupted: 2 of 6 trials done")
+
+    monkeypatch.setattr(journal, "same_code", lambda root, commit: commit == "c" * 40)
+    args = SimpleNamespace(resume=True, restart=False, jobs=1, stop_after=None)
+    again: list[int] = []
+
+    def stop_at_once(job: sweeps.Job, cpu: int | None) -> Run:
+        again.append(job[2])
+        _thread.interrupt_main()
+        time.sleep(0.2)
+        return trial(job, cpu)
+
+    with pytest.raises(SystemExit) as stopped:
+        sweeps.sweep_in_journal(
+            argparse.ArgumentParser(), args, path, sweep, tmp_path, jobs, stop_at_once, "-"
+        )
+    assert stopped.value.code == 130 and again == [2], "resumed where it stopped, then interrupted again"
