@@ -33,9 +33,8 @@ from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 
-from benchmarks.bench_engine import campaign_command
+from benchmarks.bench_engine import ROOT, campaign_command
 
-ROOT = Path(__file__).resolve().parents[1]
 SWEEPS = "batched sweeps"
 REST = "libFuzzer, Atheris and the rest"
 PARTS: tuple[tuple[str, tuple[str, ...]], ...] = (
@@ -86,7 +85,7 @@ def part_of_frame(frame: str) -> str | None:
 
 def part_of_stack(frames: list[str]) -> str:
     """The part a sample counts in (its frames root first, as py-spy writes them)."""
-    if any(FRAME.match(f) and f.startswith("run_sweep ") and "fuzzer/harness.py" in f for f in frames):
+    if any(f.startswith("run_sweep (") and "fuzzer/harness.py" in f for f in frames):
         return SWEEPS
     for frame in reversed(frames):
         part = part_of_frame(frame)
@@ -119,10 +118,15 @@ def markdown(counts: Counter[str], title: str) -> str:
     return "\n".join(rows)
 
 
-def py_spy() -> str:
-    """The py-spy executable beside this Python, else on PATH."""
+def find_py_spy() -> str | None:
+    """The py-spy executable beside this Python, else on PATH; None when there is none."""
     beside = Path(sys.executable).parent / "py-spy"
-    found = str(beside) if beside.is_file() else shutil.which("py-spy")
+    return str(beside) if beside.is_file() else shutil.which("py-spy")
+
+
+def py_spy() -> str:
+    """:func:`find_py_spy`, or exit naming how to install it."""
+    found = find_py_spy()
     if found is None:
         raise SystemExit("profile: py-spy is not installed: `make setup` installs it (the test extra)")
     return found

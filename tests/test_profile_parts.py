@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
@@ -102,10 +101,7 @@ def test_a_failed_recording_is_an_error_not_an_old_profile(
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(
-    shutil.which("py-spy") is None and not (Path(sys.executable).parent / "py-spy").is_file(),
-    reason="py-spy not installed (make setup installs it)",
-)
+@pytest.mark.skipif(profile.find_py_spy() is None, reason="py-spy not installed (make setup installs it)")
 def test_a_real_campaign_profile_has_the_targets_and_the_engine(tmp_path: Path) -> None:
     out = tmp_path / "fk.txt"
     profile.record("fk", 3.0, 1, 200, out)
