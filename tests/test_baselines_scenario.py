@@ -17,6 +17,7 @@ from fuzzer.generation import scripts as uniform
 from fuzzer.input.mapping import REMEMBERED
 from fuzzer.mutation import mutators
 from fuzzer.scenario import steps as scenario_steps
+from tests.support import python
 
 
 def _config() -> RunConfig:
@@ -104,3 +105,41 @@ def test_the_baselines_oracle_has_the_full_engines_re_run_budget(session: Sessio
     harness = baselines._harness(session, tmp_path, corpus.make_seeds(session, 2, 1), 1)
     budget = campaign.check_seconds(int(campaign.DEFAULT_FLAGS["-timeout"]))
     assert budget is not None and harness.evaluator.check_seconds == budget
+
+
+@pytest.mark.parametrize("op", ["scenario", "move"])
+def test_uniform_sampling_and_hypothesis_alone_start_with_their_own_first_input(
+    op: str, tmp_path: Path
+) -> None:
+    """Neither waits for 32 Hypothesis seeds it would never evaluate (about 0.2 s of one CPU;
+    for uniform sampling, Hypothesis' import too): the start-up the tables compare is each
+    engine's own. Uniform sampling's inputs are the same stream as before, from its first."""
+    program = f"""
+import random, sys, tempfile
+from pathlib import Path
+from benchmarks import baselines
+from fuzzer.execution.session import RunConfig, Session
+from fuzzer.execution.tolerance import default_tolerance
+from fuzzer.harness import Harness
+seen = []
+def first(self, data):
+    seen.append((data, "hypothesis" in sys.modules))
+    if len(seen) == 2:
+        raise SystemExit(0)
+Harness.test_one_input = first
+config = RunConfig(op={op!r}, targets=("native", "python"), tolerance=default_tolerance({op!r}))
+try:
+    baselines.run("uniform", config, Path(tempfile.mkdtemp()), 5.0, 7)
+except SystemExit:
+    pass
+session, rng = Session.open(config), random.Random(7)
+expected = [baselines._uniform(session, rng, n).encode() for n in range(2)]
+print([data for data, _ in seen] == expected, seen[0][1])
+"""
+    done = python(program)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["True", "False"], "the same inputs, and no Hypothesis before the first"
+    config = RunConfig(op=op, targets=("native", "python"), tolerance=default_tolerance(op))
+    harness = baselines.run("hypothesis", config, tmp_path, 0.3, 2)
+    batch = corpus.make_seeds(Session.open(config), baselines.HYPOTHESIS_BATCH, 2 * 100_003)
+    assert harness.seeds == batch, "its first batch is its Harness's seed, not 32 more"
