@@ -65,7 +65,7 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
         else session_values.field_types(session, session.config.message_type),
         interesting_floats=tuple(session_values.interesting_values(session)),
     )
-    recorded, digest = versions(), session.robot_digest()
+    digest = session.robot_digest()
     evaluator = session.evaluator()
     # the oracle's re-runs get the full engine's budget (half its default -timeout): without one,
     # checking a scenario divergence of a slow target took 90 s of a 10-s trial
@@ -75,7 +75,7 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
         store=ArtifactStore(artifacts),
         features=Features(enabled=False),
         context=ctx,
-        sidecar=lambda c, d, e: campaign.build_sidecar(session, c, d, e, recorded, digest),
+        sidecar=lambda c, d, e: campaign.build_sidecar(session, c, d, e, versions(), digest),
         seeds=seeds,
         log=CampaignLog(artifacts),
         joint_names=tuple(session.reference.joint_names),
@@ -122,7 +122,8 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     rng = random.Random(seed)
     # what each engine evaluates first is also its Harness's seed: uniform sampling and
     # Hypothesis alone never wait for seeds they would not use (32 Hypothesis seeds, and for
-    # uniform sampling Hypothesis' import, cost about 0.2 s of one CPU before the first input)
+    # uniform sampling Hypothesis' import, cost 0.1-0.6 s of one CPU before the first input,
+    # the most on scenarios; BENCHMARKS.md, "A dry run for scenarios")
     if engine == "uniform":
         seeds = [_uniform(session, rng, 0)]
     elif engine == "hypothesis":

@@ -112,11 +112,11 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             + (" ..." if len(store.recovered) > 5 else "")
         )
 
-    recorded_versions = versions()
     digest = session.robot_digest()
 
     def sidecar(case: TestCase, data: bytes, ev: Any) -> dict[str, Any]:
-        return build_sidecar(session, case, data, ev, recorded_versions, digest)
+        # versions(): looked up when the first sidecar is written, not before the first input
+        return build_sidecar(session, case, data, ev, versions(), digest)
 
     evaluator = session.evaluator()
     timeout = int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"]))
@@ -376,7 +376,7 @@ def build_sidecar(
         "lineage": list(case.lineage),
         "call": {"kind": type(ev.call).__name__, **asdict(ev.call)},
         "outcomes": [outcome_json(r, o) for r, o in zip(session.runners, ev.outcomes, strict=True)],
-        "versions": recorded,
+        "versions": dict(recorded),
         "written": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
 

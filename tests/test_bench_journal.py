@@ -424,3 +424,20 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
             argparse.ArgumentParser(), args, path, sweep, tmp_path, jobs, stop_at_once, "-"
         )
     assert stopped.value.code == 130 and again == [2], "resumed where it stopped, then interrupted again"
+
+
+def test_compile_tree_writes_the_bytecode_a_trial_imports(tmp_path: Path) -> None:
+    """A sweep byte-compiles the tree once, so that no trial compiles it again (where Python
+    writes no bytecode itself, as with PYTHONDONTWRITEBYTECODE)."""
+    import importlib.util
+
+    (tmp_path / "fuzzer" / "sub").mkdir(parents=True)
+    package = tmp_path / "fuzzer"
+    modules = [package / "__init__.py", package / "sub" / "m.py", tmp_path / "fuzz_diff.py"]
+    for module in modules:
+        module.write_text("X = 1\n")
+    (tmp_path / "elsewhere.py").write_text("X = 1\n")
+    sweeps.compile_tree(tmp_path)
+    for module in modules:
+        assert Path(importlib.util.cache_from_source(str(module))).is_file(), module
+    assert not Path(importlib.util.cache_from_source(str(tmp_path / "elsewhere.py"))).exists()

@@ -81,9 +81,10 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     last = {pid: [r for r in stats if r["pid"] == pid][-1] for pid in dry}
     early = dry_run.EARLY["fk"]
     # every sweep flags rows of a fault every input shows; CONFIRM of them go to the single call
+    # (the first stage's sweeps: one of FIRST_ROWS rows, then early ones)
     ran = last[first]["executed_by_strategy"]
     assert ran == {
-        SWEPT: early * CONFIRM,
+        SWEPT: (early + 1) * CONFIRM,
         ALIGNED: dry_run.ALIGNED["fk"],
         BOUNDARY: ran[BOUNDARY],
         LITERAL: ran[LITERAL],
@@ -93,7 +94,7 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     assert 0 < ran[LITERAL] <= dry_run.LITERALS, "configurations at the target's compared numbers"
     assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: (dry_run.SWEEPS - early) * CONFIRM}
     assert [last[pid]["sweep"]["compared"] for pid in (first, second)] == [
-        early * ROWS,
+        dry_run.FIRST_ROWS + early * ROWS,
         (dry_run.SWEEPS - early) * ROWS,
     ]
     first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
@@ -234,8 +235,10 @@ def test_the_dry_run_forks_before_hypothesis_is_imported(tmp_path: Path, op: str
 import os, sys
 from fuzzer import dry_run
 from fuzzer.cli import main
+from fuzzer.execution.session import versions
 def launch(self, work):
     print("forked with hypothesis" if "hypothesis" in sys.modules else "forked without hypothesis")
+    print("numpy.random", "numpy.random" in sys.modules, "versions", versions.cache_info().currsize)
     sys.stdout.flush()
     os._exit(0)
 dry_run.Stages._launch = launch
@@ -243,7 +246,9 @@ main({argv!r})
 """
     done = python(program)
     assert done.returncode == 0, done.stderr[-3000:]
-    assert done.stdout.splitlines() == ["forked without hypothesis"], done.stdout + done.stderr[-3000:]
+    # nor numpy.random (7-10 ms), nor the versions for the sidecars (14 ms: asked at the first)
+    expected = ["forked without hypothesis", "numpy.random False versions 0"]
+    assert done.stdout.splitlines() == expected, done.stdout + done.stderr[-3000:]
 
 
 def test_targets_opened_before_atheris_are_instrumented_all_the_same() -> None:

@@ -98,9 +98,11 @@ def _stages(op: str, seed: int = 1, wanted: int = 8) -> dry_run.Stages:
     return dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", seed, wanted, 0, no_harness)
 
 
-def test_the_dry_run_sweeps_do_not_import_scipy_stats() -> None:
-    """They run before the campaign imports it (0.55 s on one CPU): a sweep of the dry run and
-    its uniform and aligned configurations must not pull it in."""
+def test_the_dry_run_sweeps_do_not_import_scipy_stats_or_numpy_random() -> None:
+    """They run before the campaign imports scipy.stats (0.55 s on one CPU): a sweep of the dry
+    run and its uniform and aligned configurations must not pull it in. The first stage's
+    inputs (a first sweep without centres, a move's first stage) must not import numpy.random
+    either (7-10 ms, which the first input would wait for)."""
     program = """
 import sys
 from fuzzer import dry_run
@@ -109,15 +111,29 @@ from fuzzer.generation.corpus import make_seeds
 session = Session.open(RunConfig(op="fk"))
 sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
 sweep.run([r.model for r in session.evaluator().runners], [])
+for op in ("fk", "move"):
+    dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", 1, 4, 0, None).first_cases()
+first_stage = "numpy.random" in sys.modules
 move = Session.open(RunConfig(op="move"))
 stages = dry_run.Stages(move, "rrosfuzz", 1, 4, 0, None)
 made = stages.first_cases() + stages.second_cases(make_seeds(move, 4, 1))
-print(len(made), sweep.compared, "scipy.stats" in sys.modules)
+print(len(made), sweep.compared, "scipy.stats" in sys.modules, first_stage)
 """
     done = python(program)
     assert done.returncode == 0, done.stderr[-3000:]
     expected = 2 * 2 * 6 + dry_run.ALIGNED["move"] + dry_run.UNIFORM["move"] + 4
-    assert done.stdout.split() == [str(expected), str(ROWS), "False"]
+    assert done.stdout.split() == [str(expected), str(ROWS), "False", "False"]
+
+
+def test_the_first_sweep_of_a_dry_run_is_small_and_the_next_ones_full() -> None:
+    session = Session.open(RunConfig(op="fk"))
+    models = [r.model for r in session.evaluator().runners]
+    sweep = dry_run.sweep(session, "rrosfuzz", seed=1, first_rows=dry_run.FIRST_ROWS)
+    assert sweep is not None
+    assert [sweep.run(models, []).rows for _ in range(3)] == [dry_run.FIRST_ROWS, ROWS, ROWS]
+    assert sweep.compared == dry_run.FIRST_ROWS + 2 * ROWS
+    plain = dry_run.sweep(session, "rrosfuzz", seed=1)
+    assert plain is not None and plain.run(models, []).rows == ROWS
 
 
 def test_a_move_dry_run_makes_uniform_and_aligned_configurations_and_probes_before_the_seeds() -> None:

@@ -53,12 +53,16 @@ The sampled farthest tip of a serial arm is more than a quarter of its reach."""
 REACH_SAMPLES = 64
 
 
+POSE_TYPES = ("geometry_msgs/PoseStamped", "geometry_msgs/Pose")
+"""Message types with a pose ``beyond_reach`` can move."""
+
+
 def beyond_reach(msg_type: str, message: dict[str, Any], distance: float) -> dict[str, Any] | None:
     """A copy of a pose message with its position moved along its direction from the base's
     origin (x if it is the origin) to ``distance`` m; None for a type without a pose."""
     out = copy.deepcopy(message)
     pose = out.get("pose") if msg_type == "geometry_msgs/PoseStamped" else out
-    if msg_type not in ("geometry_msgs/PoseStamped", "geometry_msgs/Pose") or not isinstance(pose, dict):
+    if msg_type not in POSE_TYPES or not isinstance(pose, dict):
         return None
     position = pose.get("position")
     if not isinstance(position, dict):
@@ -160,7 +164,7 @@ def scale_orientation(msg_type: str, message: dict[str, Any], scale: float) -> d
     """
     out = copy.deepcopy(message)
     pose = out.get("pose") if msg_type == "geometry_msgs/PoseStamped" else out
-    if msg_type not in ("geometry_msgs/PoseStamped", "geometry_msgs/Pose") or not isinstance(pose, dict):
+    if msg_type not in POSE_TYPES or not isinstance(pose, dict):
         return None
     orientation = pose.get("orientation")
     if not isinstance(orientation, dict):

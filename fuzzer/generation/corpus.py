@@ -260,13 +260,13 @@ def reach_cases(session: Session, seed: int, first: int = 0) -> list[TestCase]:
     lineage ``spacefill:boundary``, numbered ``first``. The dry run's first stage evaluates it
     (both IK solvers then run out of iterations: about 0.16 s on the default robot). None for a
     message type without a pose, or a chain without joints."""
-    from fuzzer.generation.boundary import REACH_FACTOR, REACH_SAMPLES, beyond_reach
+    from fuzzer.generation.boundary import POSE_TYPES, REACH_FACTOR, REACH_SAMPLES, beyond_reach
     from fuzzer.generation.spacefill import Uniform, configuration_message
     from fuzzer.selection.state import BOUNDARY, SPACEFILL
 
     config = session.config
-    if config.op == "scenario" or not session.reference.joint_limits:
-        return []
+    if config.message_type not in POSE_TYPES or not session.reference.joint_limits:
+        return []  # before the samples: no pose to move (a scenario's message type neither)
     facts = session.facts()
     home = tuple(session.reference.home_values)
     base = session.registry.default(config.message_type)

@@ -107,11 +107,14 @@ class SpaceFill:
 
 @dataclass
 class Uniform:
-    """Pseudo-random joint configurations, uniform in the box ``[lower, upper]`` (numpy's
-    PCG64, seeded), with ``SpaceFill``'s ``box`` and ``block``.
+    """Pseudo-random joint configurations, uniform in the box ``[lower, upper]``, with
+    ``SpaceFill``'s ``box`` and ``block``.
 
-    For the dry run's sweeps (``fuzzer.dry_run``): they run before ``scipy.stats``, which
-    ``SpaceFill`` needs, is imported (0.55 s on one CPU). Uniform points cover the box without
+    For the dry run (``fuzzer.dry_run``): its sweeps and uniform configurations run before
+    ``scipy.stats``, which ``SpaceFill`` needs, is imported (0.55 s on one CPU). The numbers are
+    Python's Mersenne Twister (``random.Random(seed).randbytes``), each 64-bit word made a double
+    in [0, 1) from its top 53 bits as numpy's generators do: ``numpy.random`` costs 7-10 ms to
+    import, which the dry run's first input would wait for. Uniform points cover the box without
     Sobol's stratification: a band of width ``w`` (a share of one joint's range) is missed by
     ``n`` points with probability ``(1 - w)^n`` instead of not at all once ``n >= 1/w``.
 
@@ -135,7 +138,7 @@ class Uniform:
         lo, hi = finite_box(self.lower, self.upper)
         self._lo, self._hi = np.array(lo), np.array(hi)
         self._span = np.where(self._hi > self._lo, self._hi - self._lo, 0.0)
-        self._rng = np.random.default_rng(self.seed)
+        self._rng = random.Random(self.seed)
 
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) as arrays, infinite bounds replaced by -pi / pi."""
@@ -144,7 +147,10 @@ class Uniform:
     def block(self, n: int) -> np.ndarray:
         """The next ``n`` points, shape (n, dof), inside the box."""
         self.drawn += n
-        return self._lo + self._rng.random((n, len(self._lo))) * self._span
+        words = np.frombuffer(self._rng.randbytes(8 * n * len(self._lo)), dtype="<u8")
+        unit = (words >> np.uint64(11)).astype(np.float64) * 2.0**-53  # [0, 1): 53 bits, 2**-53 apart
+        points: np.ndarray = self._lo + unit.reshape(n, len(self._lo)) * self._span
+        return points
 
 
 @dataclass

@@ -36,11 +36,13 @@ import copy
 from collections.abc import Sequence
 from typing import Any, Final
 
+import numpy as np
+
 from fuzzer.generation.spacefill import (
     GOAL_STEP,
     Reachable,
-    Uniform,
     configuration_message,
+    finite_box,
     joint_target_step,
     toward,
 )
@@ -111,7 +113,11 @@ def tutorial_scenarios(
     """
     if not len(lower):
         return []
-    q = [tuple(map(float, row)) for row in Uniform(lower, upper, seed=seed).block(6)]
+    # six configurations uniform in the box, numpy's PCG64 seeded with ``seed``: the scripts of
+    # corpus-scenario/ (and their Cartesian paths followed to the end on every shipped robot)
+    lo, hi = (np.array(bound) for bound in finite_box(lower, upper))
+    unit = np.random.default_rng(seed).random((6, len(lo)))
+    q = [tuple(map(float, row)) for row in lo + unit * np.where(hi > lo, hi - lo, 0.0)]
     names = list(joint_names)
     path = [_pose(toward(q[2], q[3], GOAL_STEP * k / WAYPOINTS), reachable) for k in range(1, WAYPOINTS + 1)]
     cartesian = {"header": copy.deepcopy(_HEADER), "poses": path}
