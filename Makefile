@@ -33,7 +33,7 @@ test: setup
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
 ## then every deep bug x 6 engines x 10 trials x 60 s (about 4 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (28 minutes on 2e15dd3); about 7 hours in
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25 minutes on 2063e32); about 7 hours in
 ## all, estimated since the baselines run the scenario bugs too (BENCHMARKS.md). Each step keeps
 ## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup
