@@ -32,9 +32,9 @@ test: setup
 	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
-## then every deep bug x 6 engines x 10 trials x 60 s (about 4 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25 minutes on 2063e32); about 7 hours in
-## all, estimated since the baselines run the scenario bugs too (BENCHMARKS.md). Each step keeps
+## then every deep bug x 6 engines x 10 trials x 60 s (about 3.6 hours on 2 cores), then every zoo
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25 minutes on 2063e32); about 6.5 hours
+## in all, the sum of the steps (BENCHMARKS.md, "Reproducing"). Each step keeps
 ## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup
 	$(PY) -m benchmarks.bench_zoo --mode full --write-md $$(test -f benchmarks/results/zoo-full.jsonl && echo --resume)
@@ -47,7 +47,7 @@ bench-deep-full: setup
 	$(PY) -m benchmarks.bench_deep --mode full --write-md $$(test -f benchmarks/results/deep-full.jsonl && echo --resume)
 
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
-## (41 minutes on 2 cores on 5821603, every baseline on every bug).
+## (39 minutes on 2 cores on 2063e32, every baseline on every bug).
 bench-deep: setup
 	$(PY) -m benchmarks.bench_deep --mode short --write-md $$(test -f benchmarks/results/deep-short.jsonl && echo --resume)
 

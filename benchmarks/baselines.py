@@ -123,7 +123,7 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     # what each engine evaluates first is also its Harness's seed: uniform sampling and
     # Hypothesis alone never wait for seeds they would not use (32 Hypothesis seeds, and for
     # uniform sampling Hypothesis' import, cost 0.1-0.6 s of one CPU before the first input,
-    # the most on scenarios; BENCHMARKS.md, "A dry run for scenarios")
+    # the most on scenarios; docs/benchmarks-log.md, "A dry run for scenarios")
     if engine == "uniform":
         seeds = [_uniform(session, rng, 0)]
     elif engine == "hypothesis":

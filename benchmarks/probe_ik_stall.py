@@ -15,7 +15,7 @@ turn: a reachable target from a random seed; the same target 1.5 times farther f
 
     .venv/bin/python -m benchmarks.probe_ik_stall probot_anno ur5 --problems 3000 --seed 7
 
-One JSON line per robot. Measured in BENCHMARKS.md ("A stall rule for the twin's IK, measured
+One JSON line per robot. Measured in docs/benchmarks-log.md ("A stall rule for the twin's IK, measured
 and rejected").
 """
 

@@ -6,8 +6,8 @@
 Runs one campaign (default targets native vs python, default robot, a fresh corpus, as
 ``benchmarks.bench_engine`` does) under ``py-spy record --format raw`` at ``--rate`` samples a
 second, keeps the raw stacks (``--out``, default ``build/profiles/``), and prints the share of
-samples per part of the engine as a Markdown table: the table "Where the time goes" of
-BENCHMARKS.md.
+samples per part of the engine as a Markdown table: the table of BENCHMARKS.md's "Where the
+time goes today".
 
 A sample counts in the first part found walking its stack from the leaf up (:data:`PARTS`, by
 file): numpy and standard library frames count for the repository code that called them,

@@ -95,10 +95,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
     supervisor = not child and supervises(options.libfuzzer_flags)
-    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
-        from fuzzer.artifacts.travel import record_corpus
-
-        record_corpus(options.corpus, config)
     options.artifacts.mkdir(parents=True, exist_ok=True)
     artifacts = options.artifacts.resolve()  # -jobs changes the working folder
     folders = tuple(p for p in options.corpus if not p.is_file())
@@ -135,20 +131,25 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         else (0 if usable or len(folders) < len(options.corpus) else 32)
     )
     filling: list[TestCase] = []
+    if wanted and not child and folders and dry_ok:
+        # fuzzer.dry_run: children evaluate probes, uniform inputs, seeds while libFuzzer starts
+        joints = tuple(session.reference.joint_names)
+        dry = dry_run.Stages(
+            session,
+            options.mutator,
+            options.seed,
+            wanted,
+            timeout,
+            lambda base, sweep: dry_run.harness(
+                evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
+            ),
+        )
+        dry.first()  # before the seeds exist
+    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
+        from fuzzer.artifacts.travel import record_corpus
+
+        record_corpus(options.corpus, config)  # after the dry run's fork: its fsync took 1-4 ms
     if wanted and not child and folders:
-        if dry_ok:  # fuzzer.dry_run: children evaluate probes, uniform inputs, seeds while libFuzzer starts
-            joints = tuple(session.reference.joint_names)
-            dry = dry_run.Stages(
-                session,
-                options.mutator,
-                options.seed,
-                wanted,
-                timeout,
-                lambda base, sweep: dry_run.harness(
-                    evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
-                ),
-            )
-            dry.first()  # before the seeds exist
         generated = make_seeds(session, wanted, options.seed)
         orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
         if dry is not None:

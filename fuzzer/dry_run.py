@@ -11,8 +11,9 @@ instrumentation, the seed files and libFuzzer's start. A divergence those inputs
 come that much later than from an engine without libFuzzer. The dry run reports it as an
 ordinary crash file (the same ``Harness``: sidecar, divergence log, signature claim; the
 campaign's own Harness then finds the signature claimed and does not file it again). Its
-uniform rows are numpy's pseudo-random numbers, not Sobol's: ``scipy.stats`` is not imported
-yet (``fuzzer.generation.spacefill.Uniform``, the sweeps' source ``uniform``).
+uniform rows come from Python's Mersenne Twister, not Sobol's sequence: neither ``scipy.stats``
+nor ``numpy.random`` is imported yet (``fuzzer.generation.spacefill.Uniform``, the sweeps'
+source ``uniform``).
 
 Why children (``os.fork``, before Atheris is imported): libFuzzer is what turns a target that
 hangs or dies on an input (a deadly signal, an abort) into a timeout or crash file. A child
@@ -28,7 +29,7 @@ from __future__ import annotations
 
 import os
 import random
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,7 +61,7 @@ DRY_RUN_OPS = frozenset({"fk", "move", "ik", "scenario"})
 """Ops with a dry run: ``fk`` and ``move`` seeds cost well under a millisecond each; an ``ik``
 seed about 5 ms, but an IK campaign's start-up imports ``scipy.stats`` (0.55 s, for its
 space-filling seed) after the fork, so its dry run reports what the seeds show that much sooner
-(BENCHMARKS.md, "Orientation probes, and the baselines' scipy.stats import"). A ``scenario``
+(docs/benchmarks-log.md, "Orientation probes, and the baselines' scipy.stats import"). A ``scenario``
 dry run has a first stage only (``SECOND_STAGE_OPS``): MoveIt's tutorial scripts and
 ``SCRIPTS`` uniform scripts."""
 
@@ -75,7 +76,7 @@ dry run evaluates after MoveIt's tutorial scripts: about 5 ms each (median; 12 m
 Cartesian path costs more) on the default robot, so the first stage takes about 0.5 s of one
 CPU, confirmations included. A scenario campaign's own first input otherwise waits for its
 seeds, Atheris, the instrumentation and libFuzzer's start (about 0.8 s from the process start
-against 0.35 s; BENCHMARKS.md, "A dry run for scenarios")."""
+against 0.35 s; docs/benchmarks-log.md, "A dry run for scenarios")."""
 
 BOUNDARY_ROUNDS = 2
 """Rounds of boundary probes the dry run's first stage evaluates (``fuzzer.generation.boundary``:
@@ -125,7 +126,7 @@ its boundary probes, before the rest of its uniform configurations. With them `p
 (a band 2e-5 wide starting at a module constant) was found 3.2 times sooner (1.76 against
 0.54 s from process start, 10 trials, p = 0.00018), no zoo bug's search significantly longer
 but `ik_status_misread`'s, by 12 ms (p = 0.045); placed first, before the probes, they cost
-the boundary bugs 30-50 ms (BENCHMARKS.md, sixth session of 2026-11-26, item 6)."""
+the boundary bugs 30-50 ms (docs/benchmarks-log.md, sixth session of 2026-11-26, item 6)."""
 
 UNIFORM = {"move": 128}
 """Uniform random configurations the dry run evaluates in all, one input each, per op, ``EARLY``
@@ -200,17 +201,20 @@ def sweep(session: Session, mutator: str, seed: int, first_rows: int = 0) -> Swe
     return Sweep(lower, upper, tolerance, seed=seed, source="uniform", share=0.0, first_rows=first_rows)
 
 
-def evaluate(h: Harness, cases: Sequence[TestCase], before: int = 0, after: int = 0) -> None:
+def evaluate(
+    h: Harness, cases: Sequence[TestCase], before: int = 0, after: int = 0, snapshot: bool = True
+) -> None:
     """Evaluate ``cases`` in order, as libFuzzer hands inputs over (their encoding), then log
-    a stats snapshot; with the Harness's sweep, ``before`` sweeps first and ``after`` sweeps
-    last."""
+    a stats snapshot (unless not ``snapshot``); with the Harness's sweep, ``before`` sweeps
+    first and ``after`` sweeps last."""
     for _ in range(before if h.sweep is not None else 0):
         h.run_sweep()
     for case in cases:
         h.test_one_input(case.encode())
     for _ in range(after if h.sweep is not None else 0):
         h.run_sweep()
-    h.maybe_snapshot(force=True)
+    if snapshot:
+        h.maybe_snapshot(force=True)
 
 
 MakeHarness = Callable[[Sequence[TestCase], Sweep | None], Harness]
@@ -266,27 +270,53 @@ class Stages:
             return [TestCase(msg_type, {"steps": [dict(GO)]}, 0, SPACEFILL)]
         return [TestCase(msg_type, self.session.registry.default(msg_type), 0, SPACEFILL)]
 
-    def first_cases(self) -> list[TestCase]:
-        """The first stage's inputs (besides its sweeps): orientation and reach probes, the first
-        ``LEAD`` uniform configurations, the aligned ones, the boundary probes, the rest of the
-        ``EARLY`` uniform configurations."""
+    def _first_parts(self, literals: bool = False) -> Iterator[list[TestCase]]:
+        """The first stage's inputs (besides its sweeps) in the order they are evaluated, in
+        parts, each made when its turn comes: the child evaluates its first input while the
+        rest are still to be made (making all of ``move``'s took 2-3 ms before it). A pose
+        campaign's orientation and reach probes; the first uniform configuration, then the
+        rest of the first ``LEAD``; the aligned ones and the boundary probes; with
+        ``literals``, ``literal_cases``' configurations; the rest of the ``EARLY`` uniform
+        configurations. A scenario's: the tutorial scripts, then the uniform ones."""
         session, wanted = self.session, self.wanted
         op = session.config.op
+        seed = self.seed + SWEEP_SEED
         if op == "scenario":
             tutorials = tutorial_seeds(session, self.seed, wanted)
-            scripts = uniform_scripts(session, SCRIPTS, self.seed + SWEEP_SEED, wanted + len(tutorials))
-            self._literal_at = self._first_count = len(tutorials) + len(scripts)
-            return tutorials + scripts
+            yield tutorials
+            yield uniform_scripts(session, SCRIPTS, seed, wanted + len(tutorials))
+            return
         orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
         probes = [] if orientation else boundary_cases(session, BOUNDARY_ROUNDS, wanted)
         count = min(EARLY.get(op, 0), UNIFORM.get(op, 0))
-        uniform = uniform_cases(session, count, self.seed + SWEEP_SEED, wanted + len(probes))
-        aligned = aligned_cases(
-            session, ALIGNED.get(op, 0), self.seed + SWEEP_SEED, wanted + len(probes) + count
-        )
-        reach = reach_cases(session, self.seed + SWEEP_SEED, wanted + len(probes) + count + len(aligned))
-        cases = orientation + reach + uniform[:LEAD] + aligned + probes + uniform[LEAD:]
-        self._literal_at = len(cases) - len(uniform[LEAD:])  # where literal_cases go (first)
+        at = wanted + len(probes)  # the uniform configurations' first number, after the probes'
+        # reach_cases' numbers follow the aligned configurations', which are none for a pose,
+        # the only message type reach_cases makes inputs for
+        reach = reach_cases(session, seed, at + count)
+        yield orientation + reach
+        lead = min(LEAD, count)
+        first = uniform_cases(session, count, seed, at, stop=min(1, lead))
+        yield first
+        leading = uniform_cases(session, count, seed, at, start=min(1, lead), stop=lead)
+        yield leading
+        aligned = aligned_cases(session, ALIGNED.get(op, 0), seed, at + count)
+        yield aligned + probes
+        rest = uniform_cases(session, count, seed, at, start=lead)
+        if literals:  # numbered after the second stage's inputs, as literal_cases
+            parts = (orientation, reach, first, leading, aligned, probes, rest)
+            yield literal_cases(session, LITERALS, wanted + sum(map(len, parts)) + self._later_uniform())
+        yield rest
+
+    def first_cases(self) -> list[TestCase]:
+        """The first stage's inputs (besides its sweeps, and but for ``literal_cases``), all
+        made (``_first_parts``): orientation and reach probes, the first ``LEAD`` uniform
+        configurations, the aligned ones, the boundary probes, the rest of the ``EARLY``
+        uniform configurations. Sets where ``literal_cases`` go among them, and how many they
+        are (which numbers the second stage's inputs)."""
+        parts = list(self._first_parts())
+        cases = [case for part in parts for case in part]
+        scenario = self.session.config.op == "scenario"
+        self._literal_at = len(cases) - (0 if scenario else len(parts[-1]))
         self._first_count = len(cases)
         return cases
 
@@ -313,7 +343,8 @@ class Stages:
     def first(self) -> None:
         """Start the first stage. Its child makes its inputs (6-7 ms for ``fk``): its sweeps
         come first, and the campaign's start-up would otherwise wait for them; the campaign
-        makes them again after the fork, for the second stage's numbering only."""
+        makes them again after the fork, for the second stage's numbering only (an op with a
+        second stage, ``SECOND_STAGE_OPS``)."""
         early = min(EARLY.get(self.session.config.op, 0), SWEEPS)
 
         def work() -> None:
@@ -321,12 +352,13 @@ class Stages:
             harness = self.make_harness(self._base(), made)
             for _ in range(early + 1 if made is not None else 0):  # FIRST_ROWS rows, then early sweeps
                 harness.run_sweep()
-            cases, at = self.first_cases(), self._literal_at
-            evaluate(harness, cases[:at])
-            evaluate(harness, self.literal_cases() + cases[at:])  # made here: off the start-up
+            for part in self._first_parts(literals=True):  # the literals made here: off the start-up
+                evaluate(harness, part, snapshot=False)
+            harness.maybe_snapshot(force=True)
 
         self._launch(work)
-        self.first_cases()  # sets _first_count, which numbers the second stage's inputs
+        if self.session.config.op in SECOND_STAGE_OPS:
+            self.first_cases()  # sets _first_count, which numbers the second stage's inputs
 
     def second(self, seeds: list[TestCase]) -> None:
         """Start the second stage, with the campaign's generated ``seeds`` (none for an op

@@ -9,7 +9,7 @@ or steps that undo each other, common when the target is out of reach) starts a 
 the loop then skips to the iterate its last iteration would leave (``_cycle_end``), bit
 for bit the answer of running every iteration. It is the loop's only shortcut: a solve that stalls
 (steps of a few ulps, far from the target) runs on to the last iteration as KDL's does, since
-a stall can be an unstable fixed point that the iterate leaves later (BENCHMARKS.md, "A stall
+a stall can be an unstable fixed point that the iterate leaves later (docs/benchmarks-log.md, "A stall
 rule for the twin's IK measured and rejected"). ``ik`` is a function of its problem alone
 (the chain, the target, the seed, the link), so it answers a problem it solved recently from
 memory (``IK_MEMO``): scripts of calls repeat them (a scenario re-run to confirm a divergence,

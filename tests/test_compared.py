@@ -300,7 +300,7 @@ def test_a_site_remembers_only_its_newest_operand_values() -> None:
 def test_a_value_of_0_is_no_operand() -> None:
     """A leaf at its default 0 compared at an unsolved site: no factor scales 0 past the
     threshold, so the input has no operand there, and the input-to-state stage does not queue it
-    for that site (two 10-trial runs per arm, BENCHMARKS.md: ``plan_start_band`` 10/20 -> 15/20
+    for that site (two 10-trial runs per arm, docs/benchmarks-log.md: ``plan_start_band`` 10/20 -> 15/20
     one-minute trials, p = 0.015)."""
     table = ComparedValues()
     table.watch(4, 3.0, 0.25, False)

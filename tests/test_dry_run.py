@@ -227,7 +227,7 @@ print(dry.wait(), os.getpid(), flush=True)
 def test_the_dry_run_forks_before_hypothesis_is_imported(tmp_path: Path, op: str) -> None:
     """Importing Hypothesis takes about 0.12 s on one CPU, which only the seeds need: the first
     stage's child is forked before it (``fuzzer.input.mapping`` imports it in the functions that
-    build strategies), so the first input comes that much sooner (BENCHMARKS.md, twenty-first
+    build strategies), so the first input comes that much sooner (docs/benchmarks-log.md, twenty-first
     session). The campaign runs as ``fuzz_diff.py`` does, up to the fork."""
     art = f"--artifacts={tmp_path / 'art'}"
     argv = [str(tmp_path / "corpus"), "-runs=0", f"--op={op}", art, "--no-progress"]
@@ -336,3 +336,23 @@ def test_the_boundary_probes_of_the_dry_run_move_one_joint_of_the_middle_past_a_
         seen.add((j, position[j] > lim.upper, offset))
     assert len(seen) == len(cases), "every joint, side and offset once"
     assert boundary_cases(Session.open(RunConfig(op="scenario")), dry_run.BOUNDARY_ROUNDS) == []
+
+
+@pytest.mark.parametrize("op", sorted(dry_run.DRY_RUN_OPS))
+def test_the_campaign_makes_the_first_stages_inputs_again_only_to_number_a_second_stage(
+    monkeypatch: pytest.MonkeyPatch, op: str
+) -> None:
+    """The child makes the first stage's inputs; the campaign makes them again after the fork
+    only where a second stage is numbered after them. A scenario has none: its tutorial and
+    uniform scripts (about 2 ms) would be made for nothing."""
+    made: list[str] = []
+
+    def first_cases(self: dry_run.Stages) -> list[Any]:
+        made.append(op)
+        return []
+
+    monkeypatch.setattr(dry_run, "launch", lambda work, timeout: None)  # no child
+    monkeypatch.setattr(dry_run.Stages, "first_cases", first_cases)
+    stages = dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", 1, 32, 0, lambda seeds, made: None)
+    stages.first()
+    assert made == ([op] if op in dry_run.SECOND_STAGE_OPS else [])

@@ -264,3 +264,67 @@ def test_the_reach_probe_is_out_of_reach_and_correct_targets_agree_on_it(robot: 
         targets = ("native", "benchmarks.zoo.bugs:ik_status_misread")
         misread = Session.open(RunConfig(op="ik", targets=targets))
         assert misread.evaluator().evaluate(reach_cases(misread, seed=7)[0]).divergent
+
+
+class _Recorder:
+    """A harness that records what the first stage's child hands it (no target runs)."""
+
+    sweep = None  # run_sweep stands for the sweeps
+
+    def __init__(self, events: list[object]) -> None:
+        self.events = events
+
+    def test_one_input(self, data: bytes) -> None:
+        self.events.append(decode(data))
+
+    def run_sweep(self) -> None:
+        self.events.append("sweep")
+
+    def maybe_snapshot(self, force: bool = False) -> None:
+        self.events.append("snapshot")
+
+
+@pytest.mark.parametrize(
+    ("op", "target"),
+    [
+        ("move", "benchmarks.zoo.deep:per_joint_band"),
+        ("fk", "python"),
+        ("ik", "python"),
+        ("scenario", "python"),
+    ],
+)
+def test_the_first_stage_evaluates_its_first_input_before_it_makes_the_rest(
+    monkeypatch: pytest.MonkeyPatch, op: str, target: str
+) -> None:
+    """The child evaluates the first stage's inputs in ``first_cases``' order with the literal
+    configurations at ``_literal_at``, each part made when its turn comes: a ``move``'s first
+    uniform configuration before the other 183 inputs are made (2-3 ms), with one snapshot at
+    the end."""
+    events: list[object] = []
+    session = Session.open(RunConfig(op=op, targets=("native", target)))
+    stages = dry_run.Stages(session, "rrosfuzz", 3, 8, 0, lambda seeds, sweep: _Recorder(events))
+    monkeypatch.setattr(dry_run, "launch", lambda work, timeout: work())  # the child's work, here
+    made = dry_run.aligned_cases
+
+    def aligned(*args: object, **kwargs: object) -> list[TestCase]:
+        events.append("aligned made")
+        return made(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(dry_run, "aligned_cases", aligned)
+    stages.first()
+    monkeypatch.setattr(dry_run, "aligned_cases", made)
+    expected = _stages(op, seed=3).first_cases()
+    at = len(expected) if op == "scenario" else len(expected) - (dry_run.EARLY.get(op, 0) - dry_run.LEAD)
+    literals = dry_run.Stages(session, "rrosfuzz", 3, 8, 0, None)
+    literals.first_cases()
+    evaluated = [e for e in events if isinstance(e, TestCase)]
+    if op == "fk":  # its sweeps first: FIRST_ROWS rows, then the early ones
+        assert events[: dry_run.EARLY["fk"] + 1] == ["sweep"] * (dry_run.EARLY["fk"] + 1)
+    if op == "move":
+        assert literals.literal_cases(), "per_joint_band's module compares against numbers"
+        assert isinstance(events[0], TestCase) and events[0].lineage == (UNIFORM,), events[:2]
+        assert events.index("aligned made") > 1, "made after the first input"
+    expected = expected[:at] + literals.literal_cases() + expected[at:]
+    assert [c.encode() for c in evaluated] == [c.encode() for c in expected]
+    handed = [e for e in events if e != "aligned made"]  # (the campaign's own count makes them again)
+    assert handed[-1] == "snapshot" and handed.count("snapshot") == 1

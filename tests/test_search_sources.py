@@ -282,7 +282,7 @@ def test_every_arm_is_credited_no_more_rewards_than_inputs(tmp_path: Path) -> No
 
 def test_scipy_stats_is_imported_only_where_a_space_filling_point_is_drawn() -> None:
     """``scipy.stats`` costs 0.55-0.8 s of imports: the baselines, replay and the full engine's
-    dry-run child must not wait for it (BENCHMARKS.md, "Orientation probes, ... start-up"), nor a
+    dry-run child must not wait for it (docs/benchmarks-log.md, "Orientation probes, ... start-up"), nor a
     scenario campaign, which writes no space-filling seeds, before libFuzzer starts: its search
     parts (the fresh-input makers over a Sobol stream) import it at the first point drawn."""
     from tests.support import python

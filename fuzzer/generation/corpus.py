@@ -47,7 +47,7 @@ SLOW_OP_SPACEFILL_SEEDS = {"ik": 1}
 """Space-filling seed files of the ops whose evaluation is slow (``ik``: a solver run per input,
 about 100 a second; the others as many as the Hypothesis seeds). libFuzzer runs every seed file
 before its first mutation, and 32 reachable poses cost an IK campaign about 0.25 s of that
-(BENCHMARKS.md, "Fewer space-filling seed files for IK"); the space-filling source brings the
+(docs/benchmarks-log.md, "Fewer space-filling seed files for IK"); the space-filling source brings the
 rest during the campaign, where the bandit weighs them against mutations."""
 
 
@@ -146,16 +146,20 @@ def configuration_cases(
     return out
 
 
-def uniform_cases(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:
+def uniform_cases(
+    session: Session, n: int, seed: int, first: int = 0, start: int = 0, stop: int | None = None
+) -> list[TestCase]:
     """``configuration_cases`` of ``n`` configurations uniform at random inside the limits
-    (``spacefill.Uniform``: no ``scipy.stats``), lineage ``spacefill:uniform``."""
+    (``spacefill.Uniform``: no ``scipy.stats``), lineage ``spacefill:uniform``; only those from
+    ``start`` to ``stop`` (numbered from ``first + start``): a stream's parts made apart."""
     from fuzzer.generation.spacefill import Uniform
     from fuzzer.selection.state import UNIFORM
 
     if n <= 0 or not session.reference.joint_limits:
         return []
     facts = session.facts()
-    return configuration_cases(session, Uniform(facts.lower, facts.upper, seed=seed).block(n), UNIFORM, first)
+    rows = Uniform(facts.lower, facts.upper, seed=seed).block(n)[start:stop]
+    return configuration_cases(session, rows, UNIFORM, first + start)
 
 
 def uniform_scripts(session: Session, n: int, seed: int, first: int = 0) -> list[TestCase]:

@@ -324,7 +324,7 @@ def _scaled(message: Message, ctx: MutationContext) -> bool:
     The factor is not bounded: an oracle's ``gap > 1e-6`` that saw a rounding error of 2e-16
     scales a leaf by 5e9, a threshold 0 scales one to about 0. Keeping only factors within
     1e-3..1e3 (edc5fe9) lost ``plan_start_band`` in 10 of 10 one-minute trials against 4 of 10
-    without (p = 0.035, BENCHMARKS.md): such far values are mutations of their own."""
+    without (p = 0.035, docs/benchmarks-log.md): such far values are mutations of their own."""
     assert ctx.compared is not None
     operands = ctx.compared.operands()  # never a value of 0, which no factor moves
     if not operands:

@@ -78,7 +78,7 @@ OBSERVE_PROBABILITY: Final = 1.0
 """``seq_compared``: chance that each ``/go`` after the changed step becomes ``/plan`` +
 ``/execute`` (when there is one; the earlier ones while there is room). 0.5 until 2026-11-28:
 ``profile_switch_band``'s band was reached by children that moved with ``/go``, whose
-trajectory the oracle never sees (BENCHMARKS.md, seventeenth session)."""
+trajectory the oracle never sees (docs/benchmarks-log.md, seventeenth session)."""
 
 
 # ----------------------------------------------------------------------------------------------------------

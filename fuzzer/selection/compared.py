@@ -64,7 +64,7 @@ moving the state by up to the campaign tolerance (1e-6) changes a target's answe
 of the three crossings of ``fuzzer.mutation.thresholds._past``) shows nothing behind it:
 ``ik_seed_band``'s site ``seed[0] < 0.31`` was solved by four inputs at 0.30999999999999994,
 each judged ill-conditioned, and its campaign (seed 28) never detected the bug, although the
-same inputs with 0.305 do (BENCHMARKS.md, nineteenth session)."""
+same inputs with 0.305 do (docs/benchmarks-log.md, nineteenth session)."""
 MEMORY: Final = 4096
 """Inputs whose operands at the unsolved sites are remembered (the most recently run or
 mutated), for :meth:`ComparedValues.operands`."""
