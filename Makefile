@@ -32,8 +32,8 @@ test: setup
 	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
-## then every deep bug x 6 engines x 10 trials x 60 s (about 3.6 hours on 2 cores), then every zoo
-## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25 minutes on 2063e32); about 6.5 hours
+## then every deep bug x 6 engines x 10 trials x 60 s (3 h 23 min on 2 cores on 2063e32), then every zoo
+## bug x 5 engines x 10 trials x 10 s with the deep bugs' statistics (25 minutes on 2063e32); about 6 hours
 ## in all, the sum of the steps (BENCHMARKS.md, "Reproducing"). Each step keeps
 ## its finished trials in a journal (benchmarks/results/*.jsonl): stopped, `make bench` goes on.
 bench: setup
