@@ -314,7 +314,8 @@ def test_the_first_stage_evaluates_its_first_input_before_it_makes_the_rest(
     stages.first()
     monkeypatch.setattr(dry_run, "aligned_cases", made)
     expected = _stages(op, seed=3).first_cases()
-    at = len(expected) if op == "scenario" else len(expected) - (dry_run.EARLY.get(op, 0) - dry_run.LEAD)
+    early = min(dry_run.EARLY.get(op, 0), dry_run.UNIFORM.get(op, 0))
+    at = len(expected) - max(0, early - dry_run.LEAD)  # the literals go before the later uniform ones
     literals = dry_run.Stages(session, "rrosfuzz", 3, 8, 0, None)
     literals.first_cases()
     evaluated = [e for e in events if isinstance(e, TestCase)]
