@@ -39,7 +39,6 @@ import json
 import os
 import platform
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -214,15 +213,7 @@ def run_one(
         if stop_at_detection:
             returncode = run_until_detection(cmd, artifacts, budget + 180, ROOT)
         else:
-            returncode = subprocess.run(
-                cmd,
-                cwd=ROOT,
-                capture_output=True,
-                text=True,
-                timeout=budget + 180,
-                check=False,
-                env=dict(os.environ, PYTHONPATH=str(ROOT)),
-            ).returncode
+            returncode = trials.run_to_end(cmd, budget + 180, ROOT)
         hits = [r for r in read_lines(artifacts / DIVERGENCES) if r.get("kind") not in NOT_DETECTIONS]
         first = min((float(r["t"]) - started for r in hits), default=None)
         last: dict[Any, dict[str, Any]] = {}

@@ -15,6 +15,7 @@ import os
 import queue
 import random
 import shutil
+import signal
 import sys
 import threading
 import time
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from benchmarks import trials
 from benchmarks.journal import Journal, JournalError, Sweep, open_sweep
 from benchmarks.zoo import Bug
 
@@ -75,8 +77,8 @@ class Progress:
     pace : float
         Wall seconds per trial of this run (trials at a time included).
     interrupted : bool
-        Stopped by Ctrl-C (``KeyboardInterrupt``): no trial started after it, those running
-        finished and are in ``runs``.
+        Stopped by Ctrl-C: no trial started after it, those running finished and are in
+        ``runs`` (unless a second Ctrl-C killed them: then they are not).
     """
 
     runs: list[Run]
@@ -149,6 +151,11 @@ def run_sweep(
     ``shuffle`` runs them in a seeded random order (as FuzzBench does: a change of machine load
     during the sweep then falls on every engine alike instead of on those that happen to run
     last); the records come back in the jobs' order either way. Closes ``book``.
+
+    Ctrl-C (SIGINT; in the main thread, where SIGINT is not ignored) starts no other trial,
+    and the trials running finish and are kept; a second Ctrl-C kills them
+    (``trials.stop_all``) and keeps none of them. The trials' processes run in sessions of their
+    own (``trials.started``), so the terminal's Ctrl-C reaches them only this way.
     """
     order = {key_of(job): i for i, job in enumerate(jobs)}
     held = {run_key(r): r for r in done if run_key(r) in order}
@@ -166,7 +173,7 @@ def run_sweep(
     for cpu in pins:
         free.put(cpu)
 
-    interrupted = threading.Event()
+    interrupted, abandoned = threading.Event(), threading.Event()
 
     def one(job: Job) -> Run | None:
         if interrupted.is_set() or (deadline is not None and time.monotonic() >= deadline):
@@ -174,27 +181,60 @@ def run_sweep(
         cpu = free.get()  # one per worker: never empty when a worker asks
         try:
             run = trial(job, cpu)
+        except Exception:
+            if abandoned.is_set():  # killed, or not started, by the second Ctrl-C
+                return None
+            raise
         finally:
             free.put(cpu)
+        if abandoned.is_set():
+            return None
         book.add(run)
         return run
 
+    def ctrl_c(*_: object) -> None:
+        if not interrupted.is_set():  # start no other trial; those running finish and are kept
+            interrupted.set()
+            print(
+                "interrupted: the trials running finish and stay in the journal "
+                "(Ctrl-C again stops them now, and keeps none of them)",
+                file=sys.stderr,
+                flush=True,
+            )
+        elif not abandoned.is_set():
+            abandoned.set()
+            killed = trials.stop_all()
+            print(f"stopped: {killed} trial(s) running killed, not kept", file=sys.stderr, flush=True)
+
+    trials.allow_starts()
+    previous = _handle_sigint(ctrl_c)
     pool = ThreadPoolExecutor(max_workers=max(1, workers))
     futures: list[Future[Run | None]] = []
     try:
         futures += (pool.submit(one, job) for job in todo)
         for future in futures:
             future.result()
-    except KeyboardInterrupt:  # Ctrl-C: start no other trial; those running finish and are kept
-        interrupted.set()
-        print("interrupted: the trials running finish and stay in the journal", file=sys.stderr, flush=True)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
         book.close()
     ended = [f.result() for f in futures if f.done() and not f.cancelled()]
     new = [run for run in ended if run is not None]
     runs = sorted([*held.values(), *new], key=lambda r: order[run_key(r)])
     return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)), interrupted.is_set())
+
+
+def _handle_sigint(handler: Callable[..., None]) -> Callable[..., object] | int | None:
+    """Make ``handler`` SIGINT's and return the handler it replaces; None (nothing set) outside
+    the main thread, or where SIGINT is ignored (a shell's background job: Ctrl-C is not ours)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    previous = signal.getsignal(signal.SIGINT)
+    if previous in (signal.SIG_IGN, None):
+        return None
+    signal.signal(signal.SIGINT, handler)
+    return previous
 
 
 PACKAGES = ("fuzzer", "robot_api", "python_impl", "native", "adapters", "benchmarks")

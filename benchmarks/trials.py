@@ -1,10 +1,16 @@
 """Running one benchmark trial and reading what it found (``bench_zoo.run_one``).
 
-``run_until_detection`` runs it until its first detection (``stop_at_detection``): the trial's
-process group is killed once its logs show a detection and the snapshot that records its first
-input. The time to first detection is the engine's own timestamp in its divergence log, so
-stopping, and how long the kill takes, do not change it. ``found_fields`` sums up its logged
-divergences; ``replay_fidelity`` replays its crash files in a new process."""
+Every process a trial starts (its campaign, its replay) runs in a session of its own: a
+terminal's Ctrl-C goes to the sweep, which decides what becomes of the trials running
+(``benchmarks.sweeps``), and never cuts a trial short behind its back (a trial stopped at 3 s of
+its 10 would be kept as a 10-s trial). ``stop_all`` kills them all (a second Ctrl-C).
+
+``run_to_end`` runs a trial for its whole budget. ``run_until_detection`` runs it until its
+first detection (``stop_at_detection``): the trial's process group is killed once its logs show
+a detection and the snapshot that records its first input. The time to first detection is the
+engine's own timestamp in its divergence log, so stopping, and how long the kill takes, do not
+change it. ``found_fields`` sums up its logged divergences; ``replay_fidelity`` replays its
+crash files in a new process."""
 
 from __future__ import annotations
 
@@ -14,7 +20,9 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -92,14 +100,80 @@ def watch(progress: Progress, artifacts: Path) -> Progress:
     )
 
 
-def _kill_group(process: subprocess.Popen[bytes]) -> None:
+def _kill_group(process: subprocess.Popen[Any]) -> None:
     """SIGKILL the process group of ``process`` (a session leader not yet reaped)."""
     with contextlib.suppress(ProcessLookupError):
         os.killpg(process.pid, signal.SIGKILL)
 
 
+class Stopped(Exception):
+    """A trial asked to start a process after ``stop_all``."""
+
+
+_RUNNING: set[subprocess.Popen[Any]] = set()
+"""The processes ``started`` has started and not yet reaped."""
+_LOCK = threading.Lock()
+_STOPPING = threading.Event()
+"""Set by ``stop_all``: ``started`` starts nothing more until ``allow_starts``."""
+
+
+def stop_all() -> int:
+    """Kill every process group a trial has running (``started``), and start no other until
+    ``allow_starts``: a sweep's second Ctrl-C. Returns how many were killed."""
+    _STOPPING.set()
+    with _LOCK:
+        running = [p for p in _RUNNING if p.returncode is None]
+        for process in running:
+            _kill_group(process)
+    return len(running)
+
+
+def allow_starts() -> None:
+    """Let trials start processes again (a new sweep, after ``stop_all``)."""
+    _STOPPING.clear()
+
+
+@contextlib.contextmanager
+def started(cmd: list[str], cwd: Path, **streams: Any) -> Iterator[subprocess.Popen[Any]]:
+    """``cmd`` started in a session of its own, in ``cwd`` (also its ``PYTHONPATH``), with
+    ``streams`` (``stdout``, ``stderr``, ``text``: as ``subprocess.Popen``'s; default: none
+    kept); its whole process group is killed if it still runs when the block ends (a time-out,
+    an exception). ``stop_all`` can kill it meanwhile; after ``stop_all``, raises ``Stopped``."""
+    options: dict[str, Any] = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, **streams}
+    with _LOCK:
+        if _STOPPING.is_set():
+            raise Stopped(f"the sweep is stopping: {cmd[0]} not started")
+        process = subprocess.Popen(
+            cmd,
+            cwd=cwd,
+            env=dict(os.environ, PYTHONPATH=str(cwd)),
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,
+            **options,
+        )
+        _RUNNING.add(process)
+    try:
+        yield process
+    finally:
+        if process.returncode is None:  # timed out, interrupted, or its reader failed
+            _kill_group(process)
+            if options["stdout"] == subprocess.PIPE:
+                process.communicate()  # its pipes drained: wait() could block on a full one
+            else:
+                process.wait()
+        with _LOCK:
+            _RUNNING.discard(process)
+
+
+def run_to_end(cmd: list[str], timeout: float, cwd: Path) -> int:
+    """Run ``cmd`` (``started``) until it exits; past ``timeout`` seconds its process group is
+    killed and ``subprocess.TimeoutExpired`` raised. Returns its exit status."""
+    with started(cmd, cwd) as process:
+        return process.wait(timeout=timeout)
+
+
 def run_until_detection(cmd: list[str], artifacts: Path, timeout: float, cwd: Path) -> int:
-    """Run ``cmd`` in a new session until it exits or logs a detection in ``artifacts``.
+    """Run ``cmd`` (``started``) until it exits or logs a detection in ``artifacts``.
 
     Parameters
     ----------
@@ -119,17 +193,8 @@ def run_until_detection(cmd: list[str], artifacts: Path, timeout: float, cwd: Pa
         logs showed a detection and a stats snapshot with its first input (``Progress.done``);
         its whole process group is killed then.
     """
-    process = subprocess.Popen(
-        cmd,
-        cwd=cwd,
-        env=dict(os.environ, PYTHONPATH=str(cwd)),
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
-    )
     deadline, progress = time.monotonic() + timeout, Progress()
-    try:
+    with started(cmd, cwd) as process:
         while True:
             try:
                 return process.wait(timeout=POLL_SECONDS)
@@ -141,10 +206,6 @@ def run_until_detection(cmd: list[str], artifacts: Path, timeout: float, cwd: Pa
                 return process.wait()
             if time.monotonic() > deadline:
                 raise subprocess.TimeoutExpired(cmd, timeout)
-    finally:
-        if process.returncode is None:  # timed out, or interrupted
-            _kill_group(process)
-            process.wait()
 
 
 def found_fields(hits: list[dict[str, Any]]) -> tuple[str, ...]:
@@ -166,20 +227,14 @@ def replay_fidelity(bug: Bug, artifacts: Path, root: Path) -> tuple[int, int, tu
     )
     if not crashes:
         return 0, 0, ()
-    done = subprocess.run(
-        [sys.executable, str(root / "fuzz_diff.py"), *map(str, crashes), f"--targets=native,{bug.target}"],
-        cwd=root,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-        env=dict(os.environ, PYTHONPATH=str(root)),
-    )
+    cmd = [sys.executable, str(root / "fuzz_diff.py"), *map(str, crashes), f"--targets=native,{bug.target}"]
+    with started(cmd, root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as process:
+        stdout, stderr = process.communicate(timeout=600)
     same, misses = 0, []
     for path in crashes:
         line = next(
-            (ln for ln in done.stdout.splitlines() if ln.startswith(f"{path}:")),
-            f"no verdict (exit {done.returncode}: {done.stderr.strip()[-300:]})",
+            (ln for ln in stdout.splitlines() if ln.startswith(f"{path}:")),
+            f"no verdict (exit {process.returncode}: {stderr.strip()[-300:]})",
         )
         if "still diverges (same signature)" in line:
             same += 1

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import _thread
 import argparse
 import json
 import os
@@ -10,6 +9,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,7 +17,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from benchmarks import bench_deep, bench_zoo, deep_stats, journal, sweeps
+from benchmarks import bench_deep, bench_zoo, deep_stats, journal, sweeps, trials
 from benchmarks.bench_zoo import Run
 from benchmarks.zoo import CONTROL, Bug
 
@@ -375,7 +375,7 @@ def test_each_trial_running_at_a_time_has_a_cpu_of_its_own(
 @pytest.fixture
 def ctrl_c() -> Iterator[None]:
     """SIGINT raises ``KeyboardInterrupt``, as in a terminal. A shell starts a background job (a
-    CI step, say) with SIGINT ignored, and ``_thread.interrupt_main`` then does nothing."""
+    CI step, say) with SIGINT ignored, and a sweep then leaves it so."""
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     yield
     signal.signal(signal.SIGINT, previous)
@@ -394,7 +394,7 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
         bug, engine, seed = job
         started.append(seed)
         if seed == 1:
-            _thread.interrupt_main()  # as Ctrl-C would, while the main thread waits for the trials
+            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C, while the main thread waits for the trials
             time.sleep(0.2)
         return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
 
@@ -415,7 +415,7 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
 
     def stop_at_once(job: sweeps.Job, cpu: int | None) -> Run:
         again.append(job[2])
-        _thread.interrupt_main()
+        os.kill(os.getpid(), signal.SIGINT)
         time.sleep(0.2)
         return trial(job, cpu)
 
@@ -424,6 +424,61 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
             argparse.ArgumentParser(), args, path, sweep, tmp_path, jobs, stop_at_once, "-"
         )
     assert stopped.value.code == 130 and again == [2], "resumed where it stopped, then interrupted again"
+
+
+def test_a_trials_processes_run_in_a_session_of_their_own(tmp_path: Path) -> None:
+    """A terminal's Ctrl-C goes to the sweep's process group. A trial's campaign ran in that
+    group in bench_zoo's full mode, so the first Ctrl-C cut the trials running short (3 s of 10,
+    exit 130) and the sweep kept them as whole trials."""
+    seen = tmp_path / "sid"
+    code = f"import os; open({str(seen)!r}, 'w').write(f'{{os.getsid(0)}} {{os.getpgrp()}}')"
+    assert trials.run_to_end([sys.executable, "-c", code], 60, tmp_path) == 0
+    sid, group = map(int, seen.read_text().split())
+    assert sid != os.getsid(0) and group != os.getpgrp()
+
+
+@pytest.mark.usefixtures("ctrl_c")
+def test_a_second_ctrl_c_kills_the_trials_running_and_keeps_none_of_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The first Ctrl-C lets the trials running finish (up to a budget plus its margin); a second
+    one kills them, and the journal keeps only the trials that had finished. It used to end in
+    a traceback, with the trials' processes left running."""
+    started = tmp_path / "started"
+    statuses: list[int] = []
+
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        bug, engine, seed = job
+        if seed == 1:
+            code = f"import time; open({str(started)!r}, 'w'); time.sleep(30)"
+            statuses.append(trials.run_to_end([sys.executable, "-c", code], 60, tmp_path))
+        return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
+
+    def press_ctrl_c_twice() -> None:
+        while not started.exists():
+            time.sleep(0.02)
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.3)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    bug = bench_deep.BUGS["narrow_band"]
+    jobs = [(bug, "full", seed) for seed in range(3)]
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full",), 3, 1.0, "c" * 40)
+    path = tmp_path / "j.jsonl"
+    book, _ = journal.open_sweep(path, sweep, tmp_path, resume=False, restart=False)
+    presser = threading.Thread(target=press_ctrl_c_twice)
+    presser.start()
+    progress = sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    presser.join()
+    assert statuses == [-signal.SIGKILL], "the trial's process was killed"
+    assert progress.interrupted and [r.seed for r in progress.runs] == [0]
+    assert [r.seed for r in journal.read(path)[1]] == [0], "the killed trial is not in the journal"
+    monkeypatch.setattr(journal, "same_code", lambda root, commit: commit == "c" * 40)
+    book, done = journal.open_sweep(path, sweep, tmp_path, resume=True, restart=False)
+    again = sweeps.run_sweep(
+        book, jobs, done, lambda job, cpu: Run(bug.name, "full", job[2], 1.0, None, 0, 1, 1.0, bug.op, 0), 1
+    )
+    assert again.complete, "the next sweep starts trials again"
 
 
 def test_compile_tree_writes_the_bytecode_a_trial_imports(tmp_path: Path) -> None:
