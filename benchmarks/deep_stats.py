@@ -3,7 +3,9 @@
 Per (bug, engine): detection rate and median time to first detection; per bug, the full engine
 against each baseline: the two-sided Mann-Whitney U test on the times to detection (a trial
 that never detects counts as the budget: censored) and the Vargha-Delaney A12; the same test
-with the start-up taken out; the share of trials that have found the bug over time.
+with the start-up taken out; the share of trials that have found the bug over time. Under the
+table, how many of its verdicts stand once corrected for the number of comparisons it makes
+(``corrected``).
 """
 
 from __future__ import annotations
@@ -105,6 +107,7 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
         "",
         *_head(mode, "", "vs "),
     ]
+    tests: list[tuple[float, str]] = []
     for bug in mode.bugs:
         by_engine = _by_engine(runs, bug, mode)
         cells = []
@@ -122,24 +125,60 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
             if hits and median == "-":
                 median = f">{mode.budget:.0f}"
             cells.append(f"{median} ({len(hits)}/{len(mine)})")
-        cells += verdicts(by_engine, mode, censored)
+        found = comparisons(by_engine, mode, censored)
+        tests += [(test[0], test[2]) for test in found if test is not None]
+        cells += [_cell(test) for test in found]
         lines.append(f"| {bug} | " + " | ".join(cells) + " |")
-    return "\n".join([*lines, "", *search_table(runs, mode)])
+    return "\n".join([*lines, "", corrected(tests), "", *search_table(runs, mode)])
+
+
+def corrected(tests: list[tuple[float, str]]) -> str:
+    """How many of a table's verdicts (``(p, verdict)`` per comparison) stand at Bonferroni's
+    threshold, ``ALPHA`` over their number: the chance that any of the verdicts standing is a
+    chance result stays below ``ALPHA`` (each verdict of the table is at p < ``ALPHA`` alone, and
+    with 60-88 comparisons a few of those are chance). Not Benjamini-Hochberg
+    (``scipy.stats.false_discovery_control``): it bounds the share of chance verdicts among
+    those kept, and a table's many strong "faster" verdicts would then keep a weak "slower"
+    one, where the question is whether any "slower" verdict is real."""
+    if not tests:
+        return "No comparisons to correct."
+    threshold = ALPHA / len(tests)
+    kept = {
+        v: (sum(t == v for _, t in tests), sum(t == v and p < threshold for p, t in tests))
+        for v in ("faster", "slower")
+    }
+    (faster, faster_kept), (slower, slower_kept) = kept["faster"], kept["slower"]
+    return (
+        f"Corrected for the table's {len(tests)} comparisons (Bonferroni: p < {ALPHA}/{len(tests)} = "
+        f'{threshold:.2g}): {faster_kept} of its {faster} "faster" and {slower_kept} of its {slower} '
+        f'"slower" verdicts stand.'
+    )
+
+
+def comparisons(
+    by_engine: dict[str, list[Run]], mode: Mode, times: Callable[[list[Run], float], list[float]]
+) -> list[tuple[float, float, str] | None]:
+    """Per baseline, the full engine's ``times`` against the baseline's: ``compare``'s (p, A12,
+    verdict), or None without trials of either."""
+    full = times(by_engine[mode.engines[0]], mode.budget)
+    return [
+        compare(full, times(by_engine[engine], mode.budget)) if by_engine[engine] and full else None
+        for engine in mode.engines[1:]
+    ]
+
+
+def _cell(test: tuple[float, float, str] | None) -> str:
+    if test is None:
+        return "n/a"
+    p, effect, verdict = test
+    return f"{verdict} (p={p:.3g}, A12={effect:.2f})"
 
 
 def verdicts(
     by_engine: dict[str, list[Run]], mode: Mode, times: Callable[[list[Run], float], list[float]]
 ) -> list[str]:
     """One cell per baseline: the full engine's ``times`` against the baseline's (MWU, A12)."""
-    full = times(by_engine[mode.engines[0]], mode.budget)
-    cells = []
-    for engine in mode.engines[1:]:
-        if not by_engine[engine] or not full:
-            cells.append("n/a")
-            continue
-        p, effect, verdict = compare(full, times(by_engine[engine], mode.budget))
-        cells.append(f"{verdict} (p={p:.3g}, A12={effect:.2f})")
-    return cells
+    return [_cell(test) for test in comparisons(by_engine, mode, times)]
 
 
 def search_table(runs: list[Run], mode: Mode) -> list[str]:

@@ -288,11 +288,25 @@ def test_survival_and_markdown() -> None:
     assert "(4/4)" in row and "- (0/4)" in row and "faster" in row
     assert "tabulated from a results file" in text  # how many ran at once is not known
     assert "1 run at a time" in deep_stats.markdown(runs, mode, "cmd", jobs=1)
+    assert (
+        'Corrected for the table\'s 1 comparisons (Bonferroni: p < 0.05/1 = 0.05): 1 of its 1 "faster"'
+        in text
+    )
     assert "2 runs at a time" in deep_stats.markdown(runs, mode, "cmd", jobs=2)
     late = [_run("full", 0, 2.0), _run("full", 1, 12.0)]  # the second past the 10-s budget
     table = deep_stats.markdown(late, mode, "cmd").splitlines()
     row = next(ln for ln in table if ln.startswith("| narrow_band"))
     assert "(1/2)" in row  # a detection after the budget is not one within it
+
+
+def test_a_verdict_stands_corrected_only_below_alpha_over_the_comparisons() -> None:
+    """60-88 comparisons per table: at p < 0.05 each, one true tie in 40 comes out "slower" by
+    chance. Bonferroni keeps a verdict at p < 0.05 / the table's comparisons."""
+    tests = [(0.0001, "faster"), (0.008, "faster"), (0.006, "slower")] + [(0.5, "tie")] * 7
+    line = deep_stats.corrected(tests)  # threshold 0.005
+    assert '1 of its 2 "faster" and 0 of its 1 "slower" verdicts stand' in line
+    assert '2 of its 2 "faster" and 1 of its 1 "slower"' in deep_stats.corrected(tests[:3])  # 0.0167
+    assert deep_stats.corrected([]) == "No comparisons to correct."
 
 
 def test_the_search_table_takes_the_start_up_out() -> None:
