@@ -455,7 +455,10 @@ def test_a_second_ctrl_c_kills_the_trials_running_and_keeps_none_of_them(
         return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
 
     def press_ctrl_c_twice() -> None:
+        deadline = time.monotonic() + 60.0  # a trial that never starts fails the test, never hangs it
         while not started.exists():
+            if time.monotonic() > deadline:
+                return
             time.sleep(0.02)
         os.kill(os.getpid(), signal.SIGINT)
         time.sleep(0.3)
