@@ -11,10 +11,11 @@ Every deep bug (``benchmarks.zoo.DEEP``: faults confined to narrow regions of th
 space), or with ``--mode zoo`` every bug of the shallow zoo (``benchmarks.zoo.ZOO``), runs
 under every engine of ``benchmarks.bench_zoo`` (``full``, ``libfuzzer``, ``paper``,
 ``hypothesis``, ``uniform``; the baselines run the scenario bugs too since 2026-11-29),
-N trials each (``-seed`` = the trial number), on the same budget, each trial a subprocess
-started the same way (``bench_zoo.run_one``). A trial stops at its first detection
-(``stop_at_detection``): its time to first detection is the engine's own timestamp in its
-log, which stopping does not change, and what it would find later is not measured. Per (bug,
+N trials each (``-seed`` = the trial number, counted from ``--first-seed``, default 0), on the
+same budget, each trial a subprocess started the same way (``bench_zoo.run_one``). A trial
+stops at its first detection (``stop_at_detection``): its time to first detection is the
+engine's own timestamp in its log, which stopping does not change, and what it would find
+later is not measured. Per (bug,
 engine): detection rate and median time to first detection; per bug, the full engine against
 each baseline: the two-sided Mann-Whitney U test on the times to detection (a trial that
 never detects counts as the budget: censored) and the Vargha-Delaney A12 (the probability that
@@ -28,7 +29,9 @@ Each finished trial is also appended to ``deep-<mode>.jsonl`` in the results fol
 (``benchmarks.journal``), so a sweep stopped part way (``--stop-after MINUTES``, or killed)
 keeps what it ran: ``--resume`` runs only the missing trials, on the same code (the journal's
 commit, or one that changed only results and Markdown), and ``--from-json deep-<mode>.jsonl``
-tabulates them so far. The journal goes once ``deep-<mode>.json`` holds every trial.
+tabulates them so far. The journal goes once ``deep-<mode>.json`` holds every trial. With
+``--first-seed N`` (seeds other than the tables' 0-9) the files are ``deep-<mode>-seedsN-M.*``
+and no table of BENCHMARKS.md is replaced.
 """
 
 from __future__ import annotations
@@ -103,6 +106,13 @@ def main(argv: list[str] | None = None) -> list[Run]:
     parser.add_argument("--bugs", nargs="+", default=None, choices=list(BUGS))
     parser.add_argument("--engines", nargs="+", default=None, choices=ALL_ENGINES)
     parser.add_argument("--trials", type=int, default=None)
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="the first trial's -seed (default 0): the trials are seeds FIRST_SEED to "
+        "FIRST_SEED + trials - 1, e.g. to see whether a verdict holds beyond the tables' seeds 0-9",
+    )
     parser.add_argument("--budget", type=float, default=None)
     parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
@@ -129,6 +139,17 @@ def main(argv: list[str] | None = None) -> list[Run]:
     )
     if mode.engines[0] != "full":
         parser.error("the first engine must be 'full' (the one compared against the others)")
+    if args.first_seed < 0 or mode.trials < 1:
+        parser.error(
+            f"--first-seed must be 0 or more and --trials 1 or more, not {args.first_seed} and {mode.trials}"
+        )
+    args.stem = f"deep-{args.mode}"
+    if args.first_seed:  # other seeds than the tables': files of their own, and no table replaced
+        if args.write_md:
+            parser.error(
+                "--write-md takes the tables' seeds (from 0); --first-seed's trials get files of their own"
+            )
+        args.stem += f"-seeds{args.first_seed}-{args.first_seed + mode.trials - 1}"
     if args.from_json is not None:
         partial = args.from_json.suffix == ".jsonl"
         if partial and args.write_md:
@@ -152,13 +173,16 @@ def main(argv: list[str] | None = None) -> list[Run]:
             f"A sweep in progress: the {len(runs)} trials its journal holds so far (a cell counts its own). "
         )
         return _report(runs, mode, args, argv, copy=False, note=so_far if partial else "")
-    jobs = [(BUGS[b], e, t) for b in mode.bugs for e in mode.engines for t in range(mode.trials)]
+    seeds = range(args.first_seed, args.first_seed + mode.trials)
+    jobs = [(BUGS[b], e, t) for b in mode.bugs for e in mode.engines for t in seeds]
     # a seeded random order, as FuzzBench does: a change of machine load during the sweep then
     # falls on every engine alike instead of on the engines that happen to run last
     random.Random(0).shuffle(jobs)
     commit = journal.commit_of(ROOT)
-    sweep = journal.Sweep(args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit)
-    path = args.results / f"deep-{args.mode}.jsonl"
+    sweep = journal.Sweep(
+        args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit, first_seed=args.first_seed
+    )
+    path = args.results / f"{args.stem}.jsonl"
 
     def trial(job: sweeps.Job, cpu: int | None) -> Run:
         return run_one(job[0], job[1], job[2], mode.budget, stop_at_detection=True, cpu=cpu)
@@ -199,8 +223,8 @@ def _report(
     ``note``), and with --write-md put them into BENCHMARKS.md."""
     args.results.mkdir(parents=True, exist_ok=True)
     if copy:
-        (args.results / f"deep-{args.mode}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
-    plot(runs, mode, args.results / f"deep-{args.mode}.png")
+        (args.results / f"{args.stem}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
+    plot(runs, mode, args.results / f"{args.stem}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
     text = note + markdown(runs, mode, cmd.strip(), args.jobs if copy else None)
     print(text)

@@ -72,6 +72,9 @@ class Sweep:
         ``bench_zoo``'s ops that every bug runs under (its ``ops`` mode), or none.
     replay : bool
         ``bench_zoo``'s replay of crash files, part of each trial's record.
+    first_seed : int
+        The first trial's ``-seed`` (``bench_deep --first-seed``): the trials are seeds
+        ``first_seed`` to ``first_seed + trials - 1``.
     """
 
     mode: str
@@ -83,6 +86,7 @@ class Sweep:
     tool: str = "bench_deep"
     ops: tuple[str, ...] = ()
     replay: bool = False
+    first_seed: int = 0
 
     def header(self) -> dict[str, Any]:
         row = asdict(self)
@@ -90,8 +94,8 @@ class Sweep:
 
 
 def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
-    """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``
-    and ``replay`` are their defaults.
+    """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``,
+    ``replay`` and ``first_seed`` are their defaults.
 
     Raises
     ------
@@ -101,12 +105,13 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
     kinds: dict[str, Any] = {
         "mode": str,
         "trials": int,
+        "first_seed": int,
         "budget": (int, float),
         "commit": str,
         "replay": bool,
     }
     values = {**_DEFAULTS, **{k: v for k, v in header.items() if k in _FIELDS}}
-    for name in ("mode", "bugs", "engines", "trials", "budget", "commit", "ops", "replay"):
+    for name in ("mode", "bugs", "engines", "trials", "first_seed", "budget", "commit", "ops", "replay"):
         value = values.get(name)
         if name in ("bugs", "engines", "ops"):
             good = isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value)
@@ -118,7 +123,7 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
     return Sweep(**{**values, **tuples, "budget": float(values["budget"]), "tool": tool})
 
 
-SAME_SWEEP = ("mode", "bugs", "engines", "trials", "budget", "ops", "replay")
+SAME_SWEEP = ("mode", "bugs", "engines", "trials", "first_seed", "budget", "ops", "replay")
 """The header's keys that must equal this run's for ``--resume``."""
 _DEFAULTS = {f.name: f.default for f in fields(Sweep) if f.default is not MISSING}
 _FIELDS = {f.name for f in fields(Sweep)} - {"tool"}

@@ -141,6 +141,41 @@ def test_an_unfinished_journal_is_neither_overwritten_nor_resumed_by_another_swe
     assert (tmp_path / "deep-quick.jsonl.old").read_bytes() == kept
 
 
+def test_first_seed_runs_other_seeds_in_files_of_their_own(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    runs = _sweep(tmp_path, "--first-seed", "10")
+    assert sorted({r.seed for r in runs}) == [10, 11] and len(runs) == 8
+    assert sorted({seed for _, _, seed in fake.calls}) == [10, 11]
+    assert (tmp_path / "deep-quick-seeds10-11.json").exists() and (
+        tmp_path / "deep-quick-seeds10-11.png"
+    ).exists()
+    assert not (tmp_path / "deep-quick.json").exists()  # the tables' seeds' file is not touched
+    for extra, says in (
+        (("--first-seed", "10", "--write-md"), "--write-md takes the tables' seeds"),
+        (("--first-seed", "-1"), "--first-seed must be 0 or more"),
+        (("--trials", "-2"), "--trials 1 or more"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            _sweep(tmp_path / "refused", *extra)
+        assert exit_info.value.code == 2 and says in capsys.readouterr().err, extra
+    assert not (tmp_path / "refused").exists()
+    # a journal keeps its seeds: resumed with other seeds, it is another sweep's
+    _sweep(tmp_path / "part", "--first-seed", "10", "--stop-after", "1.5")
+    held = tmp_path / "part" / "deep-quick-seeds10-11.jsonl"
+    assert json.loads(held.read_text().splitlines()[0])["first_seed"] == 10
+    held.rename(tmp_path / "part" / "deep-quick-seeds20-21.jsonl")
+    with pytest.raises(SystemExit):
+        _sweep(tmp_path / "part", "--first-seed", "20", "--resume")
+    assert "written for another sweep (first_seed 10, this run's 20)" in capsys.readouterr().err
+    # a journal written before --first-seed existed holds seeds from 0
+    header = journal.Sweep("quick", ("b",), ("full",), 2, 10.0, "c" * 40).header()
+    del header["first_seed"]
+    assert journal.sweep_of(header, "bench_deep").first_seed == 0
+    with pytest.raises(journal.JournalError, match="first_seed"):
+        journal.sweep_of({**header, "first_seed": "10"}, "bench_deep")
+
+
 def _changed(line: str, **changes: object) -> str:
     """A journal line with some fields of its trial changed."""
     return json.dumps({**json.loads(line), **changes}) + "\n"
