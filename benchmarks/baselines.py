@@ -39,10 +39,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from benchmarks import cli
 from fuzzer import campaign, reporting
 from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
-from fuzzer.execution.session import RunConfig, Session, versions
+from fuzzer.execution.session import ConfigError, RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus, scripts
 from fuzzer.harness import Harness
@@ -181,7 +182,11 @@ def main() -> None:
     parser.add_argument("--op", default="move", choices=("move", "fk", "ik", "scenario"))
     parser.add_argument("--targets", default="native,python")
     args = parser.parse_args()
-    a, b = args.targets.split(",")
+    cli.check_sizes(parser, seconds=args.seconds)
+    pair = args.targets.split(",")
+    if len(pair) != 2 or not all(pair):
+        parser.error(f"--targets takes two targets, as in native,python, not {args.targets!r}")
+    a, b = pair
     config = RunConfig(
         op=args.op,
         robot=args.robot,
@@ -189,8 +194,11 @@ def main() -> None:
         targets=(a, b),
         tolerance=default_tolerance(args.op),
     )
-    args.artifacts.mkdir(parents=True, exist_ok=True)
-    harness = run(args.engine, config, args.artifacts, args.seconds, args.seed)
+    cli.check_folder(parser, args.artifacts)
+    try:
+        harness = run(args.engine, config, args.artifacts, args.seconds, args.seed)
+    except ConfigError as exc:  # a robot, tip link or target the session cannot load
+        parser.error(str(exc))
     reporting.summary(harness.stats, 0, str(args.artifacts), [], [])
 
 

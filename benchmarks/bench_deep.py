@@ -43,7 +43,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from benchmarks import journal, sweeps
+from benchmarks import cli, journal, sweeps
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, Run, run_one
 from benchmarks.deep_stats import Mode, markdown, plot
 from benchmarks.zoo import DEEP, ZOO, Bug
@@ -139,10 +139,9 @@ def main(argv: list[str] | None = None) -> list[Run]:
     )
     if mode.engines[0] != "full":
         parser.error("the first engine must be 'full' (the one compared against the others)")
-    if args.first_seed < 0 or mode.trials < 1:
-        parser.error(
-            f"--first-seed must be 0 or more and --trials 1 or more, not {args.first_seed} and {mode.trials}"
-        )
+    cli.check_sizes(parser, trials=args.trials, budget=args.budget)
+    if args.first_seed < 0:
+        parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
     args.stem = f"deep-{args.mode}"
     if args.first_seed:  # other seeds than the tables': files of their own, and no table replaced
         if args.write_md:
@@ -150,6 +149,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
                 "--write-md takes the tables' seeds (from 0); --first-seed's trials get files of their own"
             )
         args.stem += f"-seeds{args.first_seed}-{args.first_seed + mode.trials - 1}"
+    cli.check_folder(parser, args.results)
     if args.from_json is not None:
         partial = args.from_json.suffix == ".jsonl"
         if partial and args.write_md:

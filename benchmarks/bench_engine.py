@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks import cli
+
 ROOT = Path(__file__).resolve().parents[1]
 SUMMARY = re.compile(r"executions: (\d+) in ([0-9.]+) s")
 PAPER_RUNS = 15246
@@ -103,6 +105,7 @@ def main() -> None:
     parser.add_argument("--mutator", default=None, help="pass --mutator to fuzz_diff.py (e.g. weights)")
     parser.add_argument("--sweep", action="store_true", help="measure the batched FK path alone")
     args = parser.parse_args()
+    cli.check_sizes(parser, seconds=args.seconds)
     cpus = len(os.sched_getaffinity(0))
     if args.sweep:
         rates = [sweep_rate(args.seconds, seed) for seed in args.seeds]

@@ -19,6 +19,7 @@ import argparse
 import statistics
 import time
 
+from benchmarks import cli
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
@@ -68,6 +69,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
+    cli.check_sizes(parser, rounds=args.rounds, seconds=args.seconds)
     for op in args.ops:
         rates = rate(op, not args.plain, args.rounds, args.seconds, args.seed)
         shown = ", ".join(f"{r:,.0f}" for r in rates)

@@ -30,6 +30,7 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
+from benchmarks import cli
 from benchmarks.bench_zoo import command
 from benchmarks.trials import NOT_DETECTIONS
 from benchmarks.zoo import BY_NAME, CONTROL
@@ -172,6 +173,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--configs", default=",".join(CONFIGS))
     parser.add_argument("--write-md", action="store_true")
     args = parser.parse_args(argv)
+    cli.check_sizes(parser, seeds=args.seeds, budget=args.budget)
     configs = [c for c in args.configs.split(",") if c]
     unknown = [c for c in configs if c not in BY_NAME]
     if unknown:

@@ -23,7 +23,9 @@ import numpy as np
 
 import native
 import python_impl
+from benchmarks import cli
 from robot_api import robots
+from robot_api.errors import URDFError
 
 
 def median_time(func: Callable[[], object], number: int, repeat: int) -> float:
@@ -59,7 +61,11 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--robot", default=robots.DEFAULT_ROBOT)
     args = parser.parse_args()
-    urdf = str(robots.resolve(args.robot))
+    cli.check_sizes(parser, rounds=args.rounds, repeat=args.repeat)
+    try:
+        urdf = str(robots.resolve(args.robot))
+    except URDFError as exc:
+        parser.error(str(exc))
     cpus = len(os.sched_getaffinity(0))
     print(
         f"# {platform.machine()}, {cpus} CPU(s) available, robot {args.robot}, "

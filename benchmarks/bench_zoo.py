@@ -46,7 +46,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from benchmarks import journal, sweeps, trials
+from benchmarks import cli, journal, sweeps, trials
 from benchmarks.trials import NOT_DETECTIONS, run_until_detection
 from benchmarks.zoo import BY_NAME, CONTROL, CONTROLS, STATEFUL, ZOO, Bug
 from benchmarks.zoo_tables import (
@@ -345,6 +345,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     args = parser.parse_args(argv)
     sweeps.check_arguments(parser, args)
+    cli.check_sizes(parser, seeds=args.seeds, budget=args.budget)
     if args.render is not None:
         return render(parser, args.render, args.write_md)
     mode = MODES[args.mode]
@@ -359,6 +360,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     jobs = plan_jobs(bugs, engines, seeds, mode.ops)
     out = args.out or RESULTS / f"zoo-{args.mode}.json"
     keep = args.keep_failures or out.parent / "control-failures"
+    cli.check_folder(parser, out.parent)
     path = out.with_suffix(".jsonl")
     sweep = journal.Sweep(
         args.mode, bugs, engines, seeds, budget, journal.commit_of(ROOT), "bench_zoo", mode.ops, replay

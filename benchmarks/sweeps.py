@@ -133,6 +133,8 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         parser.error("--resume and --restart exclude each other")
     if args.stop_after is not None and not args.stop_after > 0:
         parser.error(f"--stop-after must be a positive number of minutes, not {args.stop_after}")
+    if args.jobs < 1:
+        parser.error(f"--jobs must be 1 or more, not {args.jobs}")
 
 
 def run_sweep(
@@ -277,6 +279,8 @@ def sweep_in_journal(
         book, done = open_sweep(path, sweep, root, resume=args.resume, restart=args.restart)
     except JournalError as exc:
         parser.error(str(exc))
+    except OSError as exc:
+        parser.error(f"{path}: cannot keep the sweep's journal there ({exc.strerror or exc})")
     if done:
         print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
     compile_tree(root)

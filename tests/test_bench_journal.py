@@ -154,7 +154,6 @@ def test_first_seed_runs_other_seeds_in_files_of_their_own(
     for extra, says in (
         (("--first-seed", "10", "--write-md"), "--write-md takes the tables' seeds"),
         (("--first-seed", "-1"), "--first-seed must be 0 or more"),
-        (("--trials", "-2"), "--trials 1 or more"),
     ):
         with pytest.raises(SystemExit) as exit_info:
             _sweep(tmp_path / "refused", *extra)
@@ -174,6 +173,46 @@ def test_first_seed_runs_other_seeds_in_files_of_their_own(
     assert journal.sweep_of(header, "bench_deep").first_seed == 0
     with pytest.raises(journal.JournalError, match="first_seed"):
         journal.sweep_of({**header, "first_seed": "10"}, "bench_deep")
+
+
+@pytest.mark.parametrize(
+    ("extra", "says"),
+    [
+        (("--trials", "0"), "--trials must be a finite number above 0, not 0"),
+        (("--trials", "-2"), "--trials must be a finite number above 0, not -2"),
+        (("--budget", "0"), "--budget must be a finite number above 0, not 0.0"),
+        (("--budget", "-5"), "--budget must be a finite number above 0, not -5.0"),
+        (("--budget", "nan"), "--budget must be a finite number above 0, not nan"),
+        (("--budget", "inf"), "--budget must be a finite number above 0, not inf"),
+        (("--jobs", "0"), "--jobs must be 1 or more, not 0"),
+        (("--jobs", "-1"), "--jobs must be 1 or more, not -1"),
+    ],
+)
+def test_a_count_or_budget_of_nothing_is_named_and_nothing_runs(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: tuple[str, ...], says: str
+) -> None:
+    # before, 0 meant the mode's default, and a negative budget or number of jobs ran anyway
+    with pytest.raises(SystemExit) as exit_info:
+        bench_deep.main(["--mode", "quick", "--results", str(tmp_path), *extra])
+    assert exit_info.value.code == 2 and says in capsys.readouterr().err
+    assert fake.calls == [] and list(tmp_path.iterdir()) == []
+
+
+def test_a_results_folder_that_cannot_be_made_is_named_before_any_trial(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    blocked = tmp_path / "a-file"
+    blocked.write_text("not a folder")
+    for main, extra in (
+        (bench_deep.main, ["--mode", "quick", "--results", str(blocked / "results")]),
+        (bench_zoo.main, ["--mode", "quick", "--out", str(blocked / "results" / "zoo.json")]),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            main(extra)
+        said = capsys.readouterr().err
+        assert exit_info.value.code == 2 and f"{blocked / 'results'}: cannot hold the results" in said
+        assert "Traceback" not in said
+    assert fake.calls == [] and blocked.read_text() == "not a folder"
 
 
 def _changed(line: str, **changes: object) -> str:
