@@ -149,7 +149,7 @@ def campaign_parser() -> argparse.ArgumentParser:
         "--seeds",
         type=int,
         default=None,
-        help="Hypothesis seeds to generate into the corpus (default 32 when it is empty)",
+        help="Hypothesis seeds to generate into the corpus (default 32 when it is empty; at most 100000)",
     )
     parser.add_argument(
         "--seed", type=int, default=None, help="seed of the seed generation (default: -seed or 0)"
