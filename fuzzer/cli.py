@@ -46,8 +46,8 @@ def campaign_main(argv: Sequence[str]) -> int:
     # Files next to libFuzzer flags are libFuzzer's business (-minimize_crash, running single inputs).
     if args.seeds is not None and not 0 <= args.seeds <= MAX_SEEDS:
         raise UsageError(
-            f"--seeds must be from 0 to {MAX_SEEDS} (each seed is two files in the corpus, about 8 kB "
-            f"in all), not {args.seeds}"
+            f"--seeds must be from 0 to {MAX_SEEDS} (each is a file in the corpus, with the full "
+            f"engine's space-filling seed beside it: about 8 kB in all), not {args.seeds}"
         )
     from fuzzer.artifacts import travel
 
