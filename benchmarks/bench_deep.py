@@ -180,7 +180,14 @@ def main(argv: list[str] | None = None) -> list[Run]:
     random.Random(0).shuffle(jobs)
     commit = journal.commit_of(ROOT)
     sweep = journal.Sweep(
-        args.mode, mode.bugs, mode.engines, mode.trials, mode.budget, commit, first_seed=args.first_seed
+        args.mode,
+        mode.bugs,
+        mode.engines,
+        mode.trials,
+        mode.budget,
+        commit,
+        first_seed=args.first_seed,
+        machine=journal.machine_of(),
     )
     path = args.results / f"{args.stem}.jsonl"
 

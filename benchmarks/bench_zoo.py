@@ -363,7 +363,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     cli.check_folder(parser, out.parent)
     path = out.with_suffix(".jsonl")
     sweep = journal.Sweep(
-        args.mode, bugs, engines, seeds, budget, journal.commit_of(ROOT), "bench_zoo", mode.ops, replay
+        args.mode,
+        bugs,
+        engines,
+        seeds,
+        budget,
+        journal.commit_of(ROOT),
+        "bench_zoo",
+        mode.ops,
+        replay,
+        machine=journal.machine_of(),
     )
     load_before = _load()
 
@@ -378,7 +387,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         **result_of(sweep, runs),
         "jobs": args.jobs,
         "cpus": os.cpu_count(),
-        "machine": platform.machine(),
+        "machine": f"{platform.machine()}, {journal.cpu_model()}",
         "command": "python -m benchmarks.bench_zoo " + " ".join(argv if argv is not None else sys.argv[1:]),
         "load": f"{load_before} / {_load()}",
     }

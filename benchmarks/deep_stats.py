@@ -20,6 +20,7 @@ from pathlib import Path
 
 from scipy.stats import mannwhitneyu
 
+from benchmarks import journal
 from benchmarks.bench_zoo import Run
 
 ALPHA = 0.05
@@ -87,9 +88,10 @@ def markdown(runs: list[Run], mode: Mode, cmd: str, jobs: int | None = None) -> 
     """The tables; ``jobs``: runs at a time (None: tabulated from a results file, whose runs
     the text around the table must describe)."""
     at_once = f"{jobs} run{'s' if jobs != 1 else ''} at a time" if jobs else "tabulated from a results file"
+    where = f", {journal.cpu_model()}" if jobs else ""  # the machine that ran them (a results file has none)
     lines = [
         f"{mode.trials} trials x {mode.budget:.0f} s per (bug, engine), {at_once} on "
-        f"{os.cpu_count()} CPUs ({platform.machine()}, Python {platform.python_version()}). Command: "
+        f"{os.cpu_count()} CPUs ({platform.machine()}{where}, Python {platform.python_version()}). Command: "
         f"`{cmd}`. "
         + (
             "A trial stops at its first detection, which does not change its time to first "

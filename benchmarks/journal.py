@@ -27,6 +27,7 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import platform
 import subprocess
 import threading
 from dataclasses import MISSING, asdict, dataclass, fields
@@ -75,6 +76,11 @@ class Sweep:
     first_seed : int
         The first trial's ``-seed`` (``bench_deep --first-seed``): the trials are seeds
         ``first_seed`` to ``first_seed + trials - 1``.
+    machine : str
+        The machine that runs the trials (:func:`machine_of`; "" in journals from before it was
+        kept): ``--resume`` on another refuses, since one table's times must come from one kind
+        of machine (this workplace's sessions land on Intel Xeon or AMD EPYC VMs, whose
+        start-ups differ by about 2x).
     """
 
     mode: str
@@ -87,6 +93,7 @@ class Sweep:
     ops: tuple[str, ...] = ()
     replay: bool = False
     first_seed: int = 0
+    machine: str = ""
 
     def header(self) -> dict[str, Any]:
         row = asdict(self)
@@ -95,7 +102,7 @@ class Sweep:
 
 def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
     """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``,
-    ``replay`` and ``first_seed`` are their defaults.
+    ``replay``, ``first_seed`` and ``machine`` are their defaults.
 
     Raises
     ------
@@ -108,10 +115,22 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
         "first_seed": int,
         "budget": (int, float),
         "commit": str,
+        "machine": str,
         "replay": bool,
     }
     values = {**_DEFAULTS, **{k: v for k, v in header.items() if k in _FIELDS}}
-    for name in ("mode", "bugs", "engines", "trials", "first_seed", "budget", "commit", "ops", "replay"):
+    for name in (
+        "mode",
+        "bugs",
+        "engines",
+        "trials",
+        "first_seed",
+        "budget",
+        "commit",
+        "machine",
+        "ops",
+        "replay",
+    ):
         value = values.get(name)
         if name in ("bugs", "engines", "ops"):
             good = isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value)
@@ -127,6 +146,25 @@ SAME_SWEEP = ("mode", "bugs", "engines", "trials", "first_seed", "budget", "ops"
 """The header's keys that must equal this run's for ``--resume``."""
 _DEFAULTS = {f.name: f.default for f in fields(Sweep) if f.default is not MISSING}
 _FIELDS = {f.name for f in fields(Sweep)} - {"tool"}
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``, else ``platform.processor()`` or
+    ``platform.machine()``)."""
+    model = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as info:
+            model = next(
+                (line.split(":", 1)[1].strip() for line in info if line.startswith("model name")), ""
+            )
+    except OSError:
+        pass
+    return model or platform.processor() or platform.machine() or "unknown"
+
+
+def machine_of() -> str:
+    """This machine, as a journal keeps it: the CPU's model name and the number of CPUs."""
+    return f"{cpu_model()}, {os.cpu_count()} CPUs"
 
 
 def commit_of(root: Path) -> str:
@@ -246,6 +284,12 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
                 f"{path}: written for another sweep ({key} {theirs!r}, this run's "
                 f"{mine[key]!r}); run the same options, or --restart"
             )
+    machine = header.get("machine", "")
+    if machine and sweep.machine and machine != sweep.machine:
+        raise JournalError(
+            f"{path}: its trials ran on another machine ({machine}; this one: {sweep.machine}), "
+            f"and one table's times must come from one kind of machine. Resume it there, or --restart"
+        )
     commit = header.get("commit")
     if not isinstance(commit, str) or not same_code(root, commit):
         raise JournalError(

@@ -175,6 +175,27 @@ def test_first_seed_runs_other_seeds_in_files_of_their_own(
         journal.sweep_of({**header, "first_seed": "10"}, "bench_deep")
 
 
+def test_a_journal_resumes_only_on_the_kind_of_machine_that_began_it(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(journal, "machine_of", lambda: "AMD EPYC, 2 CPUs")
+    _sweep(tmp_path, "--stop-after", "1.5")
+    path = tmp_path / "deep-quick.jsonl"
+    lines = path.read_text().splitlines(keepends=True)
+    assert json.loads(lines[0])["machine"] == "AMD EPYC, 2 CPUs"
+    monkeypatch.setattr(journal, "machine_of", lambda: "Intel Xeon, 2 CPUs")
+    with pytest.raises(SystemExit):
+        _sweep(tmp_path, "--resume")
+    said = capsys.readouterr().err
+    assert "its trials ran on another machine (AMD EPYC, 2 CPUs; this one: Intel Xeon, 2 CPUs)" in said
+    assert path.read_text().splitlines(keepends=True) == lines
+    # a journal from before machines were kept (no "machine") resumes anywhere
+    header = json.loads(lines[0])
+    del header["machine"]
+    path.write_text(json.dumps(header) + "\n" + "".join(lines[1:]))
+    assert len(_sweep(tmp_path, "--resume")) == 8
+
+
 @pytest.mark.parametrize(
     ("extra", "says"),
     [
