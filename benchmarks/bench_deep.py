@@ -15,12 +15,12 @@ N trials each (``-seed`` = the trial number, counted from ``--first-seed``, defa
 same budget, each trial a subprocess started the same way (``bench_zoo.run_one``). A trial
 stops at its first detection (``stop_at_detection``): its time to first detection is the
 engine's own timestamp in its log, which stopping does not change, and what it would find
-later is not measured. Per (bug,
-engine): detection rate and median time to first detection; per bug, the full engine against
-each baseline: the two-sided Mann-Whitney U test on the times to detection (a trial that
-never detects counts as the budget: censored) and the Vargha-Delaney A12 (the probability that
-a full-engine trial detects sooner than a baseline trial, ties half; 0.5 = no difference). A
-survival plot (the share of trials that have found the bug over time) goes to
+later is not measured. Per (bug, engine): detection rate and median time to first
+detection; per bug, the full engine against each baseline: the two-sided Mann-Whitney U
+test on the times to detection (a trial that never detects counts as the budget: censored)
+and the Vargha-Delaney A12 (the probability that a full-engine trial detects sooner than a
+baseline trial, ties half; 0.5 = no difference). A survival plot (the share of trials that
+have found the bug over time) goes to
 ``benchmarks/results/deep-<mode>.png``; with ``--write-md`` the table replaces the marked
 section of BENCHMARKS.md (``--mode zoo`` and ``--mode full``: sections of their own, so that
 ``make bench-deep``'s 10-s table and ``make bench``'s 60-s one stand side by side).
@@ -228,8 +228,7 @@ def _report(
 ) -> list[Run]:
     """Write deep-<mode>.json (unless tabulating one) and .png, print the tables (after
     ``note``), and with --write-md put them into BENCHMARKS.md."""
-    args.results.mkdir(parents=True, exist_ok=True)
-    if copy:
+    if copy:  # the results folder: made by main's check_folder
         (args.results / f"{args.stem}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
     plot(runs, mode, args.results / f"{args.stem}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)

@@ -80,7 +80,7 @@ class Sweep:
         The machine that runs the trials (:func:`machine_of`; "" in journals from before it was
         kept): ``--resume`` on another refuses, since one table's times must come from one kind
         of machine (this workplace's sessions land on Intel Xeon or AMD EPYC VMs, whose
-        start-ups differ by about 2x).
+        quiet start-ups differed by about 1.5x).
     """
 
     mode: str
