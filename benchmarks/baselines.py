@@ -118,8 +118,10 @@ def _paper_mutate(
     return lambda message, ctx, strategy: scenario_mutate(message, ctx, f"{SEQ_STEP}:{strategy}")
 
 
-def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: int) -> Harness:
-    session = Session.open(config)
+def run(engine: str, config: RunConfig | Session, artifacts: Path, seconds: float, seed: int) -> Harness:
+    """Run the baseline ``engine`` for ``seconds`` on ``config`` (or a session already opened
+    for it), its crash files and log in ``artifacts``, every random choice drawn from ``seed``."""
+    session = config if isinstance(config, Session) else Session.open(config)
     rng = random.Random(seed)
     # what each engine evaluates first is also its Harness's seed: uniform sampling and
     # Hypothesis alone never wait for seeds they would not use (32 Hypothesis seeds, and for
@@ -135,7 +137,7 @@ def run(engine: str, config: RunConfig, artifacts: Path, seconds: float, seed: i
     deadline = time.monotonic() + seconds
     if engine == "paper":
         mutate = _paper_mutate(session)
-        prefix = f"{SEQ_STEP}:" if config.op == "scenario" else ""
+        prefix = f"{SEQ_STEP}:" if session.config.op == "scenario" else ""
         accepted = {f"{prefix}{strategy}" for strategy in mutators.PAPER_STRATEGIES}
         for case in seeds:
             harness.test_one_input(case.encode())
@@ -194,11 +196,12 @@ def main() -> None:
         targets=(a, b),
         tolerance=default_tolerance(args.op),
     )
-    cli.check_folder(parser, args.artifacts)
-    try:
-        harness = run(args.engine, config, args.artifacts, args.seconds, args.seed)
+    try:  # the robot, tip link and targets load before the artifacts folder is made
+        session = Session.open(config)
     except ConfigError as exc:  # a robot, tip link or target the session cannot load
         parser.error(str(exc))
+    cli.check_folder(parser, args.artifacts)
+    harness = run(args.engine, session, args.artifacts, args.seconds, args.seed)
     reporting.summary(harness.stats, 0, str(args.artifacts), [], [])
 
 
