@@ -47,7 +47,7 @@ bench-deep-full: setup
 	$(PY) -m benchmarks.bench_deep --mode full --write-md $$(test -f benchmarks/results/deep-full.jsonl && echo --resume)
 
 ## The deep bugs against the goal's baselines, 10 trials x 10 s, each stopping at its first detection
-## (39 minutes on 2 cores on 2063e32, every baseline on every bug).
+## (41 minutes on 2 cores on 0dcf0f0, an Intel Xeon; 39 on 2063e32; every baseline on every bug).
 bench-deep: setup
 	$(PY) -m benchmarks.bench_deep --mode short --write-md $$(test -f benchmarks/results/deep-short.jsonl && echo --resume)
 
