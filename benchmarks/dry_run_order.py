@@ -102,7 +102,7 @@ def source_of(case: TestCase) -> str:
 def first_stage(session: Session, seed: int) -> list[TestCase]:
     """The first stage's inputs of a full-engine campaign with ``-seed=seed``, in order."""
     stages = dry_run.Stages(session, "rrosfuzz", seed, WANTED, 0, lambda base, sweep: None)  # type: ignore[arg-type,return-value]
-    return [case for part in stages._first_parts(literals=True) for case in part]
+    return [case for _, part in stages._first_parts(literals=True) for case in part]
 
 
 def one_seed(bug: Bug, session: Session, seed: int, uniform_inputs: int) -> SeedResult:

@@ -107,8 +107,9 @@ after them)."""
 
 LEAD = 32
 """Uniform configurations (``move``) the first stage evaluates before its aligned
-configurations and boundary probes (about 15 ms); the rest of ``EARLY`` comes after the probes
-(about 40 ms), still before the seeds. With 32 in the first stage and 96 after the seeds,
+configurations and boundary probes (about 15 ms; the literal configurations go among them,
+after ``HEAD``); the rest of ``EARLY`` comes after the probes (about 40 ms), still before the
+seeds. With 32 in the first stage and 96 after the seeds,
 ``wrap_past_pi`` (a band 2.4% of uniform targets hit) waited for the second stage in about half
 the trials."""
 
@@ -119,10 +120,23 @@ one input each (about 0.1 ms for ``fk``, 0.5 ms for ``move``). On the default ro
 show ``rpy_gimbal_band`` (a gimbal-lock branch of a roll-pitch-yaw conversion), which no
 uniform configuration of 2,000 did."""
 
+HEAD = 4
+"""Uniform configurations (``move``) the first stage evaluates before its ``LITERALS``
+configurations, the rest of ``LEAD`` after them. Until 2026-11-30 the literals came after the
+boundary probes, 100 inputs in: in about half the seeds the first 32 uniform configurations
+missed ``wrap_past_pi`` (a band 2.4% of them hit, starting at a number its module compares
+against), which then waited for them, and the full engine was slower than uniform sampling on
+it over seeds 30-69 (p = 0.0017). Counted in inputs over seeds 10-49
+(``benchmarks.dry_run_order``), literals after the first configuration put ``wrap_past_pi`` at
+13 (uniform sampling: median 31.5) and ``per_joint_band`` at 10 (97), and the boundary probes'
+bugs 13-14 inputs later; after 4, a few seeds whose first configuration misses
+``wrap_positive`` still meet it at once (docs/benchmarks-log.md, thirty-fifth session)."""
+
 LITERALS = 16
 """Configurations with joints at the numbers the Python targets compare against
-(``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates after
-its boundary probes, before the rest of its uniform configurations. With them `per_joint_band`
+(``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates: for
+``move`` after ``HEAD`` uniform configurations, for the other ops after the boundary probes.
+Placed after the probes, with them `per_joint_band`
 (a band 2e-5 wide starting at a module constant) was found 3.2 times sooner (1.76 against
 0.54 s from process start, 10 trials, p = 0.00018), no zoo bug's search significantly longer
 but `ik_status_misread`'s, by 12 ms (p = 0.045); placed first, before the probes, they cost
@@ -222,15 +236,22 @@ MakeHarness = Callable[[Sequence[TestCase], Sweep | None], Harness]
 sidecar bound."""
 
 
+TUTORIAL_PART, UNIFORM_PART, PROBE_PART, LITERAL_PART = "tutorial", "uniform", "probe", "literal"
+"""Names of the first stage's parts (``Stages._first_parts``): MoveIt's tutorial scripts; uniform
+configurations or scripts; orientation, reach, aligned and boundary probes; the literal
+configurations."""
+
+
 @dataclass
 class Stages:
     """A campaign's dry run in two children, one per stage (``first``, ``second``).
 
     The first starts before the Hypothesis seeds exist (making 32 costs the campaign 75-95 ms):
     a pose campaign's orientation and reach probes, the first ``EARLY`` uniform sweeps (``fk``)
-    or ``LEAD`` configurations (``move``), ``ALIGNED`` aligned configurations, the boundary
-    probes, ``LITERALS`` configurations at the targets' compared numbers, then the rest of
-    ``EARLY``'s configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform
+    or ``LEAD`` configurations (``move``; ``LITERALS`` configurations at the targets' compared
+    numbers after the first ``HEAD`` of them), ``ALIGNED`` aligned configurations, the boundary
+    probes (then the literal configurations of the other ops), then the rest of ``EARLY``'s
+    configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform
     scripts. The second starts once they exist: the seeds, then the rest of the uniform work
     (``SWEEPS``, ``UNIFORM``); a scenario has none (``SECOND_STAGE_OPS``). On one CPU the
     campaign waits for each child before it goes on (``launch``); on two, the children run
@@ -270,21 +291,24 @@ class Stages:
             return [TestCase(msg_type, {"steps": [dict(GO)]}, 0, SPACEFILL)]
         return [TestCase(msg_type, self.session.registry.default(msg_type), 0, SPACEFILL)]
 
-    def _first_parts(self, literals: bool = False) -> Iterator[list[TestCase]]:
+    def _first_parts(self, literals: bool = False) -> Iterator[tuple[str, list[TestCase]]]:
         """The first stage's inputs (besides its sweeps) in the order they are evaluated, in
-        parts, each made when its turn comes: the child evaluates its first input while the
-        rest are still to be made (making all of ``move``'s took 2-3 ms before it). A pose
-        campaign's orientation and reach probes; the first uniform configuration, then the
-        rest of the first ``LEAD``; the aligned ones and the boundary probes; with
-        ``literals``, ``literal_cases``' configurations; the rest of the ``EARLY`` uniform
-        configurations. A scenario's: the tutorial scripts, then the uniform ones."""
+        parts named by what they hold, each made when its turn comes: the child evaluates its
+        first input while the rest are still to be made (making all of ``move``'s took 2-3 ms
+        before it). A pose campaign's orientation and reach probes; the first uniform
+        configuration, then the rest of the first ``HEAD``; the ``LITERAL_PART``; the rest of
+        the first ``LEAD``; the aligned ones and the boundary probes; the ``LITERAL_PART`` of an
+        op without uniform configurations; the rest of the ``EARLY`` uniform configurations. A
+        scenario's: the tutorial scripts, then the uniform ones. The ``LITERAL_PART`` holds
+        ``literal_cases``' configurations with ``literals``, else nothing (it marks where they
+        go: ``first_cases``)."""
         session, wanted = self.session, self.wanted
         op = session.config.op
         seed = self.seed + SWEEP_SEED
         if op == "scenario":
             tutorials = tutorial_seeds(session, self.seed, wanted)
-            yield tutorials
-            yield uniform_scripts(session, SCRIPTS, seed, wanted + len(tutorials))
+            yield TUTORIAL_PART, tutorials
+            yield UNIFORM_PART, uniform_scripts(session, SCRIPTS, seed, wanted + len(tutorials))
             return
         orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
         probes = [] if orientation else boundary_cases(session, BOUNDARY_ROUNDS, wanted)
@@ -293,30 +317,33 @@ class Stages:
         # reach_cases' numbers follow the aligned configurations', which are none for a pose,
         # the only message type reach_cases makes inputs for
         reach = reach_cases(session, seed, at + count)
-        yield orientation + reach
+        yield PROBE_PART, orientation + reach
         lead = min(LEAD, count)
-        first = uniform_cases(session, count, seed, at, stop=min(1, lead))
-        yield first
-        leading = uniform_cases(session, count, seed, at, start=min(1, lead), stop=lead)
-        yield leading
+        head = min(HEAD, lead)
+        yield UNIFORM_PART, uniform_cases(session, count, seed, at, stop=min(1, lead))
+        yield UNIFORM_PART, uniform_cases(session, count, seed, at, start=min(1, lead), stop=head)
         aligned = aligned_cases(session, ALIGNED.get(op, 0), seed, at + count)
-        yield aligned + probes
-        rest = uniform_cases(session, count, seed, at, start=lead)
-        if literals:  # numbered after the second stage's inputs, as literal_cases
-            parts = (orientation, reach, first, leading, aligned, probes, rest)
-            yield literal_cases(session, LITERALS, wanted + sum(map(len, parts)) + self._later_uniform())
-        yield rest
+        # numbered after the second stage's inputs, as literal_cases
+        made = len(orientation) + len(reach) + count + len(aligned) + len(probes)
+        after = wanted + made + self._later_uniform()
+        if count:
+            yield LITERAL_PART, literal_cases(session, LITERALS, after) if literals else []
+        yield UNIFORM_PART, uniform_cases(session, count, seed, at, start=head, stop=lead)
+        yield PROBE_PART, aligned + probes
+        if not count:  # made only now: reading the source would hold up the probes
+            yield LITERAL_PART, literal_cases(session, LITERALS, after) if literals else []
+        yield UNIFORM_PART, uniform_cases(session, count, seed, at, start=lead)
 
     def first_cases(self) -> list[TestCase]:
         """The first stage's inputs (besides its sweeps, and but for ``literal_cases``), all
-        made (``_first_parts``): orientation and reach probes, the first ``LEAD`` uniform
-        configurations, the aligned ones, the boundary probes, the rest of the ``EARLY``
-        uniform configurations. Sets where ``literal_cases`` go among them, and how many they
-        are (which numbers the second stage's inputs)."""
-        parts = list(self._first_parts())
-        cases = [case for part in parts for case in part]
-        scenario = self.session.config.op == "scenario"
-        self._literal_at = len(cases) - (0 if scenario else len(parts[-1]))
+        made (``_first_parts``): orientation and reach probes, the uniform configurations, the
+        aligned ones, the boundary probes. Sets where ``literal_cases`` go among them
+        (``_literal_at``), and how many they are (which numbers the second stage's inputs)."""
+        cases: list[TestCase] = []
+        for name, part in self._first_parts():
+            if name == LITERAL_PART:
+                self._literal_at = len(cases)
+            cases += part
         self._first_count = len(cases)
         return cases
 
@@ -328,8 +355,8 @@ class Stages:
     def literal_cases(self) -> list[TestCase]:
         """The first ``LITERALS`` configurations with joints at the numbers the Python targets
         compare against (``corpus.literal_cases``), numbered after the second stage's inputs.
-        The first stage makes them in its child, once its boundary probes have run: reading the
-        targets' source takes 5-16 ms, which the campaign's start-up would otherwise wait for."""
+        The first stage makes them in its child when their turn comes (``_first_parts``): reading
+        the targets' source takes 5-16 ms, which the campaign's start-up would otherwise wait for."""
         first = self.wanted + self._first_count + self._later_uniform()  # after second_cases' numbers
         return literal_cases(self.session, LITERALS, first)
 
@@ -352,7 +379,7 @@ class Stages:
             harness = self.make_harness(self._base(), made)
             for _ in range(early + 1 if made is not None else 0):  # FIRST_ROWS rows, then early sweeps
                 harness.run_sweep()
-            for part in self._first_parts(literals=True):  # the literals made here: off the start-up
+            for _, part in self._first_parts(literals=True):  # the literals made here: off the start-up
                 evaluate(harness, part, snapshot=False)
             harness.maybe_snapshot(force=True)
 

@@ -315,7 +315,8 @@ def test_the_first_stage_evaluates_its_first_input_before_it_makes_the_rest(
     monkeypatch.setattr(dry_run, "aligned_cases", made)
     expected = _stages(op, seed=3).first_cases()
     early = min(dry_run.EARLY.get(op, 0), dry_run.UNIFORM.get(op, 0))
-    at = len(expected) - max(0, early - dry_run.LEAD)  # the literals go before the later uniform ones
+    # the literals go after the first HEAD uniform configurations (move), else after the probes
+    at = min(dry_run.HEAD, early) if early else len(expected)
     literals = dry_run.Stages(session, "rrosfuzz", 3, 8, 0, None)
     literals.first_cases()
     evaluated = [e for e in events if isinstance(e, TestCase)]

@@ -63,18 +63,34 @@ def test_configurations_put_each_number_on_every_joint_that_holds_it_then_one_jo
     assert many == [(0.1 * k,) * 6 for k in range(1, 17)]  # every joint at a number first
 
 
-def test_the_dry_run_puts_a_targets_numbers_after_its_boundary_probes() -> None:
-    """``per_joint_band``'s band starts at a module constant of ``benchmarks/zoo/deep.py``."""
+def test_the_dry_run_puts_a_targets_numbers_after_its_first_uniform_configurations() -> None:
+    """``per_joint_band``'s band starts at a module constant of ``benchmarks/zoo/deep.py``. A
+    ``move`` dry run evaluates the literal configurations after its first ``HEAD`` uniform
+    ones, before the rest of them and before the aligned configurations and boundary probes
+    (after those until 2026-11-30, 100 inputs in); an ``fk`` one, which has no uniform
+    configurations, after its boundary probes."""
     from benchmarks.zoo.deep import CORRECTED_FROM
     from fuzzer import dry_run
     from fuzzer.execution.session import RunConfig, Session
-    from fuzzer.selection.state import BOUNDARY, LITERAL, UNIFORM
+    from fuzzer.selection.state import ALIGNED, BOUNDARY, LITERAL, UNIFORM
 
     session = Session.open(RunConfig(op="move", targets=("native", "benchmarks.zoo.deep:per_joint_band")))
     stages = dry_run.Stages(session, "rrosfuzz", 1, 8, 0, lambda *_: None)  # type: ignore[arg-type]
     first = stages.first_cases()
     at = stages._literal_at
-    assert first[at - 1].lineage == (BOUNDARY,) and all(c.lineage == (UNIFORM,) for c in first[at:])
+    assert 0 < at == dry_run.HEAD < dry_run.LEAD
+    assert all(c.lineage == (UNIFORM,) for c in first[: dry_run.LEAD])
+    assert first[dry_run.LEAD].lineage == (ALIGNED,)
+    fk = dry_run.Stages(
+        Session.open(RunConfig(op="fk", targets=("native", "benchmarks.zoo.deep:narrow_band"))),
+        "rrosfuzz",
+        1,
+        8,
+        0,
+        lambda *_: None,  # type: ignore[arg-type]
+    )
+    probed = fk.first_cases()
+    assert fk._literal_at == len(probed) and probed[-1].lineage == (BOUNDARY,)
     literal = stages.literal_cases()
     assert 0 < len(literal) <= dry_run.LITERALS and all(c.lineage == (LITERAL,) for c in literal)
     numbers = [c.sequence for c in [*first, *stages.second_cases([]), *literal]]
