@@ -118,10 +118,9 @@ def _paper_mutate(
     return lambda message, ctx, strategy: scenario_mutate(message, ctx, f"{SEQ_STEP}:{strategy}")
 
 
-def run(engine: str, config: RunConfig | Session, artifacts: Path, seconds: float, seed: int) -> Harness:
-    """Run the baseline ``engine`` for ``seconds`` on ``config`` (or a session already opened
-    for it), its crash files and log in ``artifacts``, every random choice drawn from ``seed``."""
-    session = config if isinstance(config, Session) else Session.open(config)
+def run(engine: str, session: Session, artifacts: Path, seconds: float, seed: int) -> Harness:
+    """Run the baseline ``engine`` for ``seconds`` on ``session``, its crash files and log in
+    ``artifacts``, every random choice drawn from ``seed``."""
     rng = random.Random(seed)
     # what each engine evaluates first is also its Harness's seed: uniform sampling and
     # Hypothesis alone never wait for seeds they would not use (32 Hypothesis seeds, and for

@@ -93,7 +93,7 @@ def test_the_papers_loop_changes_the_values_of_one_step_only(session: Session) -
 
 @pytest.mark.parametrize("engine", baselines.ENGINES)
 def test_each_baseline_runs_scenarios(engine: str, tmp_path: Path) -> None:
-    harness = baselines.run(engine, _config(), tmp_path, 1.0, 1)
+    harness = baselines.run(engine, Session.open(_config()), tmp_path, 1.0, 1)
     assert harness.stats.execs > 0
     assert harness.stats.malformed == 0
 
@@ -129,7 +129,7 @@ def first(self, data):
 Harness.test_one_input = first
 config = RunConfig(op={op!r}, targets=("native", "python"), tolerance=default_tolerance({op!r}))
 try:
-    baselines.run("uniform", config, Path(tempfile.mkdtemp()), 5.0, 7)
+    baselines.run("uniform", Session.open(config), Path(tempfile.mkdtemp()), 5.0, 7)
 except SystemExit:
     pass
 session, rng = Session.open(config), random.Random(7)
@@ -140,6 +140,6 @@ print([data for data, _ in seen] == expected, seen[0][1])
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.split() == ["True", "False"], "the same inputs, and no Hypothesis before the first"
     config = RunConfig(op=op, targets=("native", "python"), tolerance=default_tolerance(op))
-    harness = baselines.run("hypothesis", config, tmp_path, 0.3, 2)
+    harness = baselines.run("hypothesis", Session.open(config), tmp_path, 0.3, 2)
     batch = corpus.make_seeds(Session.open(config), baselines.HYPOTHESIS_BATCH, 2 * 100_003)
     assert harness.seeds == batch, "its first batch is its Harness's seed, not 32 more"
