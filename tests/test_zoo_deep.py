@@ -123,6 +123,34 @@ def test_ik_seed_band_only_from_seeds_in_its_band(reference: python_impl.RobotMo
     assert model.inverse_kinematics(goal).joint_values[0] != 0.0  # the default seed is home: no fault
 
 
+def test_ik_seed_band_answers_from_its_band_without_solving(monkeypatch, reference) -> None:  # type: ignore[no-untyped-def]
+    """The fault returns before any Newton-Raphson iteration (a seed in the band costs no
+    solve), and after the twin's own argument checks: a bad pose or seed is the twin's error."""
+    from python_impl import kinematics
+    from robot_api.errors import InvalidInputError
+
+    model = deep.ik_seed_band.RobotModel(ANNO)
+    goal = reference.forward_kinematics([0.5, 0.3, 0.6, 0.0, 0.7, 0.0])
+
+    def no_solve(*args: Any, **kwargs: Any) -> Any:
+        raise AssertionError("solved from a seed in the band")
+
+    monkeypatch.setattr(kinematics, "ik", no_solve)
+    answer = model.inverse_kinematics(goal, [0.305, 0.3, 0.6, 0.0, 0.7, 0.0])
+    assert (str(answer.status), answer.joint_values) == ("success", (0.305, 0.3, 0.6, 0.0, 0.7, 0.0))
+    twin = python_impl.RobotModel(ANNO)
+    for pose, seed in (
+        (goal, [0.305, math.nan, 0.6, 0.0, 0.7, 0.0]),
+        (goal, [0.305, 0.3]),
+        (((math.inf, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)), [0.305, 0.3, 0.6, 0.0, 0.7, 0.0]),
+    ):
+        with pytest.raises(InvalidInputError) as mine:
+            model.inverse_kinematics(pose, seed)
+        with pytest.raises(InvalidInputError) as theirs:
+            twin.inverse_kinematics(pose, seed)
+        assert str(mine.value) == str(theirs.value)
+
+
 # -- the deep scenario bugs: each needs a call sequence, and the tutorial scripts miss them ----------
 
 

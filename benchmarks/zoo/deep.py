@@ -233,11 +233,19 @@ per_joint_band = _impl(group=_PerJointBand)
 
 
 class _SeedBandIk(Model):
+    """The fault returns before solving, as a seed wrongly taken for converged does: the
+    arguments are checked first (the same errors as the twin's), then no Newton-Raphson
+    iteration is run from a seed in the band. Until 2026-12-01 the fault solved first and
+    threw the answer away; its answers were the same, but every in-band call of a long
+    Cartesian path paid a solve from a seed the path had left behind (up to 100 iterations),
+    and confirming one detecting script took seconds (docs/benchmarks-log.md, "Where
+    `ik_seed_band`'s seconds go")."""
+
     def inverse_kinematics(self, pose: Pose, seed: Any = None, link: str | None = None) -> IKResult:
-        result = super().inverse_kinematics(pose, seed, link)
+        self._ik_start(pose, seed, link)  # the twin's argument checks and errors, unchanged
         if seed is not None and len(seed) and 0.3 <= float(seed[0]) < 0.31:
             return IKResult(IKStatus.SUCCESS, tuple(float(v) for v in seed), 0.0, 0.0)
-        return result
+        return super().inverse_kinematics(pose, seed, link)
 
 
 ik_seed_band = _impl(model=_SeedBandIk)
