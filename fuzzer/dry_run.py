@@ -41,6 +41,7 @@ from fuzzer.generation.corpus import (
     aligned_cases,
     boundary_cases,
     literal_cases,
+    literal_scripts,
     orientation_cases,
     reach_cases,
     space_filling_count,
@@ -135,7 +136,11 @@ bugs 13-14 inputs later; after 4, a few seeds whose first configuration misses
 LITERALS = 16
 """Configurations with joints at the numbers the Python targets compare against
 (``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates: for
-``move`` after ``HEAD`` uniform configurations, for the other ops after the boundary probes.
+``move`` after ``HEAD`` uniform configurations, for the other ops after the boundary probes; a
+scenario's first uniform scripts each start at one, their bands' middles first
+(``corpus.literal_scripts``), right after the tutorial scripts (since 2026-12-01: over seeds
+20-49, ``ik_seed_band`` met at the 5th script instead of the 19th, ``execute_skips_start_check``
+the 7th instead of the 13th; docs/benchmarks-log.md).
 Placed after the probes, with them `per_joint_band`
 (a band 2e-5 wide starting at a module constant) was found 3.2 times sooner (1.76 against
 0.54 s from process start, 10 trials, p = 0.00018), no zoo bug's search significantly longer
@@ -251,9 +256,10 @@ class Stages:
     or ``LEAD`` configurations (``move``; ``LITERALS`` configurations at the targets' compared
     numbers after the first ``HEAD`` of them), ``ALIGNED`` aligned configurations, the boundary
     probes (then the literal configurations of the other ops), then the rest of ``EARLY``'s
-    configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform
-    scripts. The second starts once they exist: the seeds, then the rest of the uniform work
-    (``SWEEPS``, ``UNIFORM``); a scenario has none (``SECOND_STAGE_OPS``). On one CPU the
+    configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform scripts, the
+    first ``LITERALS`` of them from literal configurations. The second starts once they exist:
+    the seeds, then the rest of the uniform work (``SWEEPS``, ``UNIFORM``); a scenario has none
+    (``SECOND_STAGE_OPS``). On one CPU the
     campaign waits for each child before it goes on (``launch``); on two, the children run
     while the campaign starts up.
 
@@ -299,16 +305,20 @@ class Stages:
         configuration, then the rest of the first ``HEAD``; the ``LITERAL_PART``; the rest of
         the first ``LEAD``; the aligned ones and the boundary probes; the ``LITERAL_PART`` of an
         op without uniform configurations; the rest of the ``EARLY`` uniform configurations. A
-        scenario's: the tutorial scripts, then the uniform ones. The ``LITERAL_PART`` holds
-        ``literal_cases``' configurations with ``literals``, else nothing (it marks where they
-        go: ``first_cases``)."""
+        scenario's: the tutorial scripts, then the uniform ones, in the ``LITERAL_PART`` the
+        first of them from literal configurations (``literal_scripts``, with ``literals``). The
+        ``LITERAL_PART`` holds ``literal_cases``' configurations with ``literals``, else nothing
+        (it marks where they go: ``first_cases``)."""
         session, wanted = self.session, self.wanted
         op = session.config.op
         seed = self.seed + SWEEP_SEED
         if op == "scenario":
             tutorials = tutorial_seeds(session, self.seed, wanted)
             yield TUTORIAL_PART, tutorials
-            yield UNIFORM_PART, uniform_scripts(session, SCRIPTS, seed, wanted + len(tutorials))
+            scripts = uniform_scripts(session, SCRIPTS, seed, wanted + len(tutorials))
+            started = literal_scripts(session, scripts, LITERALS, seed + 1) if literals else []
+            yield LITERAL_PART, started
+            yield UNIFORM_PART, scripts[len(started) :]
             return
         orientation = orientation_cases(session, wanted + space_filling_count(op, wanted))
         probes = [] if orientation else boundary_cases(session, BOUNDARY_ROUNDS, wanted)

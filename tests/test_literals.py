@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import math
+import random
 import sys
 import types
+from pathlib import Path
+
+import pytest
 
 from fuzzer.generation.literals import (
+    band_middles,
     compared_numbers,
     literal_configurations,
     module_numbers,
@@ -35,6 +40,26 @@ def test_the_compared_numbers_are_the_literals_and_module_constants_of_compariso
 def test_a_source_that_does_not_parse_has_none_and_is_never_run() -> None:
     assert compared_numbers("def (:\n") == []
     assert compared_numbers("import os\nos.remove('/nonexistent') if 1 < 2 else None\n") == [1.0, 2.0]
+
+
+def test_a_band_between_two_numbers_gives_its_middle_first() -> None:
+    """``4.0 <= v < 4.05`` and ``LOW <= x < HIGH`` are bands; ``q[0] > LIMIT`` is not (one
+    side), nor ``1 < 2 < v`` (no unknown in the middle) nor ``a < b < c`` (no number)."""
+    assert band_middles(SOURCE) == [pytest.approx(4.025), pytest.approx(0.86132)]
+    assert band_middles("1 < 2 < v\na < b < c\nv <= 3 <= w\n") == []
+    assert band_middles("def (:\n") == []
+    name = "fuzzer_test_literals_bands"
+    module = types.ModuleType(name)
+    sys.modules[name] = module
+    try:
+        module.__file__ = __file__
+        plain, banded = module_numbers([name]), module_numbers([name], bands=True)
+        assert banded[: len(band_middles(Path(__file__).read_text()))] == band_middles(
+            Path(__file__).read_text()
+        )
+        assert [v for v in banded if v in plain] == plain  # then the numbers, in their order
+    finally:
+        del sys.modules[name]
 
 
 def test_module_numbers_read_loaded_python_modules_only() -> None:
@@ -108,3 +133,79 @@ def _values(message: object) -> list[float]:
     if isinstance(message, list):
         return [v for x in message for v in _values(x)]
     return [message] if isinstance(message, float) else []
+
+
+def _scenario_stages(target: str, seed: int = 1, max_steps: int = 16):  # type: ignore[no-untyped-def]
+    from fuzzer import dry_run
+    from fuzzer.execution.session import RunConfig, Session
+
+    config = RunConfig(op="scenario", robot="probot_anno", targets=("native", target), max_steps=max_steps)
+    return dry_run.Stages(Session.open(config), "rrosfuzz", seed, 8, 0, lambda *_: None)  # type: ignore[arg-type]
+
+
+def test_a_scenario_dry_run_starts_its_first_uniform_scripts_at_the_targets_numbers() -> None:
+    """After the tutorial scripts, the first uniform scripts each go to a literal configuration
+    (a band's middle first: ``ik_seed_band``'s seed band [0.3, 0.31)), then make a Cartesian
+    path from there (an IK seeded with that state), then run the uniform script; the rest of
+    the uniform scripts, and a target without compared numbers, are as before."""
+    from fuzzer import dry_run
+    from fuzzer.generation.scripts import START_STEPS, uniform_script
+    from fuzzer.scenario import steps as scenario_steps
+    from fuzzer.selection.state import LITERAL, UNIFORM
+
+    stages = _scenario_stages("benchmarks.zoo.deep:ik_seed_band")
+    session = stages.session
+    parts = list(stages._first_parts(literals=True))
+    assert [name for name, _ in parts] == [dry_run.TUTORIAL_PART, dry_run.LITERAL_PART, dry_run.UNIFORM_PART]
+    tutorials, started, rest = (part for _, part in parts)
+    assert 0 < len(started) <= dry_run.LITERALS and len(started) + len(rest) == dry_run.SCRIPTS
+    rng = random.Random(1 + dry_run.SWEEP_SEED)
+    uniform = [uniform_script(session, rng) for _ in range(dry_run.SCRIPTS)]
+    assert [c.message for c in rest] == uniform[len(started) :]
+    numbers = [c.sequence for c in (*started, *rest)]
+    assert numbers == list(range(8 + len(tutorials), 8 + len(tutorials) + dry_run.SCRIPTS))
+    for case, script in zip(started, uniform, strict=False):
+        steps = case.message["steps"]
+        assert [s["topic"] for s in steps[:START_STEPS]] == ["/joint_target", "/go", "/cartesian_path"]
+        assert steps[START_STEPS:] == script["steps"][: session.config.max_steps - START_STEPS]
+        assert case.lineage == (UNIFORM, LITERAL)
+        scenario_steps.validate(case.message, session.registry, session.config.max_steps)
+    first = started[0].message["steps"][0]["msg"]["position"]
+    assert 0.3 <= first[0] < 0.31 and first[0] == pytest.approx(0.305)
+    plain = list(_scenario_stages("python")._first_parts(literals=True))
+    assert [len(part) for name, part in plain if name == dry_run.LITERAL_PART] == [0]  # no numbers
+    short = list(
+        _scenario_stages("benchmarks.zoo.deep:ik_seed_band", max_steps=START_STEPS - 1)._first_parts(True)
+    )
+    assert [len(part) for name, part in short if name == dry_run.LITERAL_PART] == [0]  # no room
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_first_script_from_a_bands_middle_shows_ik_seed_band(seed: int) -> None:
+    """The planted fault: IK answers with its seed when the seed's joint_1 is in [0.3, 0.31).
+    The first literal script goes to 0.305 and solves a Cartesian path from there."""
+    from benchmarks.dry_run_order import detects
+    from fuzzer import dry_run
+
+    stages = _scenario_stages("benchmarks.zoo.deep:ik_seed_band", seed)
+    started = dict(stages._first_parts(literals=True))[dry_run.LITERAL_PART]
+    assert detects(stages.session.evaluator(), started[0])
+
+
+def test_scripts_from_literal_configurations_show_no_divergence_between_correct_targets() -> None:
+    """The deep zoo module's literal scripts (at joint values near limits, at 0.001, at a band's
+    middle) run on the correct twin against KDL: nothing that counts as a detection."""
+    from benchmarks.dry_run_order import detects
+    from fuzzer import dry_run
+    from fuzzer.generation.scripts import with_start
+
+    started = dict(_scenario_stages("benchmarks.zoo.deep:ik_seed_band")._first_parts(literals=True))[
+        dry_run.LITERAL_PART
+    ]
+    correct = _scenario_stages("python").session
+    evaluator = correct.evaluator()
+    for case in started:
+        values = case.message["steps"][0]["msg"]["position"]
+        message = with_start(correct, {"steps": case.message["steps"][3:]}, values, random.Random(7))
+        assert message is not None
+        assert not detects(evaluator, case.child(message, "control")), values

@@ -199,16 +199,56 @@ def literal_cases(session: Session, n: int, first: int = 0) -> list[TestCase]:
     Python targets compare against (``fuzzer.generation.literals``; their modules' source is
     parsed, never run), lineage ``spacefill:literal``. None for a scenario (as
     ``configuration_cases``), without reading a source."""
-    from fuzzer.execution.targets import module_of
-    from fuzzer.generation.literals import literal_configurations, module_numbers
     from fuzzer.selection.state import LITERAL
 
     if n <= 0 or session.config.op == "scenario" or not session.reference.joint_limits:
         return []
+    return configuration_cases(session, _literal_configurations(session, n), LITERAL, first)
+
+
+def _literal_configurations(session: Session, n: int, bands: bool = False) -> list[tuple[float, ...]]:
+    """Up to ``n`` ``literal_configurations`` of the numbers the Python targets' modules compare
+    against (``literals.module_numbers``; with ``bands``, their bands' middles first)."""
+    from fuzzer.execution.targets import module_of
+    from fuzzer.generation.literals import literal_configurations, module_numbers
+
     modules = [module_of(spec) for spec in session.config.targets if spec != "native"]
     facts = session.facts()
-    configurations = literal_configurations(module_numbers(modules), facts.lower, facts.upper, n)
-    return configuration_cases(session, configurations, LITERAL, first)
+    return literal_configurations(module_numbers(modules, bands), facts.lower, facts.upper, n)
+
+
+def literal_scripts(session: Session, scripts: Sequence[TestCase], n: int, seed: int) -> list[TestCase]:
+    """The first of ``scripts`` (a scenario's uniform ones), each run from its own literal
+    configuration (``scripts.with_start``): up to ``n`` configurations at the numbers the Python
+    targets compare against, the middles of the bands they test first (``literals.band_middles``:
+    a state inside a band, out of reach of the oracle's nudges), their Cartesian paths' poses
+    drawn with ``seed``; lineage ``spacefill:uniform`` then ``spacefill:literal``, the scripts'
+    numbers kept. None for the other ops, a target without such numbers, or ``max_steps`` below
+    ``scripts.START_STEPS``."""
+    import random
+
+    from fuzzer.generation.scripts import with_start
+    from fuzzer.selection.state import LITERAL
+
+    if n <= 0 or session.config.op != "scenario" or not session.reference.joint_limits:
+        return []
+    rng = random.Random(seed)
+    out = []
+    for case, values in zip(scripts, _literal_configurations(session, n, bands=True), strict=False):
+        message = with_start(session, case.message, list(values), rng)
+        if message is None:
+            return []
+        out.append(
+            TestCase(
+                case.msg_type,
+                message,
+                case.sequence,
+                case.origin,
+                (*case.lineage, LITERAL),
+                case.lineage_length + 1,
+            )
+        )
+    return out
 
 
 def tutorial_seeds(session: Session, seed: int, first: int = 0) -> list[TestCase]:

@@ -3,9 +3,14 @@ and libFuzzer's ``-dict``, for floats. The source is parsed (``ast``), never run
 
 ``compared_numbers`` collects the numeric operands of every comparison (``4.0 <= v < 4.05``:
 4.0 and 4.05), a module-level name bound to a number standing for it (``LOW <= v``, with
-``LOW = 0.86131``); ``literal_configurations`` puts them into joint configurations inside the
-limits. The full engine's dry run evaluates the first ``fuzzer.dry_run.LITERALS`` of them
-(``fuzzer.generation.corpus.literal_cases``). Only each target's own module is read (the
+``LOW = 0.86131``); ``band_middles`` the middle of each band a chained comparison bounds on
+both sides (4.025): inside it as far from both edges as can be, where the oracle's nudges of a
+state (``fuzzer.execution.ik_check.IK_PERTURBATIONS``) do not carry it out, as the ``compared``
+mutator's middle of two thresholds (``fuzzer.mutation.leaves``); ``literal_configurations``
+puts numbers into joint configurations inside the limits. The full engine's dry run evaluates
+the first ``fuzzer.dry_run.LITERALS`` of them (``fuzzer.generation.corpus.literal_cases``; a
+scenario's first uniform scripts start at them, bands' middles first:
+``corpus.literal_scripts``). Only each target's own module is read (the
 module of its spec, ``benchmarks.zoo.deep`` for ``benchmarks.zoo.deep:wrap_past_pi``), not
 its submodules or what it imports.
 """
@@ -71,20 +76,48 @@ def compared_numbers(source: str) -> list[float]:
     return list(found)
 
 
-def module_numbers(modules: Iterable[str]) -> list[float]:
-    """``compared_numbers`` of the source files of the loaded ``modules`` (a module not loaded,
-    or not from a ``.py`` file, has none)."""
+def band_middles(source: str) -> list[float]:
+    """The middles of the bands Python ``source`` tests with a chained comparison between two
+    numbers (``a <= x < b``, ``LOW < f(q) <= HIGH``: ``(a + b) / 2``), in the order met (none
+    when it does not parse)."""
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError):
+        return []
+    names = _module_names(tree)
     found: dict[float, None] = {}
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Compare) and len(node.comparators) == 2):
+            continue
+        low, middle, high = (_number(operand, names) for operand in (node.left, *node.comparators))
+        if low is not None and high is not None and middle is None:
+            value = (low + high) / 2.0
+            if math.isfinite(value):
+                found.setdefault(value, None)
+    return list(found)
+
+
+def _sources(modules: Iterable[str]) -> Iterable[str]:
+    """The source text of each loaded module of ``modules`` read from a ``.py`` file (a module
+    not loaded, or not from such a file, or unreadable, has none)."""
     for name in modules:
         module = sys.modules.get(name)
         path = getattr(module, "__file__", None)
         if not isinstance(path, str) or not path.endswith(".py"):
             continue
         try:
-            source = Path(path).read_text(encoding="utf-8")
+            yield Path(path).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError):
             continue
-        for value in compared_numbers(source):
+
+
+def module_numbers(modules: Iterable[str], bands: bool = False) -> list[float]:
+    """``compared_numbers`` of the source files of the loaded ``modules`` (a module not loaded,
+    or not from a ``.py`` file, has none); with ``bands``, each file's ``band_middles`` before
+    its numbers."""
+    found: dict[float, None] = {}
+    for source in _sources(modules):
+        for value in (*(band_middles(source) if bands else ()), *compared_numbers(source)):
             found.setdefault(value, None)
     return list(found)
 

@@ -5,7 +5,9 @@ A script has a uniform number of steps (1 to the campaign's ``max_steps``), each
 the scenario generator's weights (``fuzzer.input.mapping.SCENARIO_WEIGHTS``); joint targets are
 uniform inside the limits (a continuous joint's: -pi, pi), pose and position targets and
 Cartesian waypoints the tip's poses at uniform configurations, settings uniform in the
-generator's ranges. The only source of randomness is the injected ``random.Random``.
+generator's ranges. ``with_start`` runs a script from a given configuration (the full engine's
+dry run: ``fuzzer.generation.corpus.literal_scripts``). The only source of randomness is the
+injected ``random.Random``.
 """
 
 from __future__ import annotations
@@ -93,3 +95,33 @@ def uniform_script(session: Session, rng: random.Random) -> dict[str, Any]:
         kind = rng.choices(kinds, weights)[0]
         steps.append({"topic": KINDS[kind], "msg": uniform_step(session, rng, kind, remembered)})
     return {"steps": steps}
+
+
+START_STEPS: Final = 3
+"""Steps ``with_start`` puts before a script: a joint target, ``/go``, a Cartesian path."""
+
+
+def with_start(
+    session: Session, script: dict[str, Any], values: list[float], rng: random.Random
+) -> dict[str, Any] | None:
+    """``script`` run from ``values`` (rad, m; shape (n_joints,)): first a joint target at them
+    and ``/go``, then a ``/cartesian_path`` to the tip's pose at a uniform configuration (IK
+    seeded with the state just reached, and a plan that a later ``/execute`` runs), then the
+    script's steps, as many as ``max_steps`` leaves room for. None when ``max_steps`` is below
+    ``START_STEPS``. A fault that reads the current state (an IK seed, a plan's start) is met
+    from there; the script's own steps go on from a state other than home."""
+    if session.config.max_steps < START_STEPS:
+        return None
+    target = {
+        "header": header(),
+        "name": list(session.reference.joint_names),
+        "position": [float(v) for v in values],
+        "velocity": [],
+        "effort": [],
+    }
+    start = [
+        {"topic": KINDS["joint_target"], "msg": target},
+        {"topic": KINDS["go"], "msg": {}},
+        {"topic": KINDS["cartesian_path"], "msg": {"header": header(), "poses": [pose(session, rng)]}},
+    ]
+    return {"steps": [*start, *script["steps"]][: session.config.max_steps]}
