@@ -58,43 +58,47 @@ def _module_names(tree: ast.Module) -> dict[str, float]:
     return names
 
 
-def compared_numbers(source: str) -> list[float]:
-    """The numbers compared against in Python ``source``, in the order met (none when it does
-    not parse)."""
+def _comparisons(source: str) -> list[list[float | None]]:
+    """The operands of each comparison in Python ``source``, in the order met, each the number
+    it stands for or None (none when it does not parse)."""
     try:
         tree = ast.parse(source)
     except (SyntaxError, ValueError):
         return []
     names = _module_names(tree)
-    found: dict[float, None] = {}
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Compare):
-            for operand in (node.left, *node.comparators):
-                value = _number(operand, names)
-                if value is not None:
-                    found.setdefault(value, None)
+    return [
+        [_number(operand, names) for operand in (node.left, *node.comparators)]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Compare)
+    ]
+
+
+def _numbers(comparisons: list[list[float | None]]) -> list[float]:
+    found = {value: None for operands in comparisons for value in operands if value is not None}
     return list(found)
+
+
+def _middles(comparisons: list[list[float | None]]) -> list[float]:
+    found: dict[float, None] = {}
+    for operands in comparisons:
+        if len(operands) == 3:
+            low, middle, high = operands
+            if low is not None and high is not None and middle is None and math.isfinite(low + high):
+                found.setdefault((low + high) / 2.0, None)
+    return list(found)
+
+
+def compared_numbers(source: str) -> list[float]:
+    """The numbers compared against in Python ``source``, in the order met (none when it does
+    not parse)."""
+    return _numbers(_comparisons(source))
 
 
 def band_middles(source: str) -> list[float]:
     """The middles of the bands Python ``source`` tests with a chained comparison between two
     numbers (``a <= x < b``, ``LOW < f(q) <= HIGH``: ``(a + b) / 2``), in the order met (none
     when it does not parse)."""
-    try:
-        tree = ast.parse(source)
-    except (SyntaxError, ValueError):
-        return []
-    names = _module_names(tree)
-    found: dict[float, None] = {}
-    for node in ast.walk(tree):
-        if not (isinstance(node, ast.Compare) and len(node.comparators) == 2):
-            continue
-        low, middle, high = (_number(operand, names) for operand in (node.left, *node.comparators))
-        if low is not None and high is not None and middle is None:
-            value = (low + high) / 2.0
-            if math.isfinite(value):
-                found.setdefault(value, None)
-    return list(found)
+    return _middles(_comparisons(source))
 
 
 def _sources(modules: Iterable[str]) -> Iterable[str]:
@@ -117,7 +121,8 @@ def module_numbers(modules: Iterable[str], bands: bool = False) -> list[float]:
     its numbers."""
     found: dict[float, None] = {}
     for source in _sources(modules):
-        for value in (*(band_middles(source) if bands else ()), *compared_numbers(source)):
+        comparisons = _comparisons(source)  # parsed once for both
+        for value in (*(_middles(comparisons) if bands else ()), *_numbers(comparisons)):
             found.setdefault(value, None)
     return list(found)
 
