@@ -92,6 +92,27 @@ def test_headline_difference_has_a_unit() -> None:
     assert status.unit == "status" and status.difference == 0.0
 
 
+def test_each_joint_is_judged_against_its_own_tolerance() -> None:
+    """A prismatic joint in metres, a revolute one in radians, with different tolerances. Until
+    the thirty-seventh session the field was judged against the radians for every joint: a gap
+    of 2e-6 m within a 1e-5 m tolerance was a divergence naming no joint, and a gap of 5e-6 m
+    beyond a 1e-6 m tolerance agreed when the radians were 1e-5."""
+    loose_m = Tolerance(metres=1e-5, radians=1e-6)
+    within = compare(ok(joint_values=(0.0, 0.1)), ok(joint_values=(0.0, 0.1 + 2e-6)), loose_m, (False, True))
+    assert within.kind is Kind.AGREE
+    tight_m = Tolerance(metres=1e-6, radians=1e-5)
+    beyond = compare(ok(joint_values=(0.0, 0.1)), ok(joint_values=(0.0, 0.1 + 5e-6)), tight_m, (False, True))
+    assert (beyond.kind, beyond.joints, beyond.unit) == (Kind.VALUE, (1,), "m")
+    assert beyond.difference == pytest.approx(5e-6)
+    # the revolute joint within its radians while the prismatic one is beyond its metres: the
+    # headline is the prismatic joint's gap, not the larger number of the revolute joint
+    both = compare(ok(joint_values=(0.0, 0.1)), ok(joint_values=(8e-6, 0.1 + 2e-6)), tight_m, (False, True))
+    assert (both.kind, both.joints) == (Kind.VALUE, (1,)) and both.difference == pytest.approx(2e-6)
+    # a whole turn on the revolute joint is a representation divergence under either tolerance
+    turn = compare(ok(joint_values=(0.0, 0.1)), ok(joint_values=(2 * math.pi, 0.1)), loose_m, (False, True))
+    assert (turn.kind, turn.joints) == (Kind.REPRESENTATION, (0,))
+
+
 def test_value_field_precedence_is_stable() -> None:
     """joint values, then position, then orientation: the same bug lands on one field."""
     q1, q2 = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, math.sin(0.1), math.cos(0.1))

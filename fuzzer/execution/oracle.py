@@ -75,10 +75,17 @@ class _FieldDiff:
     field: str
     raw: float  # as numbers
     equivalent: float  # modulo equivalence
-    tolerance: float
+    tolerance: float  # of ``equivalent``
     sign_flip: bool
     joints: tuple[int, ...] = ()
     unit: str = "rad"
+    raw_tolerance: float | None = None  # of ``raw``, when not ``tolerance``
+
+    def beyond(self, kind: Kind) -> bool:
+        """Whether the field diverges as ``kind`` (value: modulo equivalence; else as numbers)."""
+        if kind is Kind.VALUE:
+            return self.equivalent > self.tolerance
+        return self.raw > (self.tolerance if self.raw_tolerance is None else self.raw_tolerance)
 
 
 def _near_pi(x: float, tol: float) -> bool:
@@ -93,7 +100,10 @@ def _joint_diff(
     tol: Tolerance,
     continuous: tuple[bool, ...] = (),
 ) -> _FieldDiff:
+    # each joint against its own limit (m or rad): the field reports the joint farthest beyond
+    # its limit, as numbers and modulo equivalence (with one limit for all, the largest gaps)
     raw = equivalent = 0.0
+    raw_limit = eq_limit = tol.radians
     joints: list[int] = []
     flip = False
     worst = -1.0
@@ -111,12 +121,15 @@ def _joint_diff(
             and _near_pi(y, limit)
         ):
             gap = eq  # either side of the (-pi, pi] boundary is the canonical answer
-        raw, equivalent = max(raw, gap), max(equivalent, eq)
+        if gap * raw_limit > raw * limit:  # gap / limit > raw / raw_limit, without dividing
+            raw, raw_limit = gap, limit
+        if eq * eq_limit > equivalent * limit:
+            equivalent, eq_limit = eq, limit
         if gap > limit:
             joints.append(i)
             if gap / limit > worst:
                 worst, flip, unit = gap / limit, (x < 0) != (y < 0), "m" if linear else "rad"
-    return _FieldDiff("joint_values", raw, equivalent, tol.radians, flip, tuple(joints), unit)
+    return _FieldDiff("joint_values", raw, equivalent, eq_limit, flip, tuple(joints), unit, raw_limit)
 
 
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
@@ -198,7 +211,7 @@ def compare(
         diffs.append(_orientation_diff(a.values["orientation"], b.values["orientation"], tol))
     largest = max((d.raw for d in diffs), default=0.0)
     for kind in (Kind.VALUE, Kind.REPRESENTATION):
-        found = [d for d in diffs if (d.equivalent if kind is Kind.VALUE else d.raw) > d.tolerance]
+        found = [d for d in diffs if d.beyond(kind)]
         if found:
             first = min(found, key=lambda d: FIELD_ORDER.index(d.field))
             return Comparison(
