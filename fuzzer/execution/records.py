@@ -8,6 +8,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+import numpy as np
+
 
 class Status(enum.StrEnum):
     """How a call on one target ended."""
@@ -20,6 +22,32 @@ class Status(enum.StrEnum):
     """Raised an error of the API (``robot_api.errors``), with a class and a code."""
     CRASHED = "crashed"
     """Raised anything else: a robustness bug in the target."""
+
+
+class Floats(tuple[float, ...]):
+    """A flat tuple of Python floats that keeps them as a read-only float64 array too
+    (``array``): the scenario oracle reads trajectories as arrays, and making an array of a long
+    tuple again costs about as much as making the tuple did. Equal, hashed and printed as a
+    tuple; :func:`floats` makes one, :func:`as_array` reads any tuple of floats as an array."""
+
+    array: np.ndarray
+
+
+def floats(values: Any) -> tuple[float, ...]:
+    """Any array-like of reals as a flat tuple of Python floats (row-major), which keeps its
+    values as a read-only float64 array (a copy: the target's own array may change)."""
+    array = np.array(values, dtype=np.float64).ravel()
+    array.flags.writeable = False
+    out = Floats(array.tolist())
+    out.array = array
+    return out
+
+
+def as_array(values: Any) -> np.ndarray:
+    """``values`` (a tuple of floats, or any array-like of reals) as a float64 array: the
+    read-only array a :class:`Floats` keeps, else a new one (``np.asarray``)."""
+    array = getattr(values, "array", None)
+    return array if isinstance(array, np.ndarray) else np.asarray(values, dtype=float)
 
 
 @dataclass(frozen=True)

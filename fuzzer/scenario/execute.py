@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.execution.records import Outcome, Status
+from fuzzer.execution.records import Outcome, Status, floats
 from fuzzer.scenario.nudge import Axis, Moved, Nudge, shifted_goal, shifted_state
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
@@ -55,8 +55,9 @@ _POSED = frozenset({"go", "execute"})
 
 
 def _floats(values: Any) -> tuple[float, ...]:
-    """Any array-like of reals as a flat tuple of Python floats (row-major)."""
-    return tuple(np.asarray(values, dtype=float).ravel().tolist())
+    """Any array-like of reals as a flat tuple of Python floats (row-major) that keeps its
+    array for the oracle (``fuzzer.execution.records.floats``)."""
+    return floats(values)
 
 
 def _trajectory(values: Values, trajectory: Any) -> None:

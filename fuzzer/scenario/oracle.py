@@ -42,13 +42,14 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzer.execution import oracle
-from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario import oracle_switch
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
 from fuzzer.scenario.oracle_ik import (
     FRACTION_TOLERANCE,
     absolute,
+    apart_rows,
     classify,
     ik_answer_changed,
     joints_apart,
@@ -106,8 +107,9 @@ def _rows(
     if dof == len(limits) and bool(np.all(np.abs(a - b).reshape(-1, dof) <= limits)):
         return None  # the fast path: equal as numbers within tolerance
     found: list[Comparison] = []
-    for row_a, row_b in zip(a.reshape(-1, dof), b.reshape(-1, dof), strict=True):
-        c = joints_apart(key, row_a.tolist(), row_b.tolist(), tol, facts)
+    rows_a, rows_b = a.reshape(-1, dof), b.reshape(-1, dof)
+    for r in apart_rows(rows_a, rows_b, tol, facts).tolist():  # the others agree
+        c = joints_apart(key, rows_a[r].tolist(), rows_b[r].tolist(), tol, facts)
         if c is not None:
             found.append(c)
     if not found:
@@ -146,7 +148,7 @@ def end_knife_edge(a: Outcome, b: Outcome, dof: int) -> tuple[Outcome, Outcome]:
     for key in SAMPLED:
         if key not in values:
             continue
-        rows = np.asarray(values[key], dtype=float)
+        rows = as_array(values[key])
         if rows.size != t.size * dof:
             return a, b  # malformed: compared (and reported) as it is
         values[key] = tuple(np.delete(rows.reshape(t.size, dof), -2, axis=0).reshape(-1).tolist())
@@ -161,8 +163,8 @@ def _switches(a: Outcome, b: Outcome, va: np.ndarray, vb: np.ndarray, dof: int) 
         return vb
     profiles = []
     for o, acc in ((a, va), (b, vb)):
-        times = np.asarray(o.values.get(TIMES, ()), dtype=float)
-        speeds = np.asarray(o.values.get("trajectory.velocities", ()), dtype=float)
+        times = as_array(o.values.get(TIMES, ()))
+        speeds = as_array(o.values.get("trajectory.velocities", ()))
         if not (times.size >= 3 and speeds.size == acc.size == times.size * dof):
             return vb
         profiles.append((times, speeds.reshape(-1, dof), acc.reshape(-1, dof)))
@@ -205,7 +207,7 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
         if key not in a.values or key not in b.values:
             found.append(value_divergence(field_name, math.inf, "status"))
             break
-        va, vb = np.asarray(a.values[key], dtype=float), np.asarray(b.values[key], dtype=float)
+        va, vb = as_array(a.values[key]), as_array(b.values[key])
         if key.startswith("trajectory."):
             if points[0] != points[1]:
                 found.append(

@@ -54,7 +54,7 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzer.execution import oracle
-from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
 from fuzzer.scenario.oracle_switch import ACCELERATION_TOLERANCE
@@ -124,6 +124,32 @@ def joints_apart(
     return replace(c, field=key) if c.divergent else None
 
 
+def apart_rows(x: np.ndarray, y: np.ndarray, tol: Tolerance, facts: ScenarioFacts) -> np.ndarray:
+    """Indices of the rows of ``x`` and ``y`` (N, dof) that ``joints_apart`` may call apart: those
+    with a joint whose values differ as numbers beyond its limit (``tol.metres`` for a prismatic
+    joint, ``tol.radians`` otherwise). ``joints_apart`` never calls apart a row within its limits
+    as numbers (its rules only ever lower a gap), so the rest need no call."""
+    linear = facts.prismatic
+    dof = x.shape[1]
+    limits = np.array([tol.metres if j < len(linear) and linear[j] else tol.radians for j in range(dof)])
+    with np.errstate(invalid="ignore"):  # inf - inf: NaN, which is beyond any limit
+        near = (x == y) | (np.abs(x - y) <= limits)
+    return np.flatnonzero(~near.all(axis=1))
+
+
+def pairs_apart(pairs: Pairs, tol: Tolerance, facts: ScenarioFacts) -> Pairs:
+    """The pairs of joint vectors ``joints_apart`` calls apart, in order; only the pairs that
+    differ as numbers beyond the tolerance (``apart_rows``) are compared."""
+    try:
+        x, y = (np.array([pair[k] for pair in pairs], dtype=float) for k in (0, 1))
+    except ValueError:  # vectors of unequal lengths: each pair compared on its own
+        return [(p, q) for p, q in pairs if joints_apart("", p, q, tol, facts) is not None]
+    if x.ndim != 2 or x.shape != y.shape:
+        return [(p, q) for p, q in pairs if joints_apart("", p, q, tol, facts) is not None]
+    maybe = apart_rows(x, y, tol, facts).tolist()
+    return [(p, q) for p, q in (pairs[r] for r in maybe) if joints_apart("", p, q, tol, facts) is not None]
+
+
 def solves_ik(call: ScenarioCall, step: int, before: Context) -> bool:
     """Whether the step at ``step`` solves IK (its goal or path), given what is in effect."""
     kind = call.steps[step].kind
@@ -136,7 +162,7 @@ def ik_answers(kind: str, a: Outcome, b: Outcome, dof: int) -> Pairs | None:
     if kind == "go":
         pair = (a.values.get("joint_values", ()), b.values.get("joint_values", ()))
         return [pair] if len(pair[0]) == len(pair[1]) == dof else None
-    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    rows = [as_array(o.values.get("trajectory.positions", ())) for o in (a, b)]
     if not dof or any(r.size == 0 or r.size % dof for r in rows):
         return None
     ra, rb = (r.reshape(-1, dof) for r in rows)
@@ -179,7 +205,7 @@ def classify(
         pairs = ik_answers(kind, a, b, len(facts.joints))
         if pairs is None:
             return c
-        apart = [(x, y) for x, y in pairs if joints_apart("", x, y, tol, facts) is not None]
+        apart = pairs_apart(pairs, tol, facts)
         if apart:
             link = before[0].pose_goal.link if (kind != "cartesian_path" and before[0].pose_goal) else None
             same = all(_same_pose(x, y, link, facts) for x, y in apart)
@@ -212,7 +238,7 @@ def _either_way_round(a: Outcome, b: Outcome, c: Comparison, facts: ScenarioFact
     round (MoveIt's interpolation of a continuous joint) is then either way, and which one a
     target takes depends on where within the tolerance its start lies."""
     dof = len(facts.joints)
-    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    rows = [as_array(o.values.get("trajectory.positions", ())) for o in (a, b)]
     if not c.joints or not dof or any(r.size == 0 or r.size % dof for r in rows):
         return False
     for j in c.joints:
@@ -313,7 +339,7 @@ def extent_changed(kind: str, first: Outcome, second: Outcome) -> bool:
     if kind == "go":
         return False
     times = [len(o.values.get("trajectory.time_from_start", ())) for o in (first, second)]
-    fa, fb = (np.asarray(o.values.get("fraction", (0.0,)), dtype=float) for o in (first, second))
+    fa, fb = (as_array(o.values.get("fraction", (0.0,))) for o in (first, second))
     if times[0] != times[1] or fa.size != fb.size:
         return True
     return absolute("", fa, fb, FRACTION_TOLERANCE, "") is not None
@@ -334,7 +360,7 @@ def ik_answer_changed(
     pairs = ik_answers(kind, first, second, len(facts.joints))
     if pairs is None:
         return True
-    return any(joints_apart("", x, y, tol, facts) is not None for x, y in pairs)
+    return bool(pairs_apart(pairs, tol, facts))
 
 
 STATE_GAP_MAX = 1e-3

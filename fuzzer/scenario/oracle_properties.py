@@ -36,7 +36,7 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzer.execution import oracle
-from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.constants import ACCELERATION_LIMIT
@@ -101,11 +101,11 @@ def check_trajectory(
 ) -> Comparison | None:
     """The properties of the trajectory a ``/plan`` or ``/cartesian_path`` step returned."""
     dof = len(facts.joints)
-    times = np.asarray(outcome.values.get("trajectory.time_from_start", ()), dtype=float)
+    times = as_array(outcome.values.get("trajectory.time_from_start", ()))
     m = len(times)
     arrays = []
     for name in ("positions", "velocities", "accelerations"):
-        flat = np.asarray(outcome.values.get(f"trajectory.{name}", ()), dtype=float)
+        flat = as_array(outcome.values.get(f"trajectory.{name}", ()))
         if flat.size != m * dof:
             return _violation(target, f"{kind}.trajectory.shape", abs(flat.size - m * dof), "points")
         arrays.append(flat.reshape(m, dof))

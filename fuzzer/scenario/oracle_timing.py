@@ -21,11 +21,12 @@ difference that cancels (an absolute rounding of about 1e-8 s).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
-from fuzzer.execution.records import Outcome
+from fuzzer.execution.records import Outcome, as_array
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
 from robot_api.constants import ACCELERATION_LIMIT, TRAJECTORY_DT
 from robot_api.errors import RobotAPIError
@@ -48,11 +49,31 @@ def limits_of(facts: ScenarioFacts) -> tuple[JointLimit, ...]:
 def reference_duration(kind: str, rows: np.ndarray, before: Context, facts: ScenarioFacts) -> float | None:
     """The duration (s) the contract gives a ``plan`` from ``rows[0]`` to ``rows[-1]`` or a
     ``cartesian_path`` through ``rows`` (M, dof), with ``before``'s scaling factors; None when
-    the contract would refuse them (a planning error, a bad value)."""
+    the contract would refuse them (a planning error, a bad value).
+
+    Remembered for the last ``DURATIONS`` questions, keyed by the bits of the points and the
+    factors: mutants of one script share its steps, so one campaign asks the same again and again
+    (the thirty-seventh session counted 326 questions of 48 kinds over 1,157 corpus inputs)."""
+    rows = np.ascontiguousarray(rows, dtype=np.float64)
+    scaling = np.array([before.velocity_scaling, before.acceleration_scaling], dtype=np.float64)
+    limits = limits_of(facts)  # its repr tells -0.0 from 0.0, which == does not
+    return _duration(kind, limits, repr(limits), rows.shape[1], rows.tobytes(), scaling.tobytes())
+
+
+DURATIONS = 512
+"""How many of ``reference_duration``'s answers are remembered."""
+
+
+@functools.lru_cache(maxsize=DURATIONS)
+def _duration(
+    kind: str, limits: tuple[JointLimit, ...], exact: str, dof: int, points: bytes, factors: bytes
+) -> float | None:
+    """``reference_duration`` of the points and factors as bits (float64); ``exact`` is
+    ``repr(limits)``, for the cache's key only."""
     from python_impl.trajectory import plan_trajectory, time_parameterize
 
-    limits = limits_of(facts)
-    scaling = before.velocity_scaling, before.acceleration_scaling
+    rows = np.frombuffer(points, dtype=np.float64).reshape(-1, dof)
+    scaling = tuple(float(f) for f in np.frombuffer(factors, dtype=np.float64))
     try:
         if kind == "plan":
             timed = plan_trajectory(limits, rows[0].tolist(), rows[-1].tolist(), *scaling)
@@ -81,8 +102,8 @@ def timed_as_contract(kind: str, outcome: Outcome, before: Context, facts: Scena
     if kind not in ("plan", "cartesian_path"):
         return False
     dof = len(facts.joints)
-    times = np.asarray(outcome.values.get("trajectory.time_from_start", ()), dtype=float)
-    flat = np.asarray(outcome.values.get("trajectory.positions", ()), dtype=float)
+    times = as_array(outcome.values.get("trajectory.time_from_start", ()))
+    flat = as_array(outcome.values.get("trajectory.positions", ()))
     if not dof or times.size == 0 or flat.size != times.size * dof or not np.isfinite(flat).all():
         return False
     expected = reference_duration(kind, flat.reshape(-1, dof), before, facts)
@@ -137,8 +158,8 @@ def phase_knife_edge(
     bits of two sums."""
     dof = len(facts.joints)
     key = "trajectory.accelerations"
-    flat = [np.asarray(o.values.get(key, ()), dtype=float) for o in (a, b)]
-    rows = [np.asarray(o.values.get("trajectory.positions", ()), dtype=float) for o in (a, b)]
+    flat = [as_array(o.values.get(key, ())) for o in (a, b)]
+    rows = [as_array(o.values.get("trajectory.positions", ())) for o in (a, b)]
     if (
         not dof
         or flat[0].size != flat[1].size
