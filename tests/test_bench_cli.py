@@ -23,7 +23,7 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_targets.main, ["--robot", "nosuch"], "robot 'nosuch' is neither a URDF file nor a known robot"),
     (bench_evaluate.main, ["--rounds", "0"], "--rounds must be a finite number above 0, not 0"),
     (bench_evaluate.main, ["--seconds", "nan"], "--seconds must be a finite number above 0, not nan"),
-    (bench_evaluate.main, ["--ops", "scenario", "--corpus", "nosuch"], "needs one --ops and a folder: nosuch"),
+    (bench_evaluate.main, ["--ops", "scenario", "--corpus", "nosuch"], "and a folder: nosuch"),
     (bench_evaluate.main, ["--ops", "fk", "move", "--corpus", "."], "--corpus needs one --ops"),
     (bench_native_cov.main, ["--seeds", "0"], "--seeds must be a finite number above 0, not 0"),
     (bench_native_cov.main, ["--budget", "-1"], "--budget must be a finite number above 0, not -1.0"),
