@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fuzzer.execution.records import Floats, Outcome, Status, as_array, floats
+from fuzzer.execution import oracle
+from fuzzer.execution.records import Comparison, Floats, Kind, Outcome, Status, as_array, floats
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario import oracle_timing
 from fuzzer.scenario.oracle import TIMES, compare_step
@@ -157,3 +159,56 @@ def test_reference_duration_is_remembered_by_the_bits_of_its_inputs() -> None:
     assert reference_duration("cartesian_path", rows, Context(velocity_scaling=0.0), facts) is None
     assert reference_duration("cartesian_path", rows, Context(velocity_scaling=0.0), facts) is None
     assert oracle_timing._duration.cache_info().misses == 3
+
+
+POSE_PARTS = {"joint_values": 3, "position": 3, "orientation": 4}
+
+
+@st.composite
+def pose_pairs(draw: st.DrawFn) -> tuple[dict[str, tuple[float, ...]], dict[str, tuple[float, ...]]]:
+    """Two steps' pose values: some fields equal (finite or not), some a little or far apart."""
+    number = st.one_of(st.sampled_from([0.0, -0.0, 0.5, math.pi, -math.pi, *SPECIAL]), st.floats(-4.0, 4.0))
+    a, b = {}, {}
+    for key, size in POSE_PARTS.items():
+        if not draw(st.booleans()):
+            continue
+        x = tuple(draw(st.lists(number, min_size=size, max_size=size)))
+        shifts = draw(
+            st.lists(st.sampled_from([0.0, 0.0, 5e-7, 2e-6, 2.0 * math.pi]), min_size=size, max_size=size)
+        )
+        a[key], b[key] = x, tuple(v + s for v, s in zip(x, shifts, strict=True))
+    return a, b
+
+
+@settings(max_examples=400, deadline=None)
+@given(pose_pairs())
+def test_a_step_s_pose_values_give_the_single_call_oracle_s_verdict(pair: tuple[dict, dict]) -> None:
+    """``compare_step`` leaves out the pose fields equal as numbers and finite; the verdict must be
+    the single-call oracle's on all of them (inf on both sides is a divergence of a position)."""
+    facts = ScenarioFacts((SPECS["revolute"], SPECS["continuous"], SPECS["prismatic"]))
+    a, b = pair
+    step = compare_step("go", Outcome(Status.OK, values=a), Outcome(Status.OK, values=b), TOL, facts)
+    whole = oracle.compare(
+        Outcome(Status.OK, values=a),
+        Outcome(Status.OK, values=b),
+        TOL,
+        facts.prismatic,
+        continuous=facts.continuous,
+    )
+    assert step == (replace(whole, field=f"go.{whole.field}") if whole.divergent else Comparison(Kind.AGREE))
+
+
+def test_statuses_are_compared_only_when_they_differ_or_one_crashed() -> None:
+    facts = ScenarioFacts((SPECS["revolute"],))
+    ok = Outcome(Status.OK, values={"joint_values": (0.1,)})
+    failed = Outcome(Status.FAILED, values={"joint_values": (0.1,)})
+    crashed = Outcome(Status.CRASHED, "ZeroDivisionError", values={})
+    assert compare_step("go", ok, ok, TOL, facts) == Comparison(Kind.AGREE)
+    assert (
+        compare_step("go", ok, failed, TOL, facts).kind,
+        compare_step("go", ok, failed, TOL, facts).field,
+    ) == (
+        Kind.STATUS,
+        "go.status",
+    )
+    assert compare_step("go", crashed, crashed, TOL, facts).kind is Kind.CRASH
