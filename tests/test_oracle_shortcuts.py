@@ -5,6 +5,7 @@
 * ``records.floats`` keeps a step's trajectory as a read-only array beside its tuple; the tuple
   must stay a tuple in every way that counts (equality, hash, repr, JSON).
 * ``oracle_timing.reference_duration`` remembers its answers, keyed by the bits of its inputs.
+* ``compare_step`` gives the single-call oracle's verdict on a step's statuses and pose values.
 """
 
 from __future__ import annotations
@@ -183,8 +184,10 @@ def pose_pairs(draw: st.DrawFn) -> tuple[dict[str, tuple[float, ...]], dict[str,
 @settings(max_examples=400, deadline=None)
 @given(pose_pairs())
 def test_a_step_s_pose_values_give_the_single_call_oracle_s_verdict(pair: tuple[dict, dict]) -> None:
-    """``compare_step`` leaves out the pose fields equal as numbers and finite; the verdict must be
-    the single-call oracle's on all of them (inf on both sides is a divergence of a position)."""
+    """``compare_step``'s verdict on a step's pose values is the single-call oracle's on all of them
+    (inf on both sides is a divergence of a position). 09c9d70 left out the fields equal as
+    numbers and finite, with the same verdicts, and was reverted: fewer calls of the instrumented
+    oracle slowed the search (BENCHMARKS.md, "The scenario oracle's share, cut")."""
     facts = ScenarioFacts((SPECS["revolute"], SPECS["continuous"], SPECS["prismatic"]))
     a, b = pair
     step = compare_step("go", Outcome(Status.OK, values=a), Outcome(Status.OK, values=b), TOL, facts)

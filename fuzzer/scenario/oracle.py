@@ -37,7 +37,6 @@ divergence takes precedence at the same step, else the earliest step wins; a
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -191,8 +190,8 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
     facts : ScenarioFacts
         The robot's joints.
     """
-    if Status.CRASHED in (a.status, b.status) or a.label != b.label:  # else the statuses agree
-        status = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
+    status = oracle.compare(Outcome(a.status, a.error, a.code), Outcome(b.status, b.error, b.code), tol)
+    if status.divergent:
         return replace(status, field=f"{kind}.status")
     if a.status is Status.CRASHED:
         return Comparison(Kind.AGREE)
@@ -238,8 +237,7 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
         elif key == "trajectory.positions" and dof:
             c = _rows(field_name, va, vb, tol, facts, dof)
         elif key == "joint_target" or key.startswith("named."):
-            same = _same(a.values[key], b.values[key])
-            c = None if same else joints_apart(field_name, va.tolist(), vb.tolist(), tol, facts)
+            c = joints_apart(field_name, va.tolist(), vb.tolist(), tol, facts)
         elif key in POSE_VALUES:
             continue  # below, together (the oracle's own order and rules)
         else:
@@ -249,7 +247,6 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
             if c.kind is Kind.VALUE:
                 break
     pose = {k: a.values[k] for k in POSE_VALUES if k in a.values and k in b.values}
-    pose = {k: v for k, v in pose.items() if not _same(v, b.values[k])}  # equal ones cannot diverge
     if pose and not any(c.kind is Kind.VALUE for c in found):
         c = oracle.compare(
             Outcome(Status.OK, values=pose),
@@ -262,12 +259,6 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
             found.append(replace(c, field=f"{kind}.{c.field}"))
     chosen = next((c for c in found if c.kind is Kind.VALUE), found[0] if found else None)
     return chosen or Comparison(Kind.AGREE)
-
-
-def _same(x: Sequence[float], y: Sequence[float]) -> bool:
-    """Whether two vectors are equal as numbers and finite: no rule of the oracle reports such a
-    pair, alone or beside other fields (inf - inf is NaN, which a position reports as inf)."""
-    return x == y and all(map(math.isfinite, x))
 
 
 def _status_of_shorter(kind: str, shorter: Outcome) -> Comparison:
