@@ -81,12 +81,6 @@ class _FieldDiff:
     unit: str = "rad"
     raw_tolerance: float | None = None  # of ``raw``, when not ``tolerance``
 
-    def beyond(self, kind: Kind) -> bool:
-        """Whether the field diverges as ``kind`` (value: modulo equivalence; else as numbers)."""
-        if kind is Kind.VALUE:
-            return self.equivalent > self.tolerance
-        return self.raw > (self.tolerance if self.raw_tolerance is None else self.raw_tolerance)
-
 
 def _near_pi(x: float, tol: float) -> bool:
     """In the canonical range (-pi, pi] and within ``tol`` of its boundary."""
@@ -101,9 +95,10 @@ def _joint_diff(
     continuous: tuple[bool, ...] = (),
 ) -> _FieldDiff:
     # each joint against its own limit (m or rad): the field reports the joint farthest beyond
-    # its limit, as numbers and modulo equivalence (with one limit for all, the largest gaps)
-    raw = equivalent = 0.0
-    raw_limit = eq_limit = tol.radians
+    # its limit, as numbers and modulo equivalence (with one limit for all, the largest gaps).
+    # Kept as (gap / limit, gap, limit) and max(): no comparison or branch of its own for
+    # Atheris to trace (the campaign's feedback is this module's edges and comparisons).
+    raw_worst = eq_worst = (0.0, 0.0, tol.radians)
     joints: list[int] = []
     flip = False
     worst = -1.0
@@ -121,14 +116,13 @@ def _joint_diff(
             and _near_pi(y, limit)
         ):
             gap = eq  # either side of the (-pi, pi] boundary is the canonical answer
-        if gap * raw_limit > raw * limit:  # gap / limit > raw / raw_limit, without dividing
-            raw, raw_limit = gap, limit
-        if eq * eq_limit > equivalent * limit:
-            equivalent, eq_limit = eq, limit
+        raw_worst = max(raw_worst, (gap / limit, gap, limit))  # a NaN never wins a max()
+        eq_worst = max(eq_worst, (eq / limit, eq, limit))
         if gap > limit:
             joints.append(i)
             if gap / limit > worst:
                 worst, flip, unit = gap / limit, (x < 0) != (y < 0), "m" if linear else "rad"
+    (_, raw, raw_limit), (_, equivalent, eq_limit) = raw_worst, eq_worst
     return _FieldDiff("joint_values", raw, equivalent, eq_limit, flip, tuple(joints), unit, raw_limit)
 
 
@@ -211,7 +205,13 @@ def compare(
         diffs.append(_orientation_diff(a.values["orientation"], b.values["orientation"], tol))
     largest = max((d.raw for d in diffs), default=0.0)
     for kind in (Kind.VALUE, Kind.REPRESENTATION):
-        found = [d for d in diffs if d.beyond(kind)]
+        # one comparison site, as before the per-joint limits (the campaign traces it)
+        found = [
+            d
+            for d in diffs
+            if (d.equivalent if kind is Kind.VALUE else d.raw)
+            > (d.tolerance if kind is Kind.VALUE or d.raw_tolerance is None else d.raw_tolerance)
+        ]
         if found:
             first = min(found, key=lambda d: FIELD_ORDER.index(d.field))
             return Comparison(
