@@ -103,12 +103,9 @@ def _rank(key: str) -> int:
 def _rows(
     key: str, a: np.ndarray, b: np.ndarray, tol: Tolerance, facts: ScenarioFacts, dof: int
 ) -> Comparison | None:
-    limits = np.array([tol.metres if p else tol.radians for p in facts.prismatic] or [tol.radians] * dof)
-    if dof == len(limits) and bool(np.all(np.abs(a - b).reshape(-1, dof) <= limits)):
-        return None  # the fast path: equal as numbers within tolerance
     found: list[Comparison] = []
     rows_a, rows_b = a.reshape(-1, dof), b.reshape(-1, dof)
-    for r in apart_rows(rows_a, rows_b, tol, facts).tolist():  # the others agree
+    for r in apart_rows(rows_a, rows_b, tol, facts).tolist():  # the others agree (none: no call)
         c = joints_apart(key, rows_a[r].tolist(), rows_b[r].tolist(), tol, facts)
         if c is not None:
             found.append(c)

@@ -142,11 +142,11 @@ def pairs_apart(pairs: Pairs, tol: Tolerance, facts: ScenarioFacts) -> Pairs:
     differ as numbers beyond the tolerance (``apart_rows``) are compared."""
     try:
         x, y = (np.array([pair[k] for pair in pairs], dtype=float) for k in (0, 1))
-    except ValueError:  # vectors of unequal lengths: each pair compared on its own
-        return [(p, q) for p, q in pairs if joints_apart("", p, q, tol, facts) is not None]
-    if x.ndim != 2 or x.shape != y.shape:
-        return [(p, q) for p, q in pairs if joints_apart("", p, q, tol, facts) is not None]
-    maybe = apart_rows(x, y, tol, facts).tolist()
+        maybe = apart_rows(x, y, tol, facts).tolist() if x.ndim == 2 and x.shape == y.shape else None
+    except ValueError:  # vectors of unequal lengths
+        maybe = None
+    if maybe is None:  # each pair compared on its own
+        maybe = list(range(len(pairs)))
     return [(p, q) for p, q in (pairs[r] for r in maybe) if joints_apart("", p, q, tol, facts) is not None]
 
 
