@@ -113,6 +113,27 @@ def test_each_joint_is_judged_against_its_own_tolerance() -> None:
     assert (turn.kind, turn.joints) == (Kind.REPRESENTATION, (0,))
 
 
+def test_a_value_divergence_reports_the_unit_and_sign_of_its_own_joint() -> None:
+    """A value divergence's unit and sign flip describe the joint its headline difference is
+    from. Until the thirty-eighth session they came from the joint farthest apart as numbers:
+    beside a revolute joint a whole turn off (a representation), a prismatic joint 0.02 m off
+    was reported as "0.02 rad", and the turn's opposite signs made the value divergence a
+    sign flip (Table III's coordinates row instead of its size row)."""
+    turn = -3.0 + 2 * math.pi
+    mixed = compare(ok(joint_values=(-3.0, 0.1)), ok(joint_values=(turn, 0.12)), TOL, prismatic=(False, True))
+    assert (mixed.kind, mixed.joints, mixed.unit, mixed.sign_flip) == (Kind.VALUE, (0, 1), "m", False)
+    assert mixed.difference == pytest.approx(0.02)
+    both = compare(ok(joint_values=(-3.0, 0.1)), ok(joint_values=(turn, 0.3)), TOL)
+    assert (both.kind, both.unit, both.sign_flip) == (Kind.VALUE, "rad", False)
+    assert both.difference == pytest.approx(0.2)
+    crossing = compare(ok(joint_values=(-3.0, 0.1)), ok(joint_values=(turn, -0.1)), TOL)
+    assert (crossing.kind, crossing.sign_flip) == (Kind.VALUE, True)
+    # a representation alone keeps the numbers that differ: the turn's radians and signs
+    alone = compare(ok(joint_values=(-3.0, 0.1)), ok(joint_values=(turn, 0.1)), TOL, prismatic=(False, True))
+    assert (alone.kind, alone.unit, alone.sign_flip) == (Kind.REPRESENTATION, "rad", True)
+    assert alone.raw == pytest.approx(2 * math.pi)
+
+
 def test_value_field_precedence_is_stable() -> None:
     """joint values, then position, then orientation: the same bug lands on one field."""
     q1, q2 = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, math.sin(0.1), math.cos(0.1))

@@ -17,7 +17,7 @@ from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import MoveCall
 from fuzzer.input.testcase import TestCase
-from fuzzer.scenario.oracle import compare_scenario, ik_answer_changed
+from fuzzer.scenario.oracle import compare_scenario, compare_step, ik_answer_changed
 from fuzzer.scenario.oracle_facts import Context, JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import absolute, extent_changed
 from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge, plan_points, timed_as_contract
@@ -133,6 +133,38 @@ def test_each_plan_quantity_within_tolerance_agrees_and_beyond_diverges(
     assert (c.kind, c.field, c.unit, c.step, c.step_kind) == (Kind.VALUE, field, unit, 1, "plan")
     if key.startswith("trajectory.") and key != "trajectory.time_from_start":
         assert c.joints == ((1,) if key == "trajectory.velocities" else (0,))
+
+
+@pytest.mark.parametrize(
+    ("gaps", "unit"),
+    [((0.0, 0.5), "m/s"), ((0.1, 0.5), "m/s"), ((0.5, 0.1), "rad/s"), ((0.5, 0.0), "rad/s")],
+)
+def test_a_speed_divergence_has_the_unit_of_its_own_joint(gaps: tuple[float, float], unit: str) -> None:
+    """A revolute and a prismatic joint: the headline is the largest gap, in its joint's unit.
+    Until the thirty-eighth session a gap on both joints read rad/s, whichever was larger."""
+    facts = ScenarioFacts((JointSpec("revolute", -2.0, 2.0, 1.0), JointSpec("prismatic", -0.5, 0.5, 0.3)))
+    times = (0.0, 0.5)
+    a = ok(trajectory__time_from_start=times, trajectory__velocities=(0.0, 0.0, 0.2, 0.1))
+    b = ok(trajectory__time_from_start=times, trajectory__velocities=(0.0, 0.0, 0.2 + gaps[0], 0.1 + gaps[1]))
+    c = compare_step("plan", a, b, TOL, facts)
+    assert (c.kind, c.field, c.unit) == (Kind.VALUE, "plan.trajectory.velocities", unit)
+    assert c.difference == pytest.approx(max(gaps))
+    assert c.joints == tuple(j for j in (0, 1) if gaps[j] > 0.0)
+
+
+def test_a_trajectory_reports_the_point_farthest_beyond_its_own_limit() -> None:
+    """Two points apart, one on a prismatic joint 2e-5 m off (twice its 1e-5 m), one on a
+    revolute joint 8e-6 rad off (eight times its 1e-6 rad): the headline is the revolute
+    joint's, as the single-call oracle picks within one point. Until the thirty-eighth session
+    the larger number won across points, whatever its unit."""
+    facts = ScenarioFacts((JointSpec("revolute", -2.0, 2.0, 1.0), JointSpec("prismatic", -0.5, 0.5, 0.3)))
+    tol = Tolerance(metres=1e-5, radians=1e-6)
+    rows = (0.0, 0.0, 0.1, 0.1, 0.2, 0.2)
+    apart = (0.0, 0.0, 0.1, 0.1 + 2e-5, 0.2 + 8e-6, 0.2)
+    a, b = (ok(trajectory__time_from_start=(0.0, 0.5, 1.0), trajectory__positions=r) for r in (rows, apart))
+    c = compare_step("plan", a, b, tol, facts)
+    assert (c.kind, c.field, c.unit, c.joints) == (Kind.VALUE, "plan.trajectory.positions", "rad", (0, 1))
+    assert c.difference == pytest.approx(8e-6)
 
 
 def test_point_count_is_exact_and_reported_before_values() -> None:

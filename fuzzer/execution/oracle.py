@@ -80,6 +80,10 @@ class _FieldDiff:
     joints: tuple[int, ...] = ()
     unit: str = "rad"
     raw_tolerance: float | None = None  # of ``raw``, when not ``tolerance``
+    # (sign_flip, unit) of a value divergence's own joint, when not the field's (joint values:
+    # ``sign_flip`` and ``unit`` are those of the joint farthest apart as numbers, a
+    # representation's; a value divergence's headline is the joint farthest modulo equivalence)
+    value_view: tuple[bool, str] | None = None
 
 
 def _near_pi(x: float, tol: float) -> bool:
@@ -103,6 +107,7 @@ def _joint_diff(
     flip = False
     worst = -1.0
     unit = "rad"
+    value = (-1.0, 0.0, 0.0, 0, False, "rad")  # (eq / limit, eq, limit, -i, flip, unit)
     for i, (x, y) in enumerate(zip(a, b, strict=True)):
         linear = i < len(prismatic) and prismatic[i]
         limit = tol.metres if linear else tol.radians
@@ -120,10 +125,15 @@ def _joint_diff(
         eq_worst = max(eq_worst, (eq / limit, eq, limit))
         if gap > limit:
             joints.append(i)
+            here = ((x < 0) != (y < 0), "m" if linear else "rad")
             if gap / limit > worst:
-                worst, flip, unit = gap / limit, (x < 0) != (y < 0), "m" if linear else "rad"
+                worst, (flip, unit) = gap / limit, here
+            # only a joint beyond its limit as numbers can be beyond it modulo equivalence
+            value = max(value, (eq / limit, eq, limit, -i, *here))
     (_, raw, raw_limit), (_, equivalent, eq_limit) = raw_worst, eq_worst
-    return _FieldDiff("joint_values", raw, equivalent, eq_limit, flip, tuple(joints), unit, raw_limit)
+    return _FieldDiff(
+        "joint_values", raw, equivalent, eq_limit, flip, tuple(joints), unit, raw_limit, value[4:]
+    )
 
 
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
@@ -214,15 +224,20 @@ def compare(
         ]
         if found:
             first = min(found, key=lambda d: FIELD_ORDER.index(d.field))
+            flip, unit = (
+                first.value_view
+                if kind is Kind.VALUE and first.value_view is not None
+                else (first.sign_flip, first.unit)
+            )
             return Comparison(
                 kind,
                 first.field,
                 first.equivalent,
-                first.sign_flip,
+                flip,
                 bucket(first.equivalent),
                 first.joints,
                 largest,
-                first.unit,
+                unit,
                 first.raw,
             )
     top = max(diffs, key=lambda d: d.equivalent / d.tolerance, default=None)

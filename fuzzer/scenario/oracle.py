@@ -112,7 +112,8 @@ def _rows(
     if not found:
         return None
     values = [c for c in found if c.kind is Kind.VALUE] or found
-    worst = max(values, key=lambda c: c.difference)
+    # farthest beyond its limit, as within one row (metres and radians may have their own)
+    worst = max(values, key=lambda c: c.difference / (tol.metres if c.unit == "m" else tol.radians))
     joints = tuple(sorted({j for c in values for j in c.joints}))
     return replace(worst, joints=joints, largest=max(c.largest for c in found))
 
@@ -166,11 +167,6 @@ def _switches(a: Outcome, b: Outcome, va: np.ndarray, vb: np.ndarray, dof: int) 
             return vb
         profiles.append((times, speeds.reshape(-1, dof), acc.reshape(-1, dof)))
     return oracle_switch.canonical(profiles[0], profiles[1], ACCELERATION_TOLERANCE).reshape(-1)
-
-
-def _unit(base: str, facts: ScenarioFacts, joints: tuple[int, ...]) -> str:
-    linear = bool(joints) and all(j < len(facts.prismatic) and facts.prismatic[j] for j in joints)
-    return base.replace("rad", "m") if linear else base
 
 
 def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: ScenarioFacts) -> Comparison:
@@ -229,8 +225,7 @@ def compare_step(kind: str, a: Outcome, b: Outcome, tol: Tolerance, facts: Scena
             unit, limit = ("rad/s", VELOCITY_TOLERANCE) if speed else ("rad/s^2", ACCELERATION_TOLERANCE)
             if not speed and dof:
                 vb = _switches(a, b, va, vb, dof)
-            c = absolute(field_name, va, vb, limit, unit, dof)
-            c = c and replace(c, unit=_unit(unit, facts, c.joints))
+            c = absolute(field_name, va, vb, limit, unit, dof, facts.prismatic)
         elif key == "trajectory.positions" and dof:
             c = _rows(field_name, va, vb, tol, facts, dof)
         elif key == "joint_target" or key.startswith("named."):

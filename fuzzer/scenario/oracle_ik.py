@@ -92,10 +92,17 @@ def value_divergence(
 
 
 def absolute(
-    key: str, a: np.ndarray, b: np.ndarray, limit: float, unit: str, dof: int = 0
+    key: str,
+    a: np.ndarray,
+    b: np.ndarray,
+    limit: float,
+    unit: str,
+    dof: int = 0,
+    prismatic: tuple[bool, ...] = (),
 ) -> Comparison | None:
     """Element-wise ``|a - b| <= limit`` (NaN on both sides agrees); with ``dof`` the arrays
-    are (M * dof,) and the divergence names the joints (columns) beyond the limit."""
+    are (M * dof,) and the divergence names the joints (columns) beyond the limit, its unit
+    (``rad/s``...) read in metres (``m/s``) when the largest gap is a ``prismatic`` joint's."""
     gap = np.abs(a - b)
     gap[np.isnan(gap) & ~(np.isnan(a) & np.isnan(b))] = math.inf
     gap[np.isnan(gap)] = 0.0
@@ -106,6 +113,8 @@ def absolute(
     if dof:
         columns = gap.reshape(-1, dof).max(axis=0)
         joints = tuple(int(j) for j in np.flatnonzero(columns > limit))
+        top = int(np.argmax(columns))
+        unit = unit.replace("rad", "m") if top < len(prismatic) and prismatic[top] else unit
     return value_divergence(key, worst, unit, joints)
 
 
