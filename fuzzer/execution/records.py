@@ -161,9 +161,12 @@ class Comparison:
         "large difference"; for property violations how far past the limit or tolerance;
         0 for status divergences.
     unit : str
-        ``m``, ``rad`` or ``status``.
+        ``m``, ``rad`` or ``status`` (a scenario's quantities also ``s``, ``rad/s``...); for a
+        value divergence on joint values, that of the joint the headline difference is from.
     sign_flip : bool
-        Detail: the differing numbers have opposite signs (or the quaternions are q and -q).
+        Detail: the differing numbers have opposite signs (or the quaternions are q and -q):
+        for a value divergence on joint values, the headline joint's; for a representation,
+        those of the joint farthest apart as numbers.
     bucket : int
         Detail: ``floor(log10(difference))`` clipped to [-16, 3]; -99 when difference is 0.
     joints : tuple of int
