@@ -34,6 +34,8 @@ FACTS = ScenarioFacts(
     home=(0.0, 0.0),
 )
 FACTS_ANY_GOAL = ScenarioFacts(FACTS.joints, NAMES)  # home unknown: no joint goal to check
+# joint 0 as in FACTS; joint 1: prismatic in [-0.5, 0.5] m, 0.3 m/s (metres beside radians)
+FACTS_LINEAR = ScenarioFacts((FACTS.joints[0], JointSpec("prismatic", -0.5, 0.5, 0.3)))
 HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
 POSE = {"position": {"x": 0.3, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}
 MESSAGES: dict[str, dict[str, Any]] = {
@@ -142,11 +144,10 @@ def test_each_plan_quantity_within_tolerance_agrees_and_beyond_diverges(
 def test_a_speed_divergence_has_the_unit_of_its_own_joint(gaps: tuple[float, float], unit: str) -> None:
     """A revolute and a prismatic joint: the headline is the largest gap, in its joint's unit.
     Until the thirty-eighth session a gap on both joints read rad/s, whichever was larger."""
-    facts = ScenarioFacts((JointSpec("revolute", -2.0, 2.0, 1.0), JointSpec("prismatic", -0.5, 0.5, 0.3)))
     times = (0.0, 0.5)
     a = ok(trajectory__time_from_start=times, trajectory__velocities=(0.0, 0.0, 0.2, 0.1))
     b = ok(trajectory__time_from_start=times, trajectory__velocities=(0.0, 0.0, 0.2 + gaps[0], 0.1 + gaps[1]))
-    c = compare_step("plan", a, b, TOL, facts)
+    c = compare_step("plan", a, b, TOL, FACTS_LINEAR)
     assert (c.kind, c.field, c.unit) == (Kind.VALUE, "plan.trajectory.velocities", unit)
     assert c.difference == pytest.approx(max(gaps))
     assert c.joints == tuple(j for j in (0, 1) if gaps[j] > 0.0)
@@ -157,12 +158,11 @@ def test_a_trajectory_reports_the_point_farthest_beyond_its_own_limit() -> None:
     revolute joint 8e-6 rad off (eight times its 1e-6 rad): the headline is the revolute
     joint's, as the single-call oracle picks within one point. Until the thirty-eighth session
     the larger number won across points, whatever its unit."""
-    facts = ScenarioFacts((JointSpec("revolute", -2.0, 2.0, 1.0), JointSpec("prismatic", -0.5, 0.5, 0.3)))
     tol = Tolerance(metres=1e-5, radians=1e-6)
     rows = (0.0, 0.0, 0.1, 0.1, 0.2, 0.2)
     apart = (0.0, 0.0, 0.1, 0.1 + 2e-5, 0.2 + 8e-6, 0.2)
     a, b = (ok(trajectory__time_from_start=(0.0, 0.5, 1.0), trajectory__positions=r) for r in (rows, apart))
-    c = compare_step("plan", a, b, tol, facts)
+    c = compare_step("plan", a, b, tol, FACTS_LINEAR)
     assert (c.kind, c.field, c.unit, c.joints) == (Kind.VALUE, "plan.trajectory.positions", "rad", (0, 1))
     assert c.difference == pytest.approx(8e-6)
 
