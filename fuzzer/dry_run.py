@@ -56,6 +56,7 @@ from fuzzer.generation.dry_run_plan import (
     EARLY,
     FIRST_ROWS,
     HEAD,
+    LATE,
     LEAD,
     LITERALS,
     SCRIPTS,
@@ -174,12 +175,12 @@ class Stages:
     or ``LEAD`` configurations (``move``; ``LITERALS`` configurations at the targets' compared
     numbers after the first ``HEAD`` of them), ``ALIGNED`` aligned configurations, the boundary
     probes (then the literal configurations of the other ops), then the rest of ``EARLY``'s
-    configurations; a scenario's: the tutorial scripts, then ``SCRIPTS`` uniform scripts, the
-    first ``LITERALS`` of them from literal configurations. The second starts once they exist:
-    the seeds, then the rest of the uniform work (``SWEEPS``, ``UNIFORM``); a scenario has none
-    (``SECOND_STAGE_OPS``). On one CPU the
-    campaign waits for each child before it goes on (``launch``); on two, the children run
-    while the campaign starts up.
+    configurations (``fk``: ``LATE`` more sweeps); a scenario's: the tutorial scripts, then
+    ``SCRIPTS`` uniform scripts, the first ``LITERALS`` of them from literal configurations. The
+    second starts once they exist: the seeds, then the rest of the uniform work (``SWEEPS``,
+    ``UNIFORM``); a scenario has none (``SECOND_STAGE_OPS``). On one CPU the campaign waits
+    for each child before it goes on (``launch``); on two, the children run while the campaign
+    starts up.
 
     Parameters
     ----------
@@ -295,12 +296,19 @@ class Stages:
         first = self.wanted + self._first_count  # numbered after the first stage's (first_cases)
         return seeds + uniform_cases(self.session, count, self.seed + SWEEP_SEED + 1, first)
 
+    def _first_sweeps(self) -> tuple[int, int]:
+        """The first stage's sweeps of ``ROWS`` (``fk``): before its probes (``EARLY``) and after
+        them (``LATE``), together at most ``SWEEPS``."""
+        op = self.session.config.op
+        early = min(EARLY.get(op, 0), SWEEPS)
+        return early, min(LATE.get(op, 0), SWEEPS - early)
+
     def first(self) -> None:
         """Start the first stage. Its child makes its inputs (6-7 ms for ``fk``): its sweeps
         come first, and the campaign's start-up would otherwise wait for them; the campaign
         makes them again after the fork, for the second stage's numbering only (an op with a
         second stage, ``SECOND_STAGE_OPS``)."""
-        early = min(EARLY.get(self.session.config.op, 0), SWEEPS)
+        early, late = self._first_sweeps()
 
         def work() -> None:
             made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
@@ -309,6 +317,8 @@ class Stages:
                 harness.run_sweep()
             for _, part in self._first_parts(literals=True):  # the literals made here: off the start-up
                 evaluate(harness, part, snapshot=False)
+            for _ in range(late if made is not None else 0):  # the late sweeps, after the probes
+                harness.run_sweep()
             harness.maybe_snapshot(force=True)
 
         self._launch(work)
@@ -320,7 +330,7 @@ class Stages:
         outside ``SECOND_STAGE_OPS``)."""
         if self.session.config.op not in SECOND_STAGE_OPS:
             return
-        rest = SWEEPS - min(EARLY.get(self.session.config.op, 0), SWEEPS)
+        rest = SWEEPS - sum(self._first_sweeps())
 
         def work() -> None:
             made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED + 1)

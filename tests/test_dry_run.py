@@ -79,12 +79,12 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     assert len(dry) == 2, "two dry-run processes (stages) logged their counters"
     first, second = sorted(dry, key=lambda pid: min(r["first_input"] for r in stats if r["pid"] == pid))
     last = {pid: [r for r in stats if r["pid"] == pid][-1] for pid in dry}
-    early = dry_run.EARLY["fk"]
+    early, late = dry_run.EARLY["fk"], dry_run.LATE["fk"]
     # every sweep flags rows of a fault every input shows; CONFIRM of them go to the single call
-    # (the first stage's sweeps: one of FIRST_ROWS rows, then early ones)
+    # (the first stage's sweeps: one of FIRST_ROWS rows, the early ones, the late ones)
     ran = last[first]["executed_by_strategy"]
     assert ran == {
-        SWEPT: (early + 1) * CONFIRM,
+        SWEPT: (early + 1 + late) * CONFIRM,
         ALIGNED: dry_run.ALIGNED["fk"],
         BOUNDARY: ran[BOUNDARY],
         LITERAL: ran[LITERAL],
@@ -92,10 +92,12 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     assert ran[BOUNDARY] > 0, "the boundary probes"
     # benchmarks/zoo/bugs.py compares against 3.0 and 1.0: the zoo arm's joints that hold them
     assert 0 < ran[LITERAL] <= dry_run.LITERALS, "configurations at the target's compared numbers"
-    assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: (dry_run.SWEEPS - early) * CONFIRM}
+    rest = dry_run.SWEEPS - early - late
+    assert rest > 0, "the second stage keeps sweeps of its own"
+    assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: rest * CONFIRM}
     assert [last[pid]["sweep"]["compared"] for pid in (first, second)] == [
-        dry_run.FIRST_ROWS + early * ROWS,
-        (dry_run.SWEEPS - early) * ROWS,
+        dry_run.FIRST_ROWS + (early + late) * ROWS,
+        rest * ROWS,
     ]
     first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
     assert max(min(r["first_input"] for r in stats if r["pid"] == pid) for pid in dry) < first_of_campaign

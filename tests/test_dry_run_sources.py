@@ -320,8 +320,12 @@ def test_the_first_stage_evaluates_its_first_input_before_it_makes_the_rest(
     literals = dry_run.Stages(session, "rrosfuzz", 3, 8, 0, None)
     literals.first_cases()
     evaluated = [e for e in events if isinstance(e, TestCase)]
-    if op == "fk":  # its sweeps first: FIRST_ROWS rows, then the early ones
-        assert events[: dry_run.EARLY["fk"] + 1] == ["sweep"] * (dry_run.EARLY["fk"] + 1)
+    if op == "fk":  # its sweeps first: FIRST_ROWS rows, then the early ones; the late ones last
+        early, late = dry_run.EARLY["fk"], dry_run.LATE["fk"]
+        assert events[: early + 1] == ["sweep"] * (early + 1)
+        end = events.index("snapshot")  # the child's last event
+        assert events[end - late : end] == ["sweep"] * late
+        assert "sweep" not in events[early + 1 : end - late], "the probes between them"
     if op == "move":
         assert literals.literal_cases(), "per_joint_band's module compares against numbers"
         assert isinstance(events[0], TestCase) and events[0].lineage == (UNIFORM,), events[:2]
