@@ -249,14 +249,43 @@ def compile_tree(root: Path) -> None:
     bytecode (``PYTHONDONTWRITEBYTECODE``, set in this sandbox and in many container images), or
     after an edit, every trial would compile them again: about 0.1 s of its start-up, spent by
     CPython and not by the engine measured, and more for an engine that imports more modules.
-    Files that cannot be written are left as they are (Python then compiles in memory)."""
-    import compileall
+    A module is compiled again when its bytecode is missing or ``stale`` as the importer judges
+    it (``compileall`` compares the modification second alone, so an edit or a ``git checkout``
+    within the second of an earlier compile left bytecode it called fresh and every trial
+    compiled the module again: docs/benchmarks-log.md, thirty-ninth session). Files that cannot
+    be written are left as they are (Python then compiles in memory)."""
+    import contextlib
+    import py_compile
 
-    for name in PACKAGES:
-        if (root / name).is_dir():
-            compileall.compile_dir(root / name, quiet=2)
+    sources = [path for name in PACKAGES for path in sorted((root / name).rglob("*.py"))]
     if (root / "fuzz_diff.py").is_file():
-        compileall.compile_file(root / "fuzz_diff.py", quiet=2)
+        sources.append(root / "fuzz_diff.py")
+    for source in sources:
+        if stale(source):  # an unwritable cache folder: the importer compiles in memory
+            with contextlib.suppress(OSError):
+                py_compile.compile(str(source), doraise=False, quiet=2)
+
+
+def stale(source: Path) -> bool:
+    """Whether the importer would compile ``source`` again rather than load its cached bytecode:
+    none, another Python's, or a timestamp header whose source time (whole seconds) or size
+    differs from the file's. Hash-checked bytecode (``SOURCE_DATE_EPOCH``) counts as current:
+    the importer checks its hash itself."""
+    import importlib.util
+    import struct
+
+    try:
+        with open(importlib.util.cache_from_source(str(source)), "rb") as cached:
+            header = cached.read(16)
+        status = source.stat()
+    except (OSError, ValueError):
+        return True
+    if len(header) < 16 or header[:4] != importlib.util.MAGIC_NUMBER:
+        return True
+    flags, mtime, size = struct.unpack("<LLL", header[4:16])
+    if flags:
+        return False
+    return (mtime, size) != (int(status.st_mtime) & 0xFFFF_FFFF, status.st_size & 0xFFFF_FFFF)
 
 
 def sweep_in_journal(

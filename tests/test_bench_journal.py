@@ -594,3 +594,27 @@ def test_compile_tree_writes_the_bytecode_a_trial_imports(tmp_path: Path) -> Non
     for module in modules:
         assert Path(importlib.util.cache_from_source(str(module))).is_file(), module
     assert not Path(importlib.util.cache_from_source(str(tmp_path / "elsewhere.py"))).exists()
+
+
+def test_compile_tree_compiles_again_a_module_changed_within_the_second(tmp_path: Path) -> None:
+    """An edit or a checkout in the second of the last compile (same modification time, another
+    size): compileall called its bytecode fresh, the importer (which checks the size too) stale,
+    and every trial of a sweep compiled the module again."""
+    import importlib.util
+    import os
+
+    module = tmp_path / "fuzzer" / "m.py"
+    module.parent.mkdir()
+    module.write_text("X = 1\n")
+    sweeps.compile_tree(tmp_path)
+    stamp = module.stat().st_mtime_ns
+    module.write_text("X = 12345\n")  # another arm's content, within the same second
+    os.utime(module, ns=(stamp, stamp))
+    sweeps.compile_tree(tmp_path)
+    header = Path(importlib.util.cache_from_source(str(module))).read_bytes()[:16]
+    recorded = int.from_bytes(header[8:12], "little"), int.from_bytes(header[12:16], "little")
+    assert recorded == (stamp // 10**9, module.stat().st_size), "bytecode of the current source"
+    assert not sweeps.stale(module)
+    module.write_text("X = 2\n")  # and back, again within the second
+    os.utime(module, ns=(stamp, stamp))
+    assert sweeps.stale(module), "the importer would not load this bytecode"
