@@ -37,9 +37,9 @@ later, on space-filling points."""
 
 SWEEPS = 32
 """Sweeps of ``ROWS`` uniform configurations an ``fk`` dry run evaluates in all, ``EARLY`` and
-``LATE`` of them in the first stage (32,768 rows, about 60 ms on one CPU for the default robot): a band 1e-4
-of one joint's range wide is met with probability 0.96, one 1e-5 wide with 0.28 (the campaign's
-Sobol sweeps go on from there)."""
+``LATE`` of them in the first stage (32,768 rows, about 60 ms on one CPU for the default
+robot): a band 1e-4 of one joint's range wide is met with probability 0.96, one 1e-5 wide with
+0.28 (the campaign's Sobol sweeps go on from there)."""
 
 FIRST_ROWS = 64
 """Rows of the first stage's first sweep (``fk``), before its ``EARLY`` sweeps of ``ROWS``: what
