@@ -10,11 +10,13 @@ from pathlib import Path
 
 import pytest
 
+from fuzzer.generation import literals
 from fuzzer.generation.literals import (
     band_middles,
     compared_numbers,
     literal_configurations,
     module_numbers,
+    parsed,
 )
 
 SOURCE = """
@@ -73,6 +75,62 @@ def test_module_numbers_read_loaded_python_modules_only() -> None:
         del sys.modules[name]
 
 
+def test_a_sources_numbers_are_parsed_once_then_read_from_the_cache(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    expected = (band_middles(SOURCE), compared_numbers(SOURCE))
+    assert parsed(SOURCE, None) == expected and not list(tmp_path.iterdir())  # no cache: no file
+    assert parsed(SOURCE, tmp_path) == expected
+    files = list(tmp_path.glob("literals-*.json"))
+    assert len(files) == 1
+
+    def no_parse(source: str) -> list[list[float | None]]:
+        raise AssertionError("parsed again")
+
+    monkeypatch.setattr(literals, "_comparisons", no_parse)
+    assert parsed(SOURCE, tmp_path) == expected  # the same numbers, bit for bit, from the file
+    with pytest.raises(AssertionError, match="parsed again"):
+        parsed(SOURCE + "\nx = 1 < 2\n", tmp_path)  # other text: another file
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        b"",
+        b"not json",
+        b'["rrosfuzz-compared-numbers-v0", [], []]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], [2.0], [3.0]]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], {"a": 1}]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], ["2.0"]]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], [true]]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], [NaN]]',
+        b'["rrosfuzz-compared-numbers-v1", [1.0], [1e999]]',
+        b"\xff\xfe",
+    ],
+)
+def test_a_bad_cache_file_means_parsing_and_is_written_again(tmp_path: Path, content: bytes) -> None:
+    expected = (band_middles(SOURCE), compared_numbers(SOURCE))
+    parsed(SOURCE, tmp_path)
+    (path,) = tmp_path.glob("literals-*.json")
+    path.write_bytes(content)
+    assert parsed(SOURCE, tmp_path) == expected
+    assert parsed(SOURCE, tmp_path / "missing" / "folder") == expected  # made when missing
+    assert literals._load(path) == expected  # written again
+
+
+def test_an_unwritable_cache_folder_means_no_cache(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert parsed(SOURCE, blocker / "cache") == (band_middles(SOURCE), compared_numbers(SOURCE))
+
+
+def test_the_cache_keeps_its_newest_files(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(literals, "CACHE_KEEP", 3)
+    for i in range(5):
+        parsed(f"v < {i}.5\n", tmp_path)
+    assert len(list(tmp_path.glob("literals-*.json"))) == 3
+
+
 def test_configurations_put_each_number_on_every_joint_that_holds_it_then_one_joint_at_a_time() -> None:
     lower, upper = [-6.0, -6.0, -1.0], [6.0, 6.0, 3.0]
     made = literal_configurations([0.0, 4.0, 1.5, 9.0], lower, upper, 64)
@@ -93,7 +151,7 @@ def test_the_dry_run_puts_a_targets_numbers_after_its_first_uniform_configuratio
     ones, before the rest of them and before the aligned configurations and boundary probes
     (after those until 2026-11-30, 100 inputs in); an ``fk`` one, which has no uniform
     configurations, after its boundary probes."""
-    from benchmarks.zoo.deep import CORRECTED_FROM
+    from benchmarks.zoo.deep import CORRECTED_FROM, CORRECTED_TO
     from fuzzer import dry_run
     from fuzzer.execution.session import RunConfig, Session
     from fuzzer.selection.state import ALIGNED, BOUNDARY, LITERAL, UNIFORM
@@ -120,6 +178,12 @@ def test_the_dry_run_puts_a_targets_numbers_after_its_first_uniform_configuratio
     numbers = [c.sequence for c in [*first, *stages.second_cases([]), *literal]]
     assert len(set(numbers)) == len(numbers)  # numbered after every other input
     assert any(CORRECTED_FROM in _values(c.message) for c in literal)  # a joint in the band
+    # the bands' middles first (0.305, 0.86132, 4.025 in benchmarks/zoo/deep.py), then the numbers
+    middle = (CORRECTED_FROM + CORRECTED_TO) / 2
+    at_middle = [i for i, c in enumerate(literal) if middle in _values(c.message)]
+    at_number = [i for i, c in enumerate(literal) if CORRECTED_FROM in _values(c.message)]
+    assert at_middle and at_number and max(at_middle) < min(at_number)
+    assert at_middle[0] < 3
     default = dry_run.Stages(Session.open(RunConfig(op="move")), "rrosfuzz", 1, 8, 0, lambda *_: None)  # type: ignore[arg-type]
     default.first_cases()
     assert default.literal_cases() == []  # the twin's package module compares against no number

@@ -197,13 +197,14 @@ def aligned_cases(session: Session, n: int, seed: int, first: int = 0) -> list[T
 def literal_cases(session: Session, n: int, first: int = 0) -> list[TestCase]:
     """``configuration_cases`` of up to ``n`` configurations with joints at the numbers the
     Python targets compare against (``fuzzer.generation.literals``; their modules' source is
-    parsed, never run), lineage ``spacefill:literal``. None for a scenario (as
-    ``configuration_cases``), without reading a source."""
+    parsed, never run), the middles of the bands they test first (as ``literal_scripts``),
+    lineage ``spacefill:literal``. None for a scenario (as ``configuration_cases``), without
+    reading a source."""
     from fuzzer.selection.state import LITERAL
 
     if n <= 0 or session.config.op == "scenario" or not session.reference.joint_limits:
         return []
-    return configuration_cases(session, _literal_configurations(session, n), LITERAL, first)
+    return configuration_cases(session, _literal_configurations(session, n, bands=True), LITERAL, first)
 
 
 def _literal_configurations(session: Session, n: int, bands: bool = False) -> list[tuple[float, ...]]:

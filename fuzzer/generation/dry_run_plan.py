@@ -93,12 +93,15 @@ bugs 13-14 inputs later; after 4, a few seeds whose first configuration misses
 
 LITERALS = 16
 """Configurations with joints at the numbers the Python targets compare against
-(``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates: for
-``move`` after ``HEAD`` uniform configurations, for the other ops after the boundary probes; a
-scenario's first uniform scripts each start at one, their bands' middles first
-(``corpus.literal_scripts``), right after the tutorial scripts (since 2026-12-01: over seeds
-20-49, ``ik_seed_band`` met at the 5th script instead of the 19th, ``execute_skips_start_check``
-the 7th instead of the 13th; docs/benchmarks-log.md).
+(``corpus.literal_cases``: AFL++'s autodictionary, for floats) the first stage evaluates, the
+middles of the bands the targets test first: for ``move`` after ``HEAD`` uniform
+configurations, for the other ops after the boundary probes; a scenario's first uniform
+scripts each start at one (``corpus.literal_scripts``), right after the tutorial scripts
+(since 2026-12-01: over seeds 20-49, ``ik_seed_band`` met at the 5th script instead of the
+19th, ``execute_skips_start_check`` the 7th instead of the 13th; docs/benchmarks-log.md).
+Middles first for the other ops too since 2026-12-02 (seeds 10-49: ``wrap_past_pi`` met at
+input 6 instead of 16, ``per_joint_band`` 5 instead of 13, its search 9.4 against 17.5 ms;
+docs/benchmarks-log.md, forty-first session).
 Placed after the probes, with them `per_joint_band`
 (a band 2e-5 wide starting at a module constant) was found 3.2 times sooner (1.76 against
 0.54 s from process start, 10 trials, p = 0.00018), no zoo bug's search significantly longer

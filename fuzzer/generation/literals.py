@@ -8,9 +8,10 @@ both sides (4.025): inside it as far from both edges as can be, where the oracle
 state (``fuzzer.execution.ik_check.IK_PERTURBATIONS``) do not carry it out, as the ``compared``
 mutator's middle of two thresholds (``fuzzer.mutation.leaves``); ``literal_configurations``
 puts numbers into joint configurations inside the limits. The full engine's dry run evaluates
-the first ``fuzzer.dry_run.LITERALS`` of them (``fuzzer.generation.corpus.literal_cases``; a
-scenario's first uniform scripts start at them, bands' middles first:
-``corpus.literal_scripts``). Only each target's own module is read (the
+the first ``fuzzer.dry_run.LITERALS`` of them, bands' middles first
+(``fuzzer.generation.corpus.literal_cases``; a scenario's first uniform scripts start at them:
+``corpus.literal_scripts``). ``parsed`` keeps what a module's text gives in a cache, so a
+campaign's dry run does not parse it again. Only each target's own module is read (the
 module of its spec, ``benchmarks.zoo.deep`` for ``benchmarks.zoo.deep:wrap_past_pi``), not
 its submodules or what it imports.
 """
@@ -18,6 +19,9 @@ its submodules or what it imports.
 from __future__ import annotations
 
 import ast
+import contextlib
+import hashlib
+import json
 import math
 import sys
 from collections.abc import Iterable, Sequence
@@ -118,13 +122,82 @@ def _sources(modules: Iterable[str]) -> Iterable[str]:
 def module_numbers(modules: Iterable[str], bands: bool = False) -> list[float]:
     """``compared_numbers`` of the source files of the loaded ``modules`` (a module not loaded,
     or not from a ``.py`` file, has none); with ``bands``, each file's ``band_middles`` before
-    its numbers."""
+    its numbers. Each file's from the cache when an earlier process read the same text
+    (``parsed``)."""
     found: dict[float, None] = {}
     for source in _sources(modules):
-        comparisons = _comparisons(source)  # parsed once for both
-        for value in (*(_middles(comparisons) if bands else ()), *_numbers(comparisons)):
+        middles, numbers = parsed(source)
+        for value in (*(middles if bands else ()), *numbers):
             found.setdefault(value, None)
     return list(found)
+
+
+def parsed(source: str, cache: Path | bool | None = True) -> tuple[list[float], list[float]]:
+    """(``band_middles``, ``compared_numbers``) of Python ``source``, parsed once for both.
+
+    Parsing a target's module takes a few milliseconds (3-8 ms for ``benchmarks.zoo.deep``,
+    370 lines), which the dry run's child spends before its literal configurations, right
+    after its first inputs; so the two lists are kept in a small JSON file named by a digest
+    of the text, in the folder of ``fuzzer.selection.instrument_cache`` (``build/``, or
+    ``RROSFUZZ_INSTRUMENT_CACHE``; ``off`` turns both off), and the next process that reads
+    the same text loads them. The file is data: read as JSON, used only if it holds two lists
+    of finite numbers, else the source is parsed and the file written again. ``cache``: the
+    folder (True: that one; None or False: no cache)."""
+    if cache is True:
+        from fuzzer.selection.instrument_cache import folder
+
+        cache = folder()
+    if not isinstance(cache, Path):
+        comparisons = _comparisons(source)
+        return _middles(comparisons), _numbers(comparisons)
+    digest = hashlib.sha256(f"{CACHE_MAGIC}\0{source}".encode("utf-8", "surrogatepass")).hexdigest()
+    path = cache / f"{CACHE_PREFIX}{digest[:40]}.json"
+    loaded = _load(path)
+    if loaded is not None:
+        return loaded
+    comparisons = _comparisons(source)
+    middles, numbers = _middles(comparisons), _numbers(comparisons)
+    _store(cache, path, middles, numbers)
+    return middles, numbers
+
+
+CACHE_MAGIC = "rrosfuzz-compared-numbers-v1"
+"""Names the cache files' format (in their digest and their content)."""
+CACHE_PREFIX = "literals-"
+CACHE_KEEP = 64
+"""Cache files kept (one per version of a target module's text), the oldest removed first."""
+
+
+def _load(path: Path) -> tuple[list[float], list[float]] | None:
+    """The (middles, numbers) of a cache file, or None when there is none or it does not fit."""
+    try:
+        entry = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # a cache: a bad file means parsing
+        return None
+    if not (isinstance(entry, list) and len(entry) == 3 and entry[0] == CACHE_MAGIC):
+        return None
+    lists = entry[1:]
+    if not all(isinstance(values, list) for values in lists):
+        return None
+    if not all(type(v) in (int, float) and math.isfinite(v) for values in lists for v in values):
+        return None
+    return [float(v) for v in lists[0]], [float(v) for v in lists[1]]
+
+
+def _store(cache: Path, path: Path, middles: list[float], numbers: list[float]) -> None:
+    """Write the file at once and keep the newest ``CACHE_KEEP``; a folder that cannot be
+    written only means no cache."""
+    from fuzzer.artifacts.store import atomic_write
+
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+        atomic_write(path, json.dumps([CACHE_MAGIC, middles, numbers]).encode("utf-8"), durable=False)
+        files = sorted(cache.glob(f"{CACHE_PREFIX}*.json"), key=lambda p: p.stat().st_mtime, reverse=True)
+    except (OSError, ValueError):
+        return
+    for old in files[CACHE_KEEP:]:
+        with contextlib.suppress(OSError):
+            old.unlink()
 
 
 def literal_configurations(
