@@ -19,7 +19,6 @@ its submodules or what it imports.
 from __future__ import annotations
 
 import ast
-import contextlib
 import hashlib
 import json
 import math
@@ -125,14 +124,17 @@ def module_numbers(modules: Iterable[str], bands: bool = False) -> list[float]:
     its numbers. Each file's from the cache when an earlier process read the same text
     (``parsed``)."""
     found: dict[float, None] = {}
+    from fuzzer.selection.instrument_cache import folder
+
+    cache = folder()
     for source in _sources(modules):
-        middles, numbers = parsed(source)
+        middles, numbers = parsed(source, cache)
         for value in (*(middles if bands else ()), *numbers):
             found.setdefault(value, None)
     return list(found)
 
 
-def parsed(source: str, cache: Path | bool | None = True) -> tuple[list[float], list[float]]:
+def parsed(source: str, cache: Path | None) -> tuple[list[float], list[float]]:
     """(``band_middles``, ``compared_numbers``) of Python ``source``, parsed once for both.
 
     Parsing a target's module takes a few milliseconds (3-8 ms for ``benchmarks.zoo.deep``,
@@ -142,12 +144,8 @@ def parsed(source: str, cache: Path | bool | None = True) -> tuple[list[float], 
     ``RROSFUZZ_INSTRUMENT_CACHE``; ``off`` turns both off), and the next process that reads
     the same text loads them. The file is data: read as JSON, used only if it holds two lists
     of finite numbers, else the source is parsed and the file written again. ``cache``: the
-    folder (True: that one; None or False: no cache)."""
-    if cache is True:
-        from fuzzer.selection.instrument_cache import folder
-
-        cache = folder()
-    if not isinstance(cache, Path):
+    folder (``instrument_cache.folder()``; None: no cache)."""
+    if cache is None:
         comparisons = _comparisons(source)
         return _middles(comparisons), _numbers(comparisons)
     digest = hashlib.sha256(f"{CACHE_MAGIC}\0{source}".encode("utf-8", "surrogatepass")).hexdigest()
@@ -188,16 +186,14 @@ def _store(cache: Path, path: Path, middles: list[float], numbers: list[float]) 
     """Write the file at once and keep the newest ``CACHE_KEEP``; a folder that cannot be
     written only means no cache."""
     from fuzzer.artifacts.store import atomic_write
+    from fuzzer.selection.instrument_cache import keep_newest
 
     try:
         cache.mkdir(parents=True, exist_ok=True)
         atomic_write(path, json.dumps([CACHE_MAGIC, middles, numbers]).encode("utf-8"), durable=False)
-        files = sorted(cache.glob(f"{CACHE_PREFIX}*.json"), key=lambda p: p.stat().st_mtime, reverse=True)
     except (OSError, ValueError):
         return
-    for old in files[CACHE_KEEP:]:
-        with contextlib.suppress(OSError):
-            old.unlink()
+    keep_newest(cache, f"{CACHE_PREFIX}*.json", CACHE_KEEP)
 
 
 def literal_configurations(

@@ -167,9 +167,18 @@ def _store(cache: Path, key: str, first: int, last: int, codes: list[types.CodeT
 
     try:
         atomic_write(cache / f"{key}.bin", marshal.dumps((MAGIC, first, last, tuple(codes))))
-        files = sorted(cache.glob("*.bin"), key=lambda p: p.stat().st_mtime, reverse=True)
     except (OSError, ValueError):
         return
-    for old in files[KEEP:]:
+    keep_newest(cache, "*.bin", KEEP)
+
+
+def keep_newest(cache: Path, pattern: str, keep: int) -> None:
+    """Remove all but the newest ``keep`` files of ``cache`` matching ``pattern`` (a file that
+    cannot be listed or removed stays: it is only a cache)."""
+    try:
+        files = sorted(cache.glob(pattern), key=lambda p: p.stat().st_mtime, reverse=True)
+    except OSError:
+        return
+    for old in files[keep:]:
         with contextlib.suppress(OSError):
             old.unlink()
