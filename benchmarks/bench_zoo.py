@@ -42,6 +42,7 @@ import shutil
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -132,15 +133,25 @@ class Run:
         return max(0.0, self.detected_at - self.first_input)
 
 
-def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
+def command(
+    bug: Bug,
+    engine: str,
+    seed: int,
+    budget: float,
+    workdir: Path,
+    root: Path = ROOT,
+    python: str = sys.executable,
+) -> list[str]:
+    """The trial's command line: ``engine`` against ``bug`` in the tree at ``root`` (its
+    ``fuzz_diff.py`` or its ``benchmarks.baselines``, run by ``python``), logs in ``workdir``."""
     artifacts, corpus = workdir / "artifacts", workdir / "corpus"
     common = [f"--robot={bug.robot}", f"--op={bug.op}", f"--targets=native,{bug.target}"]
     if bug.tip_link:
         common.append(f"--tip-link={bug.tip_link}")
     if engine in ("full", "libfuzzer", "weights"):
         cmd = [
-            sys.executable,
-            str(ROOT / "fuzz_diff.py"),
+            python,
+            str(root / "fuzz_diff.py"),
             str(corpus),
             f"-max_total_time={int(budget)}",
             f"-seed={seed}",
@@ -150,7 +161,7 @@ def command(bug: Bug, engine: str, seed: int, budget: float, workdir: Path) -> l
         ]
         return cmd if engine == "full" else [*cmd, f"--mutator={engine}"]
     return [
-        sys.executable,
+        python,
         "-m",
         "benchmarks.baselines",
         engine,
@@ -171,6 +182,9 @@ def run_one(
     stop_at_detection: bool = False,
     keep_failures: Path | None = None,
     cpu: int | None = None,
+    root: Path = ROOT,
+    python: str = sys.executable,
+    env: Sequence[str] | None = None,
 ) -> Run:
     """Run one trial of ``engine`` against ``bug`` in a fresh folder and read its logs.
 
@@ -199,6 +213,12 @@ def run_one(
     cpu
         Run the trial, and every process it starts, on this CPU only (``taskset``; a sweep
         gives each trial running at a time its own, ``benchmarks.sweeps.cores``); None: any.
+    root, python
+        The tree whose engine runs (its working folder and ``PYTHONPATH``), and the Python that
+        runs it (default: this tree and this Python); ``benchmarks.bench_ab`` runs another tree
+        with that tree's own ``.venv``.
+    env
+        ``VAR=VALUE`` settings the trial runs with (through ``env``; None: none, and no ``env``).
 
     Returns
     -------
@@ -208,12 +228,13 @@ def run_one(
     with tempfile.TemporaryDirectory(prefix="rrosfuzz-bench-") as tmp:
         workdir = Path(tmp)
         artifacts = workdir / "artifacts"
-        cmd = sweeps.pinned(command(bug, engine, seed, budget, workdir), cpu)
+        cmd = command(bug, engine, seed, budget, workdir, root, python)
+        cmd = sweeps.pinned(cmd if env is None else ["env", *env, *cmd], cpu)
         started = time.time()
         if stop_at_detection:
-            returncode = run_until_detection(cmd, artifacts, budget + 180, ROOT)
+            returncode = run_until_detection(cmd, artifacts, budget + 180, root)
         else:
-            returncode = trials.run_to_end(cmd, budget + 180, ROOT)
+            returncode = trials.run_to_end(cmd, budget + 180, root)
         hits = [r for r in read_lines(artifacts / DIVERGENCES) if r.get("kind") not in NOT_DETECTIONS]
         first = min((float(r["t"]) - started for r in hits), default=None)
         last: dict[Any, dict[str, Any]] = {}
@@ -223,7 +244,7 @@ def run_one(
         started_search = min(starts) - started if starts else None
         executions = sum(int(r.get("execs", 0)) for r in last.values())
         elapsed = max((float(r.get("elapsed", 0.0)) for r in last.values()), default=0.0)
-        fidelity = trials.replay_fidelity(bug, artifacts, ROOT) if replay and engine == "full" else (0, 0, ())
+        fidelity = trials.replay_fidelity(bug, artifacts, root) if replay and engine == "full" else (0, 0, ())
         if keep_failures is not None and bug.is_control and hits and artifacts.is_dir():
             name = "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{bug.name}-{engine}-seed{seed}")
             shutil.copytree(artifacts, keep_failures / name, dirs_exist_ok=True)

@@ -114,7 +114,7 @@ def _fake(monkeypatch: pytest.MonkeyPatch, kind: str, sleep: float, code: int) -
     """``bench_zoo.command`` runs a script that logs a first input and a divergence of ``kind``,
     then sleeps ``sleep`` s and exits with ``code``."""
 
-    def command(bug: object, engine: str, seed: int, budget: float, workdir: Path) -> list[str]:
+    def command(bug: object, engine: str, seed: int, budget: float, workdir: Path, *_: object) -> list[str]:
         return [sys.executable, "-c", FAKE_TRIAL, str(workdir / "artifacts"), kind, str(sleep), str(code)]
 
     monkeypatch.setattr(bench_zoo, "command", command)
