@@ -13,7 +13,7 @@ BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLis
 	constraints.txt \
 	$(MODULES)
 
-.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-deep-full bench-quick profile
+.PHONY: setup run test lint native-cov fuzz-native bench bench-deep bench-deep-full bench-paired bench-quick profile
 
 setup: $(STAMP)
 
@@ -50,6 +50,19 @@ bench-deep-full: setup
 ## (41 minutes on 2 cores on 0dcf0f0, an Intel Xeon; 39 on 2063e32; every baseline on every bug).
 bench-deep: setup
 	$(PY) -m benchmarks.bench_deep --mode short --write-md $$(test -f benchmarks/results/deep-short.jsonl && echo --resume)
+
+## The full engine against uniform sampling in pairs (benchmarks/bench_ab.py: both at once, one per
+## CPU; Wilcoxon signed-rank), 100 pairs per bug, on the bugs a 10-trial table could not separate
+## from uniform sampling (BENCHMARKS.md, "Paired A/B"; about 12 minutes on 5d8f753, AMD EPYC).
+## Stopped, the same command goes on with the pairs missing, on the same commit.
+PAIRED_BUGS = computed_branch atan2_quadrant calibration_entry wrap_past_pi execute_skips_start_check \
+	wrap_positive axis_not_normalized missing_axis_z float32_integration mimic_ignored last_sample_dropped \
+	ik_status_misread continuous_accumulates start_state_home cached_pose duplicate_start_point \
+	execute_stops_short remember_aliases_state
+bench-paired: setup
+	$(PY) -m benchmarks.bench_ab --arm full . --arm uniform . --engines full uniform --bugs $(PAIRED_BUGS) \
+		--trials 100 --first-seed 10 --out benchmarks/results/ab-paired-full-uniform.jsonl \
+		$$(test -f benchmarks/results/ab-paired-full-uniform.jsonl && echo --resume)
 
 ## CI-sized: a few zoo bugs, and two deep bugs x 2 engines x 2 trials (tests/test_zoo_deep.py runs the deep part).
 bench-quick: setup

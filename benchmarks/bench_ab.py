@@ -11,8 +11,10 @@ shared VMs (docs/benchmarks-log.md, forty-first session), more than most changes
 or the dry run save, so a difference measured from launch said more about the minute than about
 the change. Here every pair (bug, seed) runs both arms at the same moment, each on a CPU of its
 own (which arm gets which CPU: a seeded coin per pair), so whatever the machine does in that
-second it does to both; the pairs run one after another in a seeded random order. With fewer
-than two CPUs to pin to, a pair's arms run one after the other, in the coin's order.
+second it does to both; the pairs run one after another in a seeded random order. With
+``--serial`` (or fewer than two CPUs to pin to) a pair's arms run one after the other on one
+CPU, in the coin's order: the two do not slow each other down (two interpreters starting side
+by side on two vCPUs of a shared host do, unevenly), at twice the wall time.
 
 An arm is ``--arm NAME DIR [VAR=VALUE ...]``: the tree at ``DIR`` run by its own
 ``DIR/.venv/bin/python`` (``make setup`` there first: a code arm needs its own native build and
@@ -105,6 +107,11 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
     parser.add_argument("--first-seed", type=int, default=0, help="the first pair's -seed (%(default)s)")
     parser.add_argument("--budget", type=float, default=10.0, help="seconds per trial (%(default)s)")
     parser.add_argument("--out", type=Path, help="the pairs' file (JSON lines), appended as each pair ends")
+    parser.add_argument(
+        "--serial",
+        action="store_true",
+        help="run a pair's arms one after the other on one CPU (the coin's order) instead of at once",
+    )
     parser.add_argument("--resume", action="store_true", help="go on with the pairs --out does not hold yet")
     parser.add_argument("--from-json", type=Path, help="tabulate a file of pairs instead of running")
     args = parser.parse_args(argv)
@@ -126,6 +133,7 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
         "engines": list(args.engines),
         "budget": args.budget,
         "machine": journal.machine_of(),
+        "serial": args.serial,
     }
     cli.check_folder(parser, args.out.parent)
     done = _open(parser, args.out, header, args.resume)
@@ -137,7 +145,7 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
     print(f"{len(todo)} of {len(pairs)} pairs to run, {args.out}", flush=True)
     for arm in arms:
         sweeps.compile_tree(Path(arm.root))
-    runs = _run(arms, todo, args.engines, args.budget, args.out)
+    runs = _run(arms, todo, args.engines, args.budget, args.out, args.serial)
     return report(header, [*_flat(done), *runs])
 
 
@@ -185,8 +193,8 @@ def _open(
         held, runs = read(out)
     except ValueError as exc:
         parser.error(str(exc))
-    for key in ("arms", "engines", "budget", "machine"):
-        if held.get(key) != json.loads(json.dumps(header[key])):  # as the file holds it
+    for key in ("arms", "engines", "budget", "machine", "serial"):
+        if held.get(key, False) != json.loads(json.dumps(header[key])):  # as the file holds it
             parser.error(f"{out}: another test ({key}: {held.get(key)!r}, here {header[key]!r})")
     by_pair: dict[tuple[str, int], dict[str, Run]] = {}
     for side, run in runs:
@@ -199,11 +207,20 @@ def _flat(done: dict[Any, list[Run]]) -> list[tuple[str, Run]]:
 
 
 def _run(
-    arms: list[Arm], todo: list[tuple[str, int]], engines: list[str], budget: float, out: Path
+    arms: list[Arm],
+    todo: list[tuple[str, int]],
+    engines: list[str],
+    budget: float,
+    out: Path,
+    serial: bool = False,
 ) -> list[tuple[str, Run]]:
-    """Run the pairs, both arms at once; append each finished pair to ``out``."""
+    """Run the pairs, both arms at once (``serial``: one after the other on one CPU); append each
+    finished pair to ``out``."""
     coin = random.Random(1)
     cpus = sweeps.cores(2)
+    if serial:  # both on one CPU: the last, where a 2-CPU machine's interrupts are fewer
+        one_cpu = sweeps.cores(1) if cpus is None else cpus[1:]
+        cpus = None if one_cpu is None else [one_cpu[0], one_cpu[0]]
     done: list[tuple[str, Run]] = []
     with ThreadPoolExecutor(max_workers=2) as pool:
         for index, (name, seed) in enumerate(todo, 1):
@@ -228,7 +245,7 @@ def _run(
                 )
 
             try:
-                if cpus is None:  # one after the other, in the coin's order
+                if cpus is None or serial:  # one after the other, in the coin's order
                     got = [one(0), one(1)]
                 else:
                     futures = [pool.submit(one, slot) for slot in (0, 1)]
@@ -325,9 +342,9 @@ def report(header: dict[str, Any], runs: list[tuple[str, Run]]) -> dict[str, lis
     )
     print()
     print(
-        "| bug | pairs | what | "
+        "| bug | pairs (found) | what | "
         + f"{names[0]} median (s) | {names[1]} median (s) | median paired difference (ms) | "
-        + f"pairs {names[1]} sooner | Wilcoxon p | verdict | Mann-Whitney p, A12 |"
+        + f"pairs {names[1]} sooner | Wilcoxon p | {names[1]} is | Mann-Whitney p, A12 |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for bug, pairs in by_bug.items():

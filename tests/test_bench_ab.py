@@ -186,8 +186,9 @@ def test_a_file_of_another_test_is_not_resumed(tmp_path: Path, capsys: pytest.Ca
     assert "another test (arms:" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("serial", [False, True])
 def test_two_settings_of_this_tree_run_as_pairs_and_resume(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    serial: bool, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     if not (ROOT / ".venv" / "bin" / "python").is_file():
         pytest.skip("this tree has no .venv (make setup)")
@@ -196,18 +197,23 @@ def test_two_settings_of_this_tree_run_as_pairs_and_resume(
         "--arm", "plain", str(ROOT),
         "--arm", "set", str(ROOT), "RROSFUZZ_BENCH_AB_TEST=1",
         "--bugs", "axis_not_normalized", "--trials", "2", "--budget", "20", "--out", str(out),
-    ]  # fmt: skip
+    ] + (["--serial"] if serial else [])  # fmt: skip
     by_bug = bench_ab.main(argv)
     pairs = by_bug["axis_not_normalized"]
     assert len(pairs) == 2 and {a.seed for a, _ in pairs} == {0, 1}
     assert all(r.detected_at is not None and r.first_input is not None for pair in pairs for r in pair)
     header, runs = bench_ab.read(out)
     assert [a["env"] for a in header["arms"]] == [[], ["RROSFUZZ_BENCH_AB_TEST=1"]]
+    assert header["serial"] is serial
     assert sorted(side for side, _ in runs) == ["a", "a", "b", "b"]
     capsys.readouterr()
     again = bench_ab.main([*argv, "--resume"])  # nothing left to run: the same pairs, tabulated
     assert "0 of 2 pairs to run" in capsys.readouterr().out
     assert again.keys() == by_bug.keys() and len(again["axis_not_normalized"]) == 2
+    flipped = [x for x in argv if x != "--serial"] + ([] if serial else ["--serial"])
+    with pytest.raises(SystemExit):  # the other mode is another test
+        bench_ab.main([*flipped, "--resume"])
+    assert "another test (serial:" in capsys.readouterr().err
 
 
 def test_a_trial_runs_in_its_arm_s_tree_with_its_python_and_settings(
