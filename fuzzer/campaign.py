@@ -22,6 +22,7 @@ from typing import Any
 from fuzzer import dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
 from fuzzer.generation.corpus import (
     bag_seeds,
@@ -119,6 +120,14 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     evaluator.check_seconds = check_seconds(timeout)
     dry: dry_run.Stages | None = None
     dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
+    timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
+    left = guard.leftovers(folders) if not child else []
+    for path in left:  # fuzzer/execution/guard.py
+        reporting.warn(
+            f"{path}: a campaign ended while it evaluated this input in its own process (a crash, "
+            "a hang or a kill); libFuzzer runs it as a seed, and no input is evaluated in the "
+            "campaign's process while it is there"
+        )
     usable, seeds = prescan(session, folders) if not child else (1, [])
     if options.seeds_from_bag is not None and not child and folders:
         from_bag = bag_seeds(session, options.seeds_from_bag)
@@ -143,6 +152,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             lambda base, sweep: dry_run.harness(
                 evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
             ),
+            corpus=None if left else folders[0],
+            artifacts=artifacts,
+            timeout_code=timeout_code,
         )
         dry.first()  # before the seeds exist
     if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
@@ -239,8 +251,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     harness.on_exec = progress.tick
 
     from fuzzer.exit_hook import flush_all, on_exit
-
-    timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
 
     def shown(path: Path) -> str:
         return str(options.artifacts / path.name)  # as the user named the folder

@@ -23,6 +23,16 @@ reports that input as it reports any. libFuzzer runs every seed anyway, instrume
 coverage: the dry run costs the seeds' evaluation once more (in parallel on a second CPU; on
 one, before the rest of the start-up), which is why it is kept to the ops whose inputs are cheap
 enough (``DRY_RUN_OPS``).
+
+But the first (``IN_PROCESS_FIRST`` ops): the first stage's first input is evaluated in the
+campaign's process before the fork, under ``fuzzer.execution.guard`` (written ahead into the
+corpus, a hang guard), and the child goes on from the second. A child's fork, set-up and
+copy-on-write faults put 5-7 ms before its first evaluation, and a bug that nearly every input
+shows is decided by that input (BENCHMARKS.md, "Paired A/B"). It runs on the campaign's own
+targets, as every input libFuzzer runs later: for a stateful target it is one call more before
+libFuzzer's first, in the evaluator's history like any (a ``state_dependent`` crash file lists
+and replays it), and the child inherits the targets after it, as its own first evaluation left
+them before.
 """
 
 from __future__ import annotations
@@ -31,10 +41,12 @@ import os
 import random
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.execution import guard
 from fuzzer.execution.evaluate import Evaluator
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.corpus import (
@@ -56,6 +68,7 @@ from fuzzer.generation.dry_run_plan import (
     EARLY,
     FIRST_ROWS,
     HEAD,
+    IN_PROCESS_FIRST,
     LATE,
     LEAD,
     LITERALS,
@@ -69,7 +82,7 @@ from fuzzer.generation.sweep import Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
-from fuzzer.processes import DryRun
+from fuzzer.processes import TIMEOUT_EXIT, DryRun
 from fuzzer.scenario.fresh import GO
 from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import SPACEFILL
@@ -78,7 +91,12 @@ DEFAULT_BUDGET = 60.0
 """Seconds the child may take when libFuzzer's ``-timeout`` is 0 (off)."""
 
 ENV = "RROSFUZZ_DRY_RUN"
-"""``RROSFUZZ_DRY_RUN=0`` turns the dry run off (libFuzzer then runs the seeds first, alone)."""
+"""``RROSFUZZ_DRY_RUN=0`` turns the dry run off (libFuzzer then runs the seeds first, alone);
+``RROSFUZZ_DRY_RUN=children`` (``CHILDREN``) keeps every dry-run input out of the campaign's
+process, the first one included (``IN_PROCESS_FIRST``): for targets known to crash or hang, at
+5-7 ms of the first detection."""
+
+CHILDREN = "children"
 
 
 def applies(config: RunConfig, mutator: str, several_processes: bool, stop_on_divergence: bool) -> bool:
@@ -155,6 +173,14 @@ def evaluate(
         h.maybe_snapshot(force=True)
 
 
+Parts = Iterator[tuple[str, list[TestCase]]]
+"""The first stage's parts still to come (``Stages._first_parts``)."""
+
+Here = tuple[Sweep | None, Harness, Parts, list[TestCase]]
+"""What the first stage's child goes on with after its first input was evaluated before the
+fork (``Stages._first_here``): the sweep, the Harness, the parts still to come, the rest of
+the first input's part."""
+
 MakeHarness = Callable[[Sequence[TestCase], Sweep | None], Harness]
 """``(seeds, sweep) -> Harness``: ``harness`` with the campaign's evaluator, store, log and
 sidecar bound."""
@@ -194,8 +220,15 @@ class Stages:
     wanted : int
         Seeds the campaign makes: the probes are numbered after them.
     timeout : int
-        libFuzzer's ``-timeout`` (s; 0: off): each child's budget.
+        libFuzzer's ``-timeout`` (s; 0: off): each child's budget, and the first input's.
     make_harness : MakeHarness
+    corpus : Path, optional
+        The campaign's first corpus folder, where the first input is written ahead
+        (``fuzzer.execution.guard``); None: no input is evaluated in the campaign's process.
+    artifacts : Path, optional
+        Where the first input goes as a ``timeout-`` file if it hangs (None: as ``corpus``).
+    timeout_code : int
+        ``-timeout_exitcode``.
     """
 
     session: Session
@@ -204,6 +237,9 @@ class Stages:
     wanted: int
     timeout: int
     make_harness: MakeHarness
+    corpus: Path | None = None
+    artifacts: Path | None = None
+    timeout_code: int = TIMEOUT_EXIT
     children: list[DryRun] = field(default_factory=list)
     _first_count: int = 0
     _literal_at: int = 0
@@ -309,13 +345,21 @@ class Stages:
         makes them again after the fork, for the second stage's numbering only (an op with a
         second stage, ``SECOND_STAGE_OPS``)."""
         early, late = self._first_sweeps()
+        here = self._first_here()
 
         def work() -> None:
-            made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
-            harness = self.make_harness(self._base(), made)
+            if here is None:
+                made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
+                harness = self.make_harness(self._base(), made)
+                parts: Parts = self._first_parts(literals=True)
+                rest: list[TestCase] = []
+            else:  # the first input was evaluated before the fork
+                made, harness, parts, rest = here
+                harness.maybe_snapshot(force=True)  # this process's first snapshot, which counts it
             for _ in range(early + 1 if made is not None else 0):  # FIRST_ROWS rows, then early sweeps
                 harness.run_sweep()
-            for _, part in self._first_parts(literals=True):  # the literals made here: off the start-up
+            evaluate(harness, rest, snapshot=False)  # the rest of the first input's part
+            for _, part in parts:  # the literals made here: off the start-up
                 evaluate(harness, part, snapshot=False)
             for _ in range(late if made is not None else 0):  # the late sweeps, after the probes
                 harness.run_sweep()
@@ -324,6 +368,47 @@ class Stages:
         self._launch(work)
         if self.session.config.op in SECOND_STAGE_OPS:
             self.first_cases()  # sets _first_count, which numbers the second stage's inputs
+
+    def _first_here(self) -> Here | None:
+        """Evaluate the first stage's first input in this process, before the fork, under
+        ``fuzzer.execution.guard`` (an ``IN_PROCESS_FIRST`` op with a ``corpus`` folder); returns
+        what the child goes on with (the sweep, the Harness, the parts still to come, the rest
+        of the first input's part), or None (the child makes and evaluates everything).
+
+        The first input is the first uniform configuration: for ``move`` its stream's first
+        (the child goes on from the second); ``fk`` sweeps its uniform rows and has no
+        single-call configurations, so it gets one more, on the single-call path, before the
+        child's stream (a sweep of ``FIRST_ROWS`` first costs about 0.8 ms, and what a bug
+        needs a joint away from zero for, its aligned configurations may not show). An input
+        that cannot be written ahead is left to the child (``fk``: not evaluated)."""
+        session = self.session
+        op = session.config.op
+        if op not in IN_PROCESS_FIRST or self.corpus is None or os.environ.get(ENV) == CHILDREN:
+            return None
+        made = sweep(session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
+        harness = self.make_harness(self._base(), made)
+        harness.hold_snapshots()  # the child logs the first (a snapshot names its process)
+        parts = self._first_parts(literals=True)
+        part: list[TestCase] = []
+        if UNIFORM.get(op, 0):
+            for _, part in parts:
+                if part:
+                    break
+            first, rest = (part[0], part[1:]) if part else (None, [])
+        else:
+            extra = uniform_cases(session, 1, self.seed + SWEEP_SEED, self.wanted)
+            first, rest = (extra[0] if extra else None), []
+        if first is None:
+            return made, harness, parts, rest
+        data = first.encode()
+        try:
+            pending = guard.write_ahead(self.corpus, data)
+        except OSError:
+            return made, harness, parts, part
+        budget = self.timeout if self.timeout > 0 else DEFAULT_BUDGET
+        with guard.guarded(pending, data, self.artifacts or self.corpus, budget, self.timeout_code):
+            harness.test_one_input(data)
+        return made, harness, parts, rest
 
     def second(self, seeds: list[TestCase]) -> None:
         """Start the second stage, with the campaign's generated ``seeds`` (none for an op

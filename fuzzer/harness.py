@@ -193,6 +193,12 @@ class Harness:
             message["header"]["frame_id"] = (self.sweep.link if self.sweep is not None else None) or ""
         return base.child(message, row.label)
 
+    def hold_snapshots(self) -> None:
+        """Log no snapshot until ``maybe_snapshot(force=True)`` (the first input's right-away
+        one included): the dry run evaluates its first input before it forks, and the child
+        logs the snapshot that counts it (``fuzzer.dry_run``)."""
+        self._next_snapshot = math.inf
+
     def maybe_snapshot(self, force: bool = False) -> None:
         """Append this process's counters to stats.jsonl (at most every SNAPSHOT_SECONDS)."""
         now = time.monotonic()

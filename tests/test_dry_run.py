@@ -18,7 +18,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.boundary import OFFSETS
 from fuzzer.generation.corpus import boundary_cases
 from fuzzer.generation.sweep import CONFIRM, ROWS
-from fuzzer.selection.state import ALIGNED, BOUNDARY, LITERAL, SPACEFILL
+from fuzzer.selection.state import ALIGNED, BOUNDARY, LITERAL, SPACEFILL, UNIFORM
 from tests.support import ROOT, fuzz, python
 
 ZOO_ARM = str(ROOT / "benchmarks" / "robots" / "zoo_arm.urdf")
@@ -84,6 +84,7 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     # (the first stage's sweeps: one of FIRST_ROWS rows, the early ones, the late ones)
     ran = last[first]["executed_by_strategy"]
     assert ran == {
+        UNIFORM: 1,  # one uniform configuration before the fork, in the campaign's process
         SWEPT: (early + 1 + late) * CONFIRM,
         ALIGNED: dry_run.ALIGNED["fk"],
         BOUNDARY: ran[BOUNDARY],
@@ -102,7 +103,10 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     first_of_campaign = min(r["first_input"] for r in stats if r["pid"] == campaign)
     assert max(min(r["first_input"] for r in stats if r["pid"] == pid) for pid in dry) < first_of_campaign
     divergences = _records(artifacts / "divergences.jsonl")
-    assert divergences[0]["pid"] == first and divergences[0]["strategy"] == SWEPT, "a sweep goes first"
+    # the first input is evaluated in the campaign's process (fuzzer/execution/guard.py), then
+    # the first child's sweeps go first
+    assert divergences[0]["pid"] == campaign and divergences[0]["strategy"] == UNIFORM
+    assert next(r for r in divergences if r["pid"] == first)["strategy"] == SWEPT, "a sweep goes first"
     assert "seed" in {r["strategy"] for r in divergences if r["pid"] == second}
     # the campaign meets the same seeds again: one crash file per signature all the same
     signatures = {r["sig"] for r in divergences}
@@ -305,7 +309,9 @@ def test_a_dry_run_killed_while_writing_a_crash_file_loses_nothing(tmp_path: Pat
         "--robot=kinova",
         "--targets=native,tests.plugins.faults:wrap_continuous",
         timeout=300,
-        env={KILL_HOOK: f"{point}:1"},
+        # every dry-run input in a child: the first is otherwise the campaign's own (and the
+        # campaign's first claim, fuzzer/execution/guard.py)
+        env={KILL_HOOK: f"{point}:1", dry_run.ENV: dry_run.CHILDREN},
     )
     assert run.returncode == 1, run.stderr[-3000:]
     assert "Traceback" not in run.stderr

@@ -138,7 +138,12 @@ class CampaignLog:
     def __init__(self, directory: Path) -> None:
         self.divergences = directory / DIVERGENCES
         self.stats = directory / STATS
-        self.pid = os.getpid()
+
+    @property
+    def pid(self) -> int:
+        """The writing process's: read at each record, so that a log made before a fork (the
+        dry run's, ``fuzzer.dry_run``) names the child in the child's records."""
+        return os.getpid()
 
     def divergence(self, record: dict[str, Any]) -> None:
         append_line(self.divergences, {"t": time.time(), "pid": self.pid, **record})

@@ -15,6 +15,14 @@ space-filling seed) after the fork, so its dry run reports what the seeds show t
 dry run has a first stage only (``SECOND_STAGE_OPS``): MoveIt's tutorial scripts and
 ``SCRIPTS`` uniform scripts."""
 
+IN_PROCESS_FIRST = frozenset({"fk", "move"})
+"""Ops whose dry run evaluates its first input (the first uniform configuration, one call) in
+the campaign's process before it forks (``fuzzer.dry_run``, ``fuzzer.execution.guard``): the
+child's fork, set-up and copy-on-write faults cost 5-7 ms before its first evaluation, which is
+where a bug nearly every input shows is decided (BENCHMARKS.md, "Paired A/B"). Not ``ik`` (its
+first inputs are probes of 5 ms each) nor ``scenario`` (a tutorial script, tens of ms): their
+bugs are not decided in those milliseconds."""
+
 SECOND_STAGE_OPS = DRY_RUN_OPS - {"scenario"}
 """Ops whose dry run evaluates the generated seeds once more (its second stage). Not
 ``scenario``: a scenario seed costs 10 to 100 times more than an ``fk`` one, and libFuzzer runs

@@ -76,6 +76,21 @@ class _AlwaysHangs(python_impl.MoveGroup):
 always_hangs = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_AlwaysHangs)
 
 
+class _AlwaysAborts(python_impl.MoveGroup):
+    """Kills the process (SIGABRT) in every go(): the dry run's first input, evaluated in the
+    campaign's process (fuzzer/execution/guard.py), takes the campaign with it."""
+
+    def go(self, joints=None, wait=True):  # type: ignore[no-untyped-def]
+        import faulthandler
+        import os
+
+        faulthandler.disable()  # no "Fatal Python error" stack for this intended abort
+        os.abort()
+
+
+always_aborts = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_AlwaysAborts)
+
+
 def _model_without_arguments() -> None:
     """A RobotModel that takes no URDF: calling it as the API does raises TypeError."""
 
