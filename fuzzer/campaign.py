@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer import dry_run, reporting
+from fuzzer import dry_harness, dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution import guard
@@ -149,7 +149,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             options.seed,
             wanted,
             timeout,
-            lambda base, sweep: dry_run.harness(
+            lambda base, sweep: dry_harness.harness(
                 evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
             ),
             corpus=None if left else folders[0],

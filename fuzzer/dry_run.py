@@ -38,16 +38,12 @@ them before.
 from __future__ import annotations
 
 import os
-import random
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
-from fuzzer.artifacts.divlog import CampaignLog
-from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.dry_harness import MakeHarness, evaluate, sweep
 from fuzzer.execution import guard
-from fuzzer.execution.evaluate import Evaluator
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.corpus import (
     aligned_cases,
@@ -81,10 +77,8 @@ from fuzzer.generation.dry_run_plan import (
 from fuzzer.generation.sweep import Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
-from fuzzer.mutation import mutators
-from fuzzer.processes import TIMEOUT_EXIT, DryRun
+from fuzzer.processes import TIMEOUT_EXIT, DryRun, launch
 from fuzzer.scenario.fresh import GO
-from fuzzer.selection.guidance import Features
 from fuzzer.selection.state import SPACEFILL
 
 DEFAULT_BUDGET = 60.0
@@ -119,60 +113,6 @@ def applies(config: RunConfig, mutator: str, several_processes: bool, stop_on_di
     )
 
 
-def harness(
-    evaluator: Evaluator,
-    store: ArtifactStore,
-    log: CampaignLog,
-    sidecar: Callable[[TestCase, bytes, Any], dict[str, Any]],
-    seeds: Sequence[TestCase],
-    joint_names: tuple[str, ...],
-    sweep: Sweep | None = None,
-) -> Harness:
-    """A Harness that evaluates and records, without libFuzzer, coverage or mutation; with
-    ``sweep`` (see ``sweep``), ``evaluate`` runs its sweeps."""
-    return Harness(
-        evaluator=evaluator,
-        store=store,
-        features=Features(enabled=False),
-        context=mutators.MutationContext(rng=random.Random(0), field_types={}),  # never mutates
-        sidecar=sidecar,
-        seeds=list(seeds),
-        log=log,
-        joint_names=joint_names,
-        sweep=sweep,
-    )
-
-
-def sweep(session: Session, mutator: str, seed: int, first_rows: int = 0) -> Sweep | None:
-    """A dry run's sweeps for a campaign with ``--mutator mutator``, uniform rows seeded with
-    ``seed``, the first of ``first_rows`` rows (0: ``ROWS``), never due on their own
-    (``evaluate`` runs them); None but for the full engine's ``fk`` in process on a chain with
-    joints (as the campaign's sweeps)."""
-    config = session.config
-    limits = session.reference.joint_limits
-    if mutator != "rrosfuzz" or config.op != "fk" or config.transport != "inprocess" or not limits:
-        return None
-    lower, upper = [lim.lower for lim in limits], [lim.upper for lim in limits]
-    tolerance = config.tolerance
-    return Sweep(lower, upper, tolerance, seed=seed, source="uniform", share=0.0, first_rows=first_rows)
-
-
-def evaluate(
-    h: Harness, cases: Sequence[TestCase], before: int = 0, after: int = 0, snapshot: bool = True
-) -> None:
-    """Evaluate ``cases`` in order, as libFuzzer hands inputs over (their encoding), then log
-    a stats snapshot (unless not ``snapshot``); with the Harness's sweep, ``before`` sweeps
-    first and ``after`` sweeps last."""
-    for _ in range(before if h.sweep is not None else 0):
-        h.run_sweep()
-    for case in cases:
-        h.test_one_input(case.encode())
-    for _ in range(after if h.sweep is not None else 0):
-        h.run_sweep()
-    if snapshot:
-        h.maybe_snapshot(force=True)
-
-
 Parts = Iterator[tuple[str, list[TestCase]]]
 """The first stage's parts still to come (``Stages._first_parts``)."""
 
@@ -180,11 +120,6 @@ Here = tuple[Sweep | None, Harness, Parts, list[TestCase]]
 """What the first stage's child goes on with after its first input was evaluated before the
 fork (``Stages._first_here``): the sweep, the Harness, the parts still to come, the rest of
 the first input's part."""
-
-MakeHarness = Callable[[Sequence[TestCase], Sweep | None], Harness]
-"""``(seeds, sweep) -> Harness``: ``harness`` with the campaign's evaluator, store, log and
-sidecar bound."""
-
 
 TUTORIAL_PART, UNIFORM_PART, PROBE_PART, LITERAL_PART = "tutorial", "uniform", "probe", "literal"
 """Names of the first stage's parts (``Stages._first_parts``): MoveIt's tutorial scripts; uniform
@@ -405,8 +340,7 @@ class Stages:
             pending = guard.write_ahead(self.corpus, data)
         except OSError:
             return made, harness, parts, part
-        budget = self.timeout if self.timeout > 0 else DEFAULT_BUDGET
-        with guard.guarded(pending, data, self.artifacts or self.corpus, budget, self.timeout_code):
+        with guard.guarded(pending, data, self.artifacts or self.corpus, self.budget, self.timeout_code):
             harness.test_one_input(data)
         return made, harness, parts, rest
 
@@ -423,8 +357,14 @@ class Stages:
 
         self._launch(work)
 
+    @property
+    def budget(self) -> float:
+        """Seconds a child, or the first input in this process, may take: libFuzzer's
+        ``-timeout``, ``DEFAULT_BUDGET`` if 0."""
+        return self.timeout if self.timeout > 0 else DEFAULT_BUDGET
+
     def _launch(self, work: Callable[[], None]) -> None:
-        child = launch(work, self.timeout)
+        child = launch(work, self.budget)
         if child is not None:
             self.children.append(child)
 
@@ -436,23 +376,3 @@ class Stages:
         """Reap every child (``DryRun.wait``)."""
         for child in self.children:
             child.wait()
-
-
-def launch(work: Callable[[], None], timeout: int) -> DryRun | None:
-    """Start a dry-run child that runs ``work``. ``timeout`` is libFuzzer's ``-timeout`` (s;
-    0: off, ``DEFAULT_BUDGET``): the child's whole budget.
-
-    On a single CPU (``os.sched_getaffinity``: a pinned process) the campaign waits for the
-    child before it goes on: sharing one CPU would slow both, and the scheduler would let the
-    new child wait for a time slice while the campaign starts up, for nothing."""
-    dry = DryRun.start(work, timeout if timeout > 0 else DEFAULT_BUDGET)
-    if dry is not None and _cpus() == 1:
-        dry.wait()
-    return dry
-
-
-def _cpus() -> int:
-    """The CPUs this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1

@@ -256,3 +256,22 @@ def _until_exit(pid: int, seconds: float) -> None:
         select.select([fd], [], [], seconds)
     finally:
         os.close(fd)
+
+
+def launch(work: Callable[[], object], budget: float) -> DryRun | None:
+    """Start a dry-run child that runs ``work`` within ``budget`` seconds (``DryRun.start``).
+
+    On a single CPU (``os.sched_getaffinity``: a pinned process) the campaign waits for the
+    child before it goes on: sharing one CPU would slow both, and the scheduler would let the
+    new child wait for a time slice while the campaign starts up, for nothing."""
+    dry = DryRun.start(work, budget)
+    if dry is not None and _cpus() == 1:
+        dry.wait()
+    return dry
+
+
+def _cpus() -> int:
+    """The CPUs this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzer import dry_run
+from fuzzer import dry_harness, dry_run
 from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session
@@ -47,7 +47,7 @@ def test_a_uniform_stream_stays_in_the_box_and_repeats_with_its_seed() -> None:
 
 def test_a_sweep_names_its_source_in_the_lineage_and_rejects_an_unknown_one() -> None:
     session = Session.open(RunConfig(op="fk"))
-    sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+    sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
     assert sweep is not None and sweep.source == "uniform" and not sweep.due() and not sweep.due()
     q, labels, owner = sweep.batch([])
     assert q.shape == (ROWS, len(session.reference.joint_limits))
@@ -61,7 +61,7 @@ def test_a_sweep_names_its_source_in_the_lineage_and_rejects_an_unknown_one() ->
     [("move", "rrosfuzz", "inprocess"), ("ik", "rrosfuzz", "inprocess"), ("fk", "libfuzzer", "inprocess")],
 )
 def test_only_the_full_engine_sweeps_in_an_fk_dry_run(op: str, mutator: str, transport: str) -> None:
-    assert dry_run.sweep(Session.open(RunConfig(op=op, transport=transport)), mutator, seed=1) is None
+    assert dry_harness.sweep(Session.open(RunConfig(op=op, transport=transport)), mutator, seed=1) is None
 
 
 def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_crash(tmp_path: Path) -> None:
@@ -69,9 +69,9 @@ def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_cra
     miss it with odds of about 1e-14. The flagged row is confirmed on the single-call path."""
     h = make_harness(tmp_path, targets=("native", "benchmarks.zoo.deep:narrow_band"), op="fk")
     session = Session.open(RunConfig(op="fk"))
-    h.sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+    h.sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
     h.joint_names = tuple(session.reference.joint_names)
-    dry_run.evaluate(h, [], before=dry_run.SWEEPS)
+    dry_harness.evaluate(h, [], before=dry_run.SWEEPS)
     assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
     assert h.stats.signatures and h.sweep.unconfirmed == 0
     assert h.stats.first_input is not None
@@ -85,8 +85,8 @@ def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_cra
 
 def test_no_dry_run_sweep_reports_between_correct_targets(tmp_path: Path) -> None:
     h = make_harness(tmp_path, op="fk")
-    h.sweep = dry_run.sweep(Session.open(RunConfig(op="fk")), "rrosfuzz", seed=2)
-    dry_run.evaluate(h, [], before=dry_run.SWEEPS)
+    h.sweep = dry_harness.sweep(Session.open(RunConfig(op="fk")), "rrosfuzz", seed=2)
+    dry_harness.evaluate(h, [], before=dry_run.SWEEPS)
     assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
     assert h.sweep.flagged == 0 and not h.stats.signatures
 
@@ -105,11 +105,11 @@ def test_the_dry_run_sweeps_do_not_import_scipy_stats_or_numpy_random() -> None:
     either (7-10 ms, which the first input would wait for)."""
     program = """
 import sys
-from fuzzer import dry_run
+from fuzzer import dry_harness, dry_run
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.generation.corpus import make_seeds
 session = Session.open(RunConfig(op="fk"))
-sweep = dry_run.sweep(session, "rrosfuzz", seed=1)
+sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
 sweep.run([r.model for r in session.evaluator().runners], [])
 for op in ("fk", "move"):
     dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", 1, 4, 0, None).first_cases()
@@ -128,11 +128,11 @@ print(len(made), sweep.compared, "scipy.stats" in sys.modules, first_stage)
 def test_the_first_sweep_of_a_dry_run_is_small_and_the_next_ones_full() -> None:
     session = Session.open(RunConfig(op="fk"))
     models = [r.model for r in session.evaluator().runners]
-    sweep = dry_run.sweep(session, "rrosfuzz", seed=1, first_rows=dry_run.FIRST_ROWS)
+    sweep = dry_harness.sweep(session, "rrosfuzz", seed=1, first_rows=dry_run.FIRST_ROWS)
     assert sweep is not None
     assert [sweep.run(models, []).rows for _ in range(3)] == [dry_run.FIRST_ROWS, ROWS, ROWS]
     assert sweep.compared == dry_run.FIRST_ROWS + 2 * ROWS
-    plain = dry_run.sweep(session, "rrosfuzz", seed=1)
+    plain = dry_harness.sweep(session, "rrosfuzz", seed=1)
     assert plain is not None and plain.run(models, []).rows == ROWS
 
 
@@ -219,7 +219,7 @@ def test_a_scenario_dry_run_evaluates_its_first_stage_and_has_no_second(tmp_path
     made: list[Harness] = []
 
     def harness(base: list[TestCase], sweep: Sweep | None) -> Harness:
-        made.append(dry_run.harness(session.evaluator(), store, log, lambda *_: {}, base, names, sweep))
+        made.append(dry_harness.harness(session.evaluator(), store, log, lambda *_: {}, base, names, sweep))
         return made[-1]
 
     stages = dry_run.Stages(session, "rrosfuzz", 1, 8, 0, harness)
