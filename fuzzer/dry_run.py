@@ -38,6 +38,7 @@ them before.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -320,6 +321,8 @@ class Stages:
         op = session.config.op
         if op not in IN_PROCESS_FIRST or self.corpus is None or os.environ.get(ENV) == CHILDREN:
             return None
+        if threading.current_thread() is not threading.main_thread():
+            return None  # the hang guard needs signals, which only the main thread may set
         made = sweep(session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
         harness = self.make_harness(self._base(), made)
         harness.hold_snapshots()  # the child logs the first (a snapshot names its process)

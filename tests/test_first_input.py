@@ -136,3 +136,28 @@ def test_the_dry_runs_first_move_input_is_the_campaigns_and_its_child_counts_it(
     ours = [r for r in stats if r["pid"] == campaign]
     assert ours[0]["first_input"] > opening["first_input"], "no dry-run snapshot under the campaign's pid"
     assert guard.leftovers([corpus]) == []
+
+
+def test_off_the_main_thread_the_first_input_is_left_to_the_child(tmp_path: Path) -> None:
+    """The hang guard sets a signal handler, which only the main thread may do: a campaign run
+    from another thread evaluates its first input in the child, as before."""
+    import threading
+
+    from fuzzer import dry_run
+    from fuzzer.execution.session import RunConfig, Session
+
+    made: list[object] = []
+
+    def make_harness(seeds: object, sweep: object) -> object:
+        made.append(seeds)
+        raise AssertionError("no Harness is made in this process")
+
+    stages = dry_run.Stages(
+        Session.open(RunConfig(op="move")), "rrosfuzz", 1, 4, 0, make_harness, corpus=tmp_path
+    )  # type: ignore[arg-type]
+    here: list[object] = []
+    thread = threading.Thread(target=lambda: here.append(stages._first_here()))
+    thread.start()
+    thread.join()
+    assert here == [None] and made == []
+    assert guard.leftovers([tmp_path]) == []
