@@ -25,7 +25,6 @@ from pathlib import Path
 
 from fuzzer import reporting
 from fuzzer.artifacts import manifest
-from fuzzer.artifacts.sidecar import config_from, read_sidecar
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.session import RunConfig
 from fuzzer.input.paths import check_input_file, prepare_folder
@@ -81,6 +80,8 @@ def adopt_sidecar(args: argparse.Namespace, files: Sequence[Path]) -> bool:
         A damaged sidecar, or one naming targets that may not be imported.
     """
     for path in files:
+        from fuzzer.artifacts.sidecar import config_from, read_sidecar  # a campaign on folders: not needed
+
         sidecar = read_sidecar(path)
         if sidecar is None:
             continue
