@@ -330,9 +330,12 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     defaults, our options as --name=value tokens, the corpus folders.
 
     Without ``--verbose``, ``-verbosity=0`` hides libFuzzer's per-input lines (NEW, REDUCE,
-    pulse); its crash, timeout and -fork reports still show. ``-jobs=N`` without
-    ``-workers`` gets ``-workers=N`` (libFuzzer's default, half the cores, runs the jobs one
-    at a time on small machines). With ``-jobs`` the campaign runs in its artifacts folder
+    pulse); its crash, timeout and -fork reports still show. One process (no ``-jobs``, no
+    ``-fork``, not their worker: ``CHILD_ENV``) gets ``-reload=0`` unless given: libFuzzer's
+    reread of the folder, which nothing else writes, made runs of one command differ
+    (docs/engine.md, "Reproducing a campaign"). ``-jobs=N`` without ``-workers`` gets
+    ``-workers=N`` (libFuzzer's default, half the cores, runs the jobs one at a time on small
+    machines). With ``-jobs`` the campaign runs in its artifacts folder
     (libFuzzer writes ``fuzz-<job>.log`` into the working folder), so paths are made absolute.
     """
     script = os.path.abspath(sys.argv[0])
@@ -345,6 +348,10 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     if not options.verbose and flag_value(options.libfuzzer_flags, "-verbosity") is None:
         flags.append("-verbosity=0")
     jobs = int_flag(options.libfuzzer_flags, "-jobs", 0)
+    fork = int_flag(options.libfuzzer_flags, "-fork", 0)
+    alone = not jobs and fork <= 0 and os.environ.get(CHILD_ENV) != "1"  # not a -jobs/-fork worker either
+    if alone and flag_value(options.libfuzzer_flags, "-reload") is None:
+        flags.append("-reload=0")
     forwarded = list(options.forwarded)
     corpus = [str(c) for c in options.corpus]
     if jobs > 0:

@@ -152,6 +152,21 @@ def test_agreeing_targets_run_clean(tmp_path: Path) -> None:
     assert "divergences: 0" in run.stderr and not sidecars(artifacts)
 
 
+def test_a_campaign_repeats_itself_for_a_seed(tmp_path: Path) -> None:
+    """Two runs of one command keep the same corpus: every random choice has its seed, and a
+    single process no longer rereads its corpus folder (``-reload=0``, ``campaign.libfuzzer_argv``).
+    libFuzzer's reread, once a second, ran again the seeds that had added no coverage, at an
+    execution the clock chose: of three 800-input runs, one kept other inputs than the two others."""
+    kept = []
+    for name in ("a", "b"):
+        corpus = tmp_path / name / "corpus"
+        art = f"--artifacts={tmp_path / name / 'art'}"
+        run = fuzz(str(corpus), "--op=move", "-runs=2500", "-seed=11", art)
+        assert run.returncode == 0, run.stderr[-2000:]
+        kept.append(sorted(p.name for p in corpus.iterdir() if p.is_file()))
+    assert len(kept[0]) > 100 and kept[0] == kept[1]
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -150,3 +150,26 @@ def test_atheris_leaks_array_comparison_results_and_the_guard_does_not() -> None
             assert np.array_equal(fake._trace_cmp(a, 2.0, opid, 11, False), expected)
         assert fake._trace_cmp(b"ab", b"ac", 0, 11, False) is True
         assert fake._trace_cmp("b", "a", 4, 11, False) is True
+
+
+def test_counts_and_counters_carry_over_when_atheris_swaps_its_functions() -> None:
+    """``trace`` is remade when Atheris swaps ``_trace_cmp`` in: the comparisons traced before
+    still count, a feature seen before is not new again, and its counter is bumped through the
+    ``_trace_branch`` of the input's start (``Fuzz()`` swaps that one in too)."""
+    bumped: list[tuple[str, int]] = []
+    pre = types.SimpleNamespace(_trace_branch=lambda i: bumped.append(("pre", i)))
+    features = Features(enabled=False)
+    features.enabled, features._atheris, features._ids = True, pre, list(range(features.count))
+    fake = types.SimpleNamespace(_trace_cmp=lambda *a: None)
+    tracer = FloatCompareTracer(features, fake)
+    tracer.install()
+    fake._trace_cmp(0.5, 1.0, 0, 3, False)
+    fake._trace_cmp(0.5, 1.0, 0, 3, False)  # the same feature again: a bump
+    assert tracer.traced == 2 and len(features.seen) == 1 and len(bumped) == 2
+    features._atheris = types.SimpleNamespace(_trace_branch=lambda i: bumped.append(("fuzz", i)))
+    fake._trace_cmp = lambda *a: None  # Fuzz() starts
+    tracer.install()
+    assert fake._trace_cmp == tracer.trace
+    fake._trace_cmp(0.5, 1.0, 0, 3, False)
+    assert tracer.traced == 3 and len(features.seen) == 1
+    assert [who for who, _ in bumped] == ["pre", "pre", "fuzz"] and len({i for _, i in bumped}) == 1

@@ -5,10 +5,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from tests.support import fuzz
+
+if TYPE_CHECKING:
+    from fuzzer.campaign import CampaignOptions
 
 TIGHT = "tests.plugins.faults:tight_tolerance"
 
@@ -111,14 +115,14 @@ def test_jobs_run_in_parallel_and_keep_their_logs_in_the_artifacts_folder(tmp_pa
     assert a_first < b_last and b_first < a_last, "the two jobs ran one after the other"
 
 
-def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
-    from fuzzer.campaign import CampaignOptions, libfuzzer_argv
+def _options(flags: tuple[str, ...], forwarded: tuple[str, ...] = ()) -> CampaignOptions:
+    from fuzzer.campaign import CampaignOptions
 
-    options = CampaignOptions(
+    return CampaignOptions(
         corpus=(Path("corpus"),),
         artifacts=Path("art"),
-        libfuzzer_flags=("-jobs=3", "-dict=my.dict"),
-        forwarded=("--robot=ur5", f"--msg-path={tmp_path}"),
+        libfuzzer_flags=flags,
+        forwarded=forwarded,
         seeds=None,
         seed=0,
         stop_on_divergence=False,
@@ -126,12 +130,34 @@ def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
         progress_interval=5.0,
         dictionary_file=None,
     )
+
+
+def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
+    from fuzzer.campaign import libfuzzer_argv
+
+    options = _options(("-jobs=3", "-dict=my.dict"), ("--robot=ur5", f"--msg-path={tmp_path}"))
     argv = libfuzzer_argv(options)
     assert "-workers=3" in argv and "-verbosity=0" in argv
     assert f"-dict={os.path.abspath('my.dict')}" in argv
     assert "--robot=ur5" in argv  # a robot name stays a name
     assert argv[-1] == str(Path("corpus").resolve())
-    given = libfuzzer_argv(
-        CampaignOptions(**{**options.__dict__, "libfuzzer_flags": ("-jobs=3", "-workers=1")})
-    )
+    given = libfuzzer_argv(_options(("-jobs=3", "-workers=1"), options.forwarded))
     assert "-workers=1" in given and "-workers=3" not in given
+    assert not any(f.startswith("-reload") for f in argv)  # jobs share their corpus by rereading it
+
+
+def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-reload=0`` for one process (its corpus has no other writer; the reread made runs of one
+    command differ), the user's ``-reload`` kept, none with ``-fork`` or in a worker of one."""
+    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.processes import CHILD_ENV
+
+    def argv(*flags: str) -> list[str]:
+        return [f for f in libfuzzer_argv(_options(flags)) if f.startswith("-reload")]
+
+    monkeypatch.delenv(CHILD_ENV, raising=False)
+    assert argv() == ["-reload=0"] and argv("-runs=9") == ["-reload=0"]
+    assert argv("-reload=5") == ["-reload=5"]
+    assert argv("-fork=2") == [] and argv("-jobs=2") == []
+    monkeypatch.setenv(CHILD_ENV, "1")
+    assert argv() == []

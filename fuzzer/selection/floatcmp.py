@@ -65,6 +65,13 @@ class FloatCompareTracer:
         Where the features go (libFuzzer's extra counters).
     module : object, optional
         The module holding ``_trace_cmp`` (``atheris``; a stand-in in tests).
+
+    ``trace`` is one closure over locals (made with the guard, :meth:`_build`): it records the
+    feature, counts the budget down, compares and shows the comparison to ``compared`` in one
+    Python call. It was three (``trace``, ``_record``, the guard), with the instance's attributes
+    looked up at each: a quarter of the tracing's time, which is a sixth to a quarter of an
+    instrumented evaluation (BENCHMARKS.md, "What bounds the single-input rate"). The features,
+    the counters bumped and the comparisons ``compared`` sees are the same, in the same order.
     """
 
     def __init__(
@@ -86,53 +93,87 @@ class FloatCompareTracer:
         self.compared = compared
         """Learns the comparison thresholds of every float comparison (the guard feeds it, past
         the budget too), for the ``compared`` mutator; None: not watched (the baselines)."""
-        self.guard = make_guard(None, compared)
-        """Compares as ``COMPARE_OP`` would; the pairs Atheris traces go through ``inner``."""
         self.sites: set[int] = set()
         """Comparison sites that compared a float at least once."""
-        self.traced = 0
-        self.remaining = budget
-        self._keys: set[tuple[int, ...]] = set()
+        self._counters: dict[tuple[int, ...], int] = {}
+        """Each feature key seen so far and its counter (-1 with the features disabled)."""
+        self._spent = 0
+        """Float comparisons traced before the last :meth:`install`."""
+        self._given = budget
+        self.guard: Callable[..., Any] = make_guard(None, compared)
+        """Compares as ``COMPARE_OP`` would; the pairs Atheris traces go through ``inner``."""
+        self._build()
+
+    @property
+    def traced(self) -> int:
+        """Float comparisons traced so far (every input's)."""
+        return self._spent + self._given - self._left()
 
     def install(self, budget: int | None = None) -> None:
         """Wrap the module's current ``_trace_cmp`` unless it is already this tracer's, for the
         next ``budget`` float comparisons (default ``self.budget``; the harness calls this before
         every input, which also catches Atheris swapping its function in when fuzzing starts)."""
-        self.remaining = self.budget if budget is None else budget
+        self._spent += self._given - self._left()  # the last input's, before ``trace`` is remade
         current = getattr(self.module, "_trace_cmp", None)
-        if current is None:
-            return
-        if current != self.trace and current is not self.guard:
+        if current is not None and current != self.trace and current is not self.guard:
             self.inner = current
             self.guard = make_guard(current, self.compared)
-        self.module._trace_cmp = self.trace if self.remaining > 0 else self.guard
+            self._build()
+        self._given = self.budget if budget is None else budget
+        self._set_left(self._given)
+        if current is not None:
+            self.module._trace_cmp = self.trace if self._given > 0 else self.guard
 
-    def trace(self, obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
-        """The wrapper: record the float distance, then compare (``guard``)."""
-        t1, t2 = type(obj1), type(obj2)
-        if (t1 in _FLOATS and t2 in _NUMBERS) or (t2 in _FLOATS and t1 in _NUMBERS):
-            self._record(float(obj1), float(obj2), site)
-            self.remaining -= 1
-            if self.remaining <= 0 and self.inner is not None:
-                self.module._trace_cmp = self.guard  # the budget is spent: the guard until install()
-        return self.guard(obj1, obj2, opid, site, is_const)
+    def _build(self) -> None:
+        """Make ``trace`` (and its budget's accessors) around the current guard and ``inner``."""
+        features, module, guard, compared = self.features, self.module, self.guard, self.compared
+        counters, sites, swap = self._counters, self.sites, self.inner is not None
+        floats, numbers, ops, shift, equality = _FLOATS, _NUMBERS, _OPS, _OPID_SHIFT, _EQUALITY
+        done = compared.done if compared is not None else None
+        watch = compared.watch if compared is not None else None
+        frexp, isinf, low, high = math.frexp, math.isinf, LOW, HIGH
+        left, branch = self._given, features.brancher()
 
-    def _record(self, a: float, b: float, site: int) -> None:
-        gap = a - b
-        if gap != gap or math.isinf(gap):  # NaN or infinite: one bucket per site
-            exponent = HIGH + 1
-        elif gap == 0.0:
-            exponent = LOW - 1
-        else:
-            exponent = min(HIGH, max(LOW, math.frexp(gap)[1]))
-        self.traced += 1
-        key = (FLOAT_CMP, site, int(gap > 0.0), exponent)
-        if key in self._keys:
-            self.features.bump(key)
-        else:
-            self._keys.add(key)
-            self.sites.add(site)
-            self.features.hit_ids((key,))
+        def trace(obj1: Any, obj2: Any, opid: int, site: int, is_const: bool) -> Any:
+            """The wrapper: record the float distance, then compare (as ``guard`` does)."""
+            nonlocal left
+            t1, t2 = type(obj1), type(obj2)
+            if not ((t1 in floats and t2 in numbers) or (t2 in floats and t1 in numbers)):
+                return guard(obj1, obj2, opid, site, is_const)
+            gap = float(obj1) - float(obj2)
+            if gap != gap or isinf(gap):  # NaN or infinite: one bucket per site
+                exponent = high + 1
+            elif gap == 0.0:
+                exponent = low - 1
+            else:
+                exponent = min(high, max(low, frexp(gap)[1]))
+            key = (FLOAT_CMP, site, int(gap > 0.0), exponent)
+            counter = counters.get(key)
+            if counter is None:
+                counters[key] = features.counter(key) if features.enabled else -1
+                sites.add(site)
+                features.hit_ids((key,))
+            elif features.enabled:
+                features._atheris._trace_branch(counter)
+            left -= 1
+            if left <= 0 and swap:
+                module._trace_cmp = guard  # the budget is spent: the guard until install()
+            op = opid >> shift
+            result = ops[op](obj1, obj2)
+            if done is not None and site not in done:
+                watch(site, obj1, obj2, result, op not in equality)  # type: ignore[misc]
+            return result
+
+        def get_left() -> int:
+            return left
+
+        def set_left(value: int) -> None:
+            nonlocal left, branch
+            left, branch = value, features.brancher()
+
+        self.trace = trace
+        self._left = get_left
+        self._set_left = set_left
 
 
 _OPS: tuple[Callable[[Any, Any], Any], ...] = (

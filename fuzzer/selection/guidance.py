@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 COUNTERS = 4096
 
@@ -47,11 +47,15 @@ class Features:
             # look the function up at call time: Fuzz() swaps in the real one
             self._atheris._trace_branch(self._ids[zlib.crc32(name.encode()) % self.count])
 
-    def bump(self, key: tuple[int, ...]) -> None:
-        """Bump the counter of a feature already recorded with :meth:`hit_ids` (the hot path of
-        float-comparison tracing: no name kept again)."""
-        if self.enabled:
-            self._atheris._trace_branch(self._ids[hash(key) % self.count])
+    def counter(self, key: tuple[int, ...]) -> int:
+        """The counter of a feature named by an integer tuple (the one :meth:`hit_ids` bumps)."""
+        return self._ids[hash(key) % self.count]
+
+    def brancher(self) -> Callable[[int], None] | None:
+        """The function that bumps a counter (Atheris' ``_trace_branch`` as it is now: ``Fuzz()``
+        swaps the real one in, so ask again per input), or None with the features disabled. The
+        hot path of float-comparison tracing bumps a feature it has recorded with it."""
+        return self._atheris._trace_branch if self.enabled else None
 
     def hit_ids(self, keys: Iterable[tuple[int, ...]]) -> None:
         """Record features named by integer tuples (cheaper than strings; ``hash`` of an int
