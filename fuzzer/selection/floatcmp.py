@@ -153,8 +153,8 @@ class FloatCompareTracer:
                 counters[key] = features.counter(key) if features.enabled else -1
                 sites.add(site)
                 features.hit_ids((key,))
-            elif features.enabled:
-                features._atheris._trace_branch(counter)
+            elif branch is not None:
+                branch(counter)
             left -= 1
             if left <= 0 and swap:
                 module._trace_cmp = guard  # the budget is spent: the guard until install()
