@@ -8,10 +8,16 @@ converged, one did not) and decides, in this order:
    stands;
 2. the requested orientation within ``DEAD_ZONE`` of a half turn from where the seed puts
    the link (``in_dead_zone``): ``known_limitation``;
-3. the seeds moved by ``IK_PERTURBATIONS``, then the goal's position moved and, separately,
+3. every target's last iterate (a success's answer, a failure's last Newton-Raphson
+   iterate) within ``oracle.IK_RESIDUAL`` of the requested pose by its own forward
+   kinematics (``at_knife_edge``): ``ill_conditioned``. Both stopped where the convergence
+   criterion (every error-twist component within ``IK_EPS``) is decided by rounding: on a pose
+   just out of reach, both stall at one configuration about ``IK_EPS`` short, one just inside
+   the criterion and one just outside, and a goal move of 5e-7 m gives both the same status;
+4. the seeds moved by ``IK_PERTURBATIONS``, then the goal's position moved and, separately,
    its orientation turned by ``GOAL_NUDGES``: a target that changes its own status makes it
    ``ill_conditioned``;
-4. a Newton-Raphson iterate that meets a rotation error within ``DEAD_ZONE`` of a half turn
+5. a Newton-Raphson iterate that meets a rotation error within ``DEAD_ZONE`` of a half turn
    (``meets_half_turn``): ``known_limitation``. KDL's ``diff`` and the twin's logarithm pick
    opposite axes for an exact half turn, so from there the two iterate differently; step 2
    is this rule at the seed. The iterates are replayed by the twin's own Newton-Raphson
@@ -86,6 +92,8 @@ def judge_status(
         return comparison  # a target's default seed is not its home_values: a real divergence
     if in_dead_zone(runners[0].model, call, homes[0]):
         return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+    if at_knife_edge(call, outcomes):
+        return replace(comparison, kind=Kind.ILL_CONDITIONED)
     for goal, seeds in _tries(call, homes):
         for first, second in zip(outcomes, run_both(goal, seeds, runners), strict=True):
             if first.status is not second.status:
@@ -110,6 +118,22 @@ def _tries(call: IkCall, homes: Homes) -> list[tuple[IkCall, Seeds]]:
     turns = [replace(call, orientation=turned(call.orientation, s, axis)) for s, axis in GOAL_NUDGES]
     out += [(goal, homes) for goal in moves + turns]
     return out
+
+
+def at_knife_edge(call: IkCall, outcomes: tuple[Outcome, ...]) -> bool:
+    """Whether every outcome's last iterate reaches the requested pose within
+    ``oracle.IK_RESIDUAL`` (m and rad, ``oracle.pose_gaps``), as its target reports it.
+
+    A success beyond that is a property violation (``oracle.ik_property``), so this says the
+    failure ended where a success may: a split decided by the criterion's rounding, not by
+    where the two solvers went. An outcome without its pose is no evidence (False).
+    """
+    requested = (call.position, call.orientation)
+    for outcome in outcomes:
+        gaps = oracle.pose_gaps(outcome, requested)
+        if gaps is None or not all(g <= oracle.IK_RESIDUAL for g in gaps):
+            return False
+    return True
 
 
 def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:

@@ -305,21 +305,41 @@ def ik_property(
             raw=worst,
             target=target,
         )
-    position, orientation = requested
-    reached_p = outcome.values.get("position", ())
-    reached_q = outcome.values.get("orientation", ())
-    norm = math.sqrt(sum(x * x for x in orientation))
-    for unit, gap in (
-        ("m", math.dist(reached_p, position) if len(reached_p) == len(position) else 0.0),
-        (
-            "rad",
-            rotation_distance(reached_q, tuple(x / norm for x in orientation))
-            if norm > 0.0 and math.isfinite(norm) and len(reached_q) == 4
-            else 0.0,
-        ),
-    ):
+    for unit, found in zip(("m", "rad"), _gaps(outcome, requested), strict=True):
+        gap = 0.0 if found is None else found  # a part the outcome does not report is not checked
         if gap > IK_RESIDUAL * (1.0 + 1e-6) or not math.isfinite(gap):
             return Comparison(
                 Kind.PROPERTY, "residual", gap, False, bucket(gap), (), unit=unit, raw=gap, target=target
             )
     return None
+
+
+def pose_gaps(
+    outcome: Outcome, requested: tuple[tuple[float, ...], tuple[float, ...]]
+) -> tuple[float, float] | None:
+    """How far the pose an IK outcome reports is from the requested one: (m, rad).
+
+    The rotation is 0.0 for a position-only request (no orientation, or one of no finite
+    length); None when the outcome lacks the position, or the orientation a pose asks for.
+    """
+    position, rotation = _gaps(outcome, requested)
+    if position is None or rotation is None:
+        return None
+    return position, rotation
+
+
+def _gaps(
+    outcome: Outcome, requested: tuple[tuple[float, ...], tuple[float, ...]]
+) -> tuple[float | None, float | None]:
+    """(m, rad) from the outcome's ``position`` and ``orientation`` to ``requested``; None
+    for a part it does not report (the quaternion asked for is normalized here)."""
+    position, orientation = requested
+    reached_p = outcome.values.get("position", ())
+    reached_q = outcome.values.get("orientation", ())
+    norm = math.sqrt(sum(x * x for x in orientation))
+    moved = math.dist(reached_p, position) if len(reached_p) == len(position) else None
+    if not (norm > 0.0 and math.isfinite(norm)):
+        return moved, 0.0
+    if len(reached_q) != 4:
+        return moved, None
+    return moved, rotation_distance(reached_q, tuple(x / norm for x in orientation))
