@@ -54,7 +54,7 @@ def sweep(session: Session, mutator: str, seed: int, first_rows: int = 0) -> Swe
         return None
     lower, upper = [lim.lower for lim in limits], [lim.upper for lim in limits]
     tolerance = config.tolerance
-    return Sweep(lower, upper, tolerance, seed=seed, source="uniform", share=0.0, first_rows=first_rows)
+    return Sweep(lower, upper, tolerance, seed=seed, source="uniform", every=0, first_rows=first_rows)
 
 
 def evaluate(

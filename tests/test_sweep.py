@@ -111,6 +111,18 @@ def test_the_pattern_search_climbs_the_amplified_error() -> None:
     assert any(row.label != "sweep:sobol" for row in flagged)
 
 
+def test_a_sweep_is_due_every_few_single_inputs_whatever_the_clock() -> None:
+    """The schedule counts inputs, so a campaign's inputs depend on its seed, not its speed."""
+    from fuzzer.generation import sweep as module
+
+    lower, upper = _limits()
+    sweep = Sweep(lower, upper, Tolerance())
+    due = [sweep.due() for _ in range(4 * module.EVERY)]
+    assert module.EVERY > 1
+    assert due == ([False] * (module.EVERY - 1) + [True]) * 4
+    assert not any(Sweep(lower, upper, Tolerance(), every=0).due() for _ in range(10)), "0: never due"
+
+
 def test_a_failing_batch_path_switches_the_sweep_off() -> None:
     class Broken:
         def forward_kinematics_batch(self, q: object, link: object = None) -> object:

@@ -29,8 +29,10 @@ not confirm (the targets' batch and single paths disagree) is counted, not repor
 Representation-only differences (a quaternion's sign) do not exist in rotation matrices;
 the single-call path keeps finding those.
 
-Sweeps take ``SHARE`` of the campaign's time (when they run depends on the clock, like
-libFuzzer's ``-max_total_time``; what they evaluate depends only on the seed).
+A sweep is due after every ``EVERY`` single inputs (``Sweep.due``), so which inputs a campaign
+runs depends only on its seed, not on the clock: two runs of one ``-runs`` command keep the
+same corpus (docs/engine.md, "Reproducing a campaign"). ``EVERY`` is chosen to give the sweeps
+about half of an instrumented campaign's time on the default arm.
 """
 
 from __future__ import annotations
@@ -50,8 +52,11 @@ from fuzzer.generation.spacefill import SpaceFill, Uniform
 ROWS = 1024
 """Configurations per sweep (a power of two keeps the Sobol block balanced)."""
 
-SHARE = 0.5
-"""Share of the campaign's wall time spent in sweeps."""
+EVERY = 3
+"""Single inputs per sweep. A sweep of ``ROWS`` rows costs about as much as three instrumented
+single ``fk`` inputs on the default arm (``stats.jsonl``'s ``sweep.seconds`` against the
+campaign's), so this gives the sweeps about half of the time, as the clock-shared schedule
+before 2026-12-03 did (``SHARE`` then: 0.5)."""
 
 SCALES = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
 """Pattern-search steps, as fractions of each joint's range."""
@@ -124,8 +129,8 @@ class Sweep:
         The link the campaign's FK calls ask for (None: the tip).
     source : {"sobol", "uniform"}
         The space-filling rows: ``SpaceFill`` (imports ``scipy.stats``) or ``Uniform``.
-    share : float
-        Share of the wall time ``due`` allots to sweeps (0: never due; the caller runs them).
+    every : int
+        Single inputs per sweep (``due``; 0: never due, the caller runs them).
     """
 
     lower: Sequence[float]
@@ -135,7 +140,7 @@ class Sweep:
     link: str | None = None
     source: str = "sobol"
     rows: int = ROWS
-    share: float = SHARE
+    every: int = EVERY
     first_rows: int = 0
     """Rows of the first sweep (0: ``rows``). The dry run's first is small (``fuzzer.dry_run.FIRST_ROWS``):
     a divergence most configurations show is then reported about 2 ms after the first input,
@@ -149,7 +154,8 @@ class Sweep:
     failed: int = 0
     """Sweeps a target raised in (the sweep is then switched off after ``MAX_FAILURES``)."""
     seconds: float = 0.0
-    _started: float = field(default=0.0, repr=False)
+    _waited: int = field(default=0, repr=False)
+    """Single inputs since the last sweep ``due`` allowed."""
     _stream: SpaceFill | Uniform = field(init=False, repr=False)
     _rng: np.random.Generator | None = field(default=None, init=False, repr=False)
     """The neighbourhoods' random directions, made at the first centre (importing
@@ -168,12 +174,15 @@ class Sweep:
         return self.failed < self.MAX_FAILURES
 
     def due(self) -> bool:
-        """Whether the sweeps are below their share of the time since the first call."""
-        now = time.monotonic()
-        if not self._started:
-            self._started = now
+        """Whether a sweep is due: called once per single input, true on every ``every``-th
+        call (never with ``every`` 0, or once the sweeps are off)."""
+        if not (self.every > 0 and self.enabled):
             return False
-        return self.enabled and self.seconds < self.share * (now - self._started)
+        self._waited += 1
+        if self._waited < self.every:
+            return False
+        self._waited = 0
+        return True
 
     def batch(self, centres: Sequence[tuple[tuple[float, ...], float]]) -> tuple[Array, list[str], list[int]]:
         """The rows of the next sweep: (q of shape (rows, dof), lineage label per row, index of
