@@ -129,11 +129,8 @@ def at_knife_edge(call: IkCall, outcomes: tuple[Outcome, ...]) -> bool:
     where the two solvers went. An outcome without its pose is no evidence (False).
     """
     requested = (call.position, call.orientation)
-    for outcome in outcomes:
-        gaps = oracle.pose_gaps(outcome, requested)
-        if gaps is None or not all(g <= oracle.IK_RESIDUAL for g in gaps):
-            return False
-    return True
+    gaps = (g for outcome in outcomes for g in oracle.pose_gaps(outcome, requested))
+    return all(g is not None and g <= oracle.IK_RESIDUAL for g in gaps)
 
 
 def in_dead_zone(model: Any, call: IkCall, seed: tuple[float, ...]) -> bool:

@@ -305,7 +305,7 @@ def ik_property(
             raw=worst,
             target=target,
         )
-    for unit, found in zip(("m", "rad"), _gaps(outcome, requested), strict=True):
+    for unit, found in zip(("m", "rad"), pose_gaps(outcome, requested), strict=True):
         gap = 0.0 if found is None else found  # a part the outcome does not report is not checked
         if gap > IK_RESIDUAL * (1.0 + 1e-6) or not math.isfinite(gap):
             return Comparison(
@@ -316,23 +316,13 @@ def ik_property(
 
 def pose_gaps(
     outcome: Outcome, requested: tuple[tuple[float, ...], tuple[float, ...]]
-) -> tuple[float, float] | None:
-    """How far the pose an IK outcome reports is from the requested one: (m, rad).
+) -> tuple[float | None, float | None]:
+    """How far the pose an IK outcome reports is from ``requested``: (m, rad).
 
     The rotation is 0.0 for a position-only request (no orientation, or one of no finite
-    length); None when the outcome lacks the position, or the orientation a pose asks for.
+    length; the quaternion asked for is normalized here); a part the outcome does not report
+    (its position, or the orientation a pose asks for) is None.
     """
-    position, rotation = _gaps(outcome, requested)
-    if position is None or rotation is None:
-        return None
-    return position, rotation
-
-
-def _gaps(
-    outcome: Outcome, requested: tuple[tuple[float, ...], tuple[float, ...]]
-) -> tuple[float | None, float | None]:
-    """(m, rad) from the outcome's ``position`` and ``orientation`` to ``requested``; None
-    for a part it does not report (the quaternion asked for is normalized here)."""
     position, orientation = requested
     reached_p = outcome.values.get("position", ())
     reached_q = outcome.values.get("orientation", ())
