@@ -200,7 +200,12 @@ class Harness:
         self._next_snapshot = math.inf
 
     def maybe_snapshot(self, force: bool = False) -> None:
-        """Append this process's counters to stats.jsonl (at most every SNAPSHOT_SECONDS)."""
+        """Append this process's counters to stats.jsonl (at most every SNAPSHOT_SECONDS).
+
+        It runs inside an input's evaluation, at a point the clock decides, so it must not run
+        code of the instrumented modules (the targets', the oracle's): their coverage would
+        then depend on the time, and with it libFuzzer's corpus and choices (``-seed`` would
+        no longer repeat a campaign). It reads plain attributes only."""
         now = time.monotonic()
         if self.log is not None and (force or now >= self._next_snapshot):
             self._next_snapshot = now + SNAPSHOT_SECONDS
@@ -217,7 +222,7 @@ class Harness:
             twin = sys.modules.get("python_impl.kinematics")  # loaded by a target; never imported here
             if twin is not None:
                 memo = twin.IK_MEMO
-                data["ik_memo"] = {"hits": memo.hits, "misses": memo.misses, "kept": len(memo)}
+                data["ik_memo"] = {"hits": memo.hits, "misses": memo.misses, "kept": memo.kept}
             self.log.snapshot(data)
 
     def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:

@@ -204,7 +204,10 @@ class IkMemo:
     number of variables solved for, all by their bytes (``-0.0`` and ``0.0`` are different
     problems). Newton-Raphson is deterministic, so an answer from memory is the one solving
     again would give, bit for bit. The least recently used answer goes past ``size``
-    problems. ``hits`` and ``misses`` count lookups since the last ``clear``.
+    problems. ``hits`` and ``misses`` count lookups since the last ``clear``, and ``kept`` is
+    how many answers are held: plain attributes, so that a campaign's stats snapshot reads
+    them without running this module's code, which the campaign instruments for coverage (a
+    snapshot is due by the clock: code it ran would make the coverage depend on the time).
 
     Not consulted while the module's ``error_twist`` is replaced (the oracle's model of KDL's
     rotation dead zone, ``fuzzer.execution.dead_zone``), nor for a call that records a trace.
@@ -214,6 +217,7 @@ class IkMemo:
         self.size = size
         self.hits = 0
         self.misses = 0
+        self.kept = 0
         self._answers: OrderedDict[bytes, IkAnswer] = OrderedDict()
         self._lock = threading.Lock()
 
@@ -223,7 +227,7 @@ class IkMemo:
     def clear(self) -> None:
         with self._lock:
             self._answers.clear()
-            self.hits = self.misses = 0
+            self.hits = self.misses = self.kept = 0
 
     def forked(self) -> None:
         """In a child just forked: its lookups are its own (the parent's lock may be held by a
@@ -247,6 +251,7 @@ class IkMemo:
             self._answers.move_to_end(problem)
             while len(self._answers) > self.size:
                 self._answers.popitem(last=False)
+            self.kept = len(self._answers)
 
 
 IK_MEMO = IkMemo(8192)

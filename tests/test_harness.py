@@ -6,6 +6,7 @@ import hashlib
 import json
 import math
 import random
+import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ from fuzzer import campaign
 from fuzzer.artifacts.divlog import CampaignLog, read_lines
 from fuzzer.artifacts.store import ArtifactStore, load_sidecar
 from fuzzer.execution.session import RunConfig, Session
+from fuzzer.execution.targets import module_of
 from fuzzer.generation import corpus
 from fuzzer.harness import DivergenceFound, Harness
 from fuzzer.input.testcase import TestCase, decode
@@ -166,3 +168,32 @@ def test_pool_prefers_larger_differences() -> None:
     rng = random.Random(0)
     picks = [pool.pick(rng) for _ in range(600)]
     assert picks.count(b"d") > picks.count(b"b") > picks.count(b"c") > 0
+
+
+def test_the_stats_snapshot_runs_no_code_of_the_instrumented_modules(tmp_path: Path) -> None:
+    """A snapshot is due by the clock and runs inside an input's evaluation: code of an
+    instrumented module (the targets', the oracle's) run there would be coverage that depends
+    on the time, and two runs of one ``-seed`` would keep different corpora (it did: the twin's
+    ``IkMemo.__len__``)."""
+    h = make_harness(tmp_path, op="ik")
+    h.log = CampaignLog(tmp_path)
+    for seed in h.seeds[:3]:
+        h.test_one_input(seed.encode())  # the twin's IK memory now holds answers
+    instrumented = {module_of("python"), "fuzzer.execution.oracle"}  # as fuzzer.selection.instrument
+    assert "python_impl.kinematics" in sys.modules
+    called: list[str] = []
+
+    def profile(frame, event, arg):  # type: ignore[no-untyped-def]
+        if event == "call":
+            called.append(str(frame.f_globals.get("__name__")))
+
+    sys.setprofile(profile)
+    try:
+        h.maybe_snapshot(force=True)
+    finally:
+        sys.setprofile(None)
+    assert called, "the profiler saw no call at all"
+    inside = sorted({m for m in called if any(m == n or m.startswith(n + ".") for n in instrumented)})
+    assert inside == []
+    memo = list(read_lines(tmp_path / "stats.jsonl"))[-1]["ik_memo"]
+    assert memo["kept"] >= 1 and memo["misses"] >= 1

@@ -113,6 +113,9 @@ def test_the_memory_keeps_the_most_recent_problems() -> None:
     assert memo.get(b"a") is not None  # now the most recent
     memo.put(b"c", (True, (3.0,), 0.0, 0.0))
     assert len(memo) == 2 and memo.get(b"b") is None and memo.get(b"a") is not None
+    assert memo.kept == 2  # the count a stats snapshot reads (not ``len``: instrumented code)
+    memo.clear()
+    assert (len(memo), memo.kept, memo.hits, memo.misses) == (0, 0, 0, 0)
 
 
 def test_a_forked_child_keeps_the_answers_and_counts_its_own_lookups() -> None:
