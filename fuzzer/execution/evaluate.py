@@ -15,7 +15,9 @@ it counts:
   seed makes it stand; the seed's or any Newton-Raphson iterate's rotation error within
   ``DEAD_ZONE`` of a half turn (KDL's dead zone) makes it ``known_limitation``; a target
   whose own status changes under a 1e-9..1e-7 move of the seed or of the goal makes it
-  ``ill_conditioned``. Either way a target that claims success without reaching the pose
+  ``ill_conditioned``; the targets agreeing once the twin has KDL's small-rotation dead
+  zone (``dead_zone``) makes it ``known_limitation``. Either way a target that claims
+  success without reaching the pose
   still breaks its own property (``oracle.ik_property``), which is then the verdict, as a
   scenario's property violation wins over a ``known_limitation``.
 
@@ -290,7 +292,10 @@ class Evaluator:
             and {o.status for o in outcomes} <= {Status.OK, Status.FAILED}
         ):
             runners = fresh or self.fresh()
-            judged = ik_check.judge_status(call, outcomes, comparison, runners, self.run_both, self.replay)
+            judge = lambda pair: self.judge(pair, call)  # noqa: E731
+            judged = ik_check.judge_status(
+                call, outcomes, comparison, runners, self.run_both, self.replay, judge
+            )
             if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
                 # a status split that is no finding leaves each target's own claim to check
                 judged = self._ik_violation(call, outcomes) or judged

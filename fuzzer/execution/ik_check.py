@@ -23,7 +23,15 @@ converged, one did not) and decides, in this order:
    is this rule at the seed. The iterates are replayed by the twin's own Newton-Raphson
    (``python_impl.model.ik_rotation_errors``) on a fresh model of the robot, not on a
    campaign target; they are KDL's iterates up to the first tie, as both implement one
-   documented algorithm (docs/api.md, "Inverse kinematics").
+   documented algorithm (docs/api.md, "Inverse kinematics");
+6. the call re-run with KDL's small-rotation dead zone in the twin
+   (``dead_zone.twin_with_kdl_dead_zone``: KDL's ``diff`` reports no rotation below about
+   5e-7 rad, the twin's logarithm does): if the two targets then agree (the same status, and
+   ``judge`` finds no counted divergence), that dead zone is the whole difference,
+   ``known_limitation``. Near a singularity the pseudo-inverse turns the 1e-7 rad KDL leaves
+   alone into a joint step that overshoots a limit, and the clamped iterates stall
+   (control@ik/ur5, seed 9, on 02efcff). The scenario path has had this re-run since
+   f106be8 (``Evaluator._scenario_ik``).
 
 Otherwise the divergence stands. The caller still checks each target's own claim
 (``oracle.ik_property``) when the verdict is no finding.
@@ -37,7 +45,8 @@ from dataclasses import replace
 from typing import Any
 
 from fuzzer.execution import oracle
-from fuzzer.execution.records import Comparison, Kind, Outcome
+from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
+from fuzzer.execution.records import UNCOUNTED, Comparison, Kind, Outcome
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import IkCall
 from fuzzer.scenario.nudge import Axis, turned
@@ -71,6 +80,8 @@ Seeds = tuple[tuple[float, ...] | None, ...]
 Homes = tuple[tuple[float, ...], ...]
 RunBoth = Callable[[IkCall, Seeds, Sequence[Runner]], tuple[Outcome, ...]]
 """Runs one IK call on both targets with the given seeds (``Evaluator.run_both``)."""
+Judge = Callable[[tuple[Outcome, ...]], Comparison]
+"""The oracle's verdict on the call's two outcomes (``Evaluator.judge``)."""
 
 
 def judge_status(
@@ -80,11 +91,12 @@ def judge_status(
     runners: Sequence[Runner],
     run_both: RunBoth,
     replay: Any | None,
+    judge: Judge | None = None,
 ) -> Comparison:
     """The status divergence ``comparison`` of ``call``, judged (see the module docstring).
 
     ``runners`` are fresh targets; ``replay`` is a ``python_impl.RobotModel`` of the robot (or
-    None, which skips step 4).
+    None, which skips step 5); ``judge`` the oracle for step 6 (None skips it).
     """
     homes = tuple(r.home for r in runners)
     explicit = run_both(call, homes, runners)
@@ -100,7 +112,24 @@ def judge_status(
                 return replace(comparison, kind=Kind.ILL_CONDITIONED)
     if replay is not None and meets_half_turn(replay, call, homes[0]):
         return replace(comparison, kind=Kind.KNOWN_LIMITATION)
+    if judge is not None and agree_in_kdl_dead_zone(call, homes, runners, run_both, judge):
+        return replace(comparison, kind=Kind.KNOWN_LIMITATION)
     return comparison
+
+
+def agree_in_kdl_dead_zone(
+    call: IkCall, homes: Homes, runners: Sequence[Runner], run_both: RunBoth, judge: Judge
+) -> bool:
+    """Whether the two targets agree on ``call`` (from ``homes``) once the twin in this process
+    uses KDL's small-rotation dead zone: the same status, and no counted divergence by
+    ``judge``. False when the twin cannot be swapped (a plugin, a ROS node: the divergence
+    stands)."""
+    with twin_with_kdl_dead_zone() as swapped:
+        again = run_both(call, homes, runners) if swapped else ()
+    if len(again) != 2 or again[0].status is not again[1].status:
+        return False
+    verdict = judge(again)
+    return not (verdict.divergent and verdict.kind not in UNCOUNTED)
 
 
 def _tries(call: IkCall, homes: Homes) -> list[tuple[IkCall, Seeds]]:
