@@ -365,6 +365,16 @@ def test_the_iterate_rule_needs_an_iterate_at_a_half_turn() -> None:
 # 9.5e-7 m), the twin's just outside (1.07e-6 and 1.10e-6 m). No seed or goal nudge of the
 # judge moves the stall point; a goal move of 5e-7 m gives both the same status. Whether a
 # pose splits the two depends on the CPU's rounding (found on an AMD EPYC).
+def judged_pose(
+    robot: str, position: tuple[float, ...], orientation: tuple[float, ...]
+) -> tuple[list[Status], Kind]:
+    """The two targets' statuses and the oracle's verdict on one IK pose, from the default seed."""
+    result = evaluator(session(("native", "python"), "ik", robot=robot)).evaluate(
+        ik_case(position, orientation)
+    )
+    return [o.status for o in result.outcomes], result.comparison.kind
+
+
 KNIFE_EDGE_POSES = (
     (
         "probot_anno",
@@ -386,10 +396,7 @@ def test_a_status_split_on_the_convergence_criterion_is_ill_conditioned(
     from fuzzer.execution import ik_check
 
     def judged() -> tuple[list[Status], Kind]:
-        result = evaluator(session(("native", "python"), "ik", robot=robot)).evaluate(
-            ik_case(position, orientation)
-        )
-        return [o.status for o in result.outcomes], result.comparison.kind
+        return judged_pose(robot, position, orientation)
 
     statuses, kind = judged()
     if statuses != [Status.OK, Status.FAILED]:
@@ -423,10 +430,7 @@ def test_a_status_split_from_kdls_small_rotation_dead_zone_is_a_known_limitation
     robot, position, orientation = DEAD_ZONE_SPLIT
 
     def judged() -> tuple[list[Status], Kind]:
-        result = evaluator(session(("native", "python"), "ik", robot=robot)).evaluate(
-            ik_case(position, orientation)
-        )
-        return [o.status for o in result.outcomes], result.comparison.kind
+        return judged_pose(robot, position, orientation)
 
     statuses, kind = judged()
     if statuses != [Status.OK, Status.FAILED]:
