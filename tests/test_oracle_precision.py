@@ -134,6 +134,27 @@ def test_a_value_divergence_reports_the_unit_and_sign_of_its_own_joint() -> None
     assert alone.raw == pytest.approx(2 * math.pi)
 
 
+def test_a_representation_reports_the_difference_of_its_own_joint() -> None:
+    """A representation's headline difference, unit and sign flip all describe the joint
+    farthest apart as numbers. Until the forty-eighth session the difference was the largest
+    gap modulo equivalence of any joint: beside a revolute joint a whole turn off, a prismatic
+    joint 5e-7 m apart (within its tolerance) made the headline "5e-07 rad". An agreement's
+    unit is that of its headline's joint too (it was the field's, rad for joint values)."""
+    turn = -3.0 + 2 * math.pi
+    a, b = ok(joint_values=(-3.0, 0.1)), ok(joint_values=(turn, 0.1 + 5e-7))
+    c = compare(a, b, TOL, prismatic=(False, True))
+    assert (c.kind, c.joints, c.unit, c.sign_flip) == (Kind.REPRESENTATION, (0,), "rad", True)
+    assert c.difference < 1e-12 and c.raw == pytest.approx(2 * math.pi)
+    # the same pair with both joints revolute: the headline is still the turned joint's
+    revolute = compare(a, b, TOL)
+    assert (revolute.kind, revolute.joints) == (Kind.REPRESENTATION, (0,)) and revolute.difference < 1e-12
+    # an agreement's headline stays the largest gap modulo equivalence
+    agree = compare(
+        ok(joint_values=(-3.0, 0.1)), ok(joint_values=(-3.0, 0.1 + 5e-7)), TOL, prismatic=(False, True)
+    )
+    assert (agree.kind, agree.unit) == (Kind.AGREE, "m") and agree.difference == pytest.approx(5e-7)
+
+
 def test_value_field_precedence_is_stable() -> None:
     """joint values, then position, then orientation: the same bug lands on one field."""
     q1, q2 = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, math.sin(0.1), math.cos(0.1))

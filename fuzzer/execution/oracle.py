@@ -84,6 +84,11 @@ class _FieldDiff:
     # ``sign_flip`` and ``unit`` are those of the joint farthest apart as numbers, a
     # representation's; a value divergence's headline is the joint farthest modulo equivalence)
     value_view: tuple[bool, str] | None = None
+    # a representation divergence's headline: the gap modulo equivalence of the joint farthest
+    # apart as numbers (the one ``sign_flip`` and ``unit`` describe), when not ``equivalent``
+    representation_view: float | None = None
+    # an agreement's unit: that of the joint farthest apart modulo equivalence (``equivalent``'s)
+    equivalent_unit: str | None = None
 
 
 def _near_pi(x: float, tol: float) -> bool:
@@ -102,11 +107,13 @@ def _joint_diff(
     # its limit, as numbers and modulo equivalence (with one limit for all, the largest gaps).
     # Kept as (gap / limit, gap, limit) and max(): no comparison or branch of its own for
     # Atheris to trace (the campaign's feedback is this module's edges and comparisons).
-    raw_worst = eq_worst = (0.0, 0.0, tol.radians)
+    raw_worst = (0.0, 0.0, tol.radians)
+    eq_worst = (0.0, 0.0, tol.radians, "rad")
     joints: list[int] = []
     flip = False
     worst = -1.0
     unit = "rad"
+    numbers_eq = 0.0  # the gap modulo equivalence of the joint farthest apart as numbers
     value = (-1.0, 0.0, 0.0, 0, False, "rad")  # (eq / limit, eq, limit, -i, flip, unit)
     for i, (x, y) in enumerate(zip(a, b, strict=True)):
         linear = i < len(prismatic) and prismatic[i]
@@ -122,17 +129,27 @@ def _joint_diff(
         ):
             gap = eq  # either side of the (-pi, pi] boundary is the canonical answer
         raw_worst = max(raw_worst, (gap / limit, gap, limit))  # a NaN never wins a max()
-        eq_worst = max(eq_worst, (eq / limit, eq, limit))
+        eq_worst = max(eq_worst, (eq / limit, eq, limit, "m" if linear else "rad"))
         if gap > limit:
             joints.append(i)
             here = ((x < 0) != (y < 0), "m" if linear else "rad")
             if gap / limit > worst:
-                worst, (flip, unit) = gap / limit, here
+                worst, (flip, unit), numbers_eq = gap / limit, here, eq
             # only a joint beyond its limit as numbers can be beyond it modulo equivalence
             value = max(value, (eq / limit, eq, limit, -i, *here))
-    (_, raw, raw_limit), (_, equivalent, eq_limit) = raw_worst, eq_worst
+    (_, raw, raw_limit), (_, equivalent, eq_limit, eq_unit) = raw_worst, eq_worst
     return _FieldDiff(
-        "joint_values", raw, equivalent, eq_limit, flip, tuple(joints), unit, raw_limit, value[4:]
+        "joint_values",
+        raw,
+        equivalent,
+        eq_limit,
+        flip,
+        tuple(joints),
+        unit,
+        raw_limit,
+        value[4:],
+        numbers_eq,
+        eq_unit,
     )
 
 
@@ -229,12 +246,17 @@ def compare(
                 if kind is Kind.VALUE and first.value_view is not None
                 else (first.sign_flip, first.unit)
             )
+            headline = (
+                first.representation_view
+                if kind is Kind.REPRESENTATION and first.representation_view is not None
+                else first.equivalent
+            )
             return Comparison(
                 kind,
                 first.field,
-                first.equivalent,
+                headline,
                 flip,
-                bucket(first.equivalent),
+                bucket(headline),
                 first.joints,
                 largest,
                 unit,
@@ -245,7 +267,7 @@ def compare(
         Kind.AGREE,
         difference=top.equivalent if top else 0.0,
         largest=largest,
-        unit=top.unit if top else "status",
+        unit=(top.equivalent_unit or top.unit) if top else "status",
     )
 
 
