@@ -20,7 +20,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -137,6 +137,10 @@ def check_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         parser.error(f"--jobs must be 1 or more, not {args.jobs}")
 
 
+WAIT_SLICE = 0.5
+"""Seconds the main thread waits on a trial before it looks at the signals caught meanwhile."""
+
+
 def run_sweep(
     book: Journal,
     jobs: Sequence[Job],
@@ -215,6 +219,11 @@ def run_sweep(
     try:
         futures += (pool.submit(one, job) for job in todo)
         for future in futures:
+            # waited for in slices: a signal caught while the main thread is between two waits
+            # (a second Ctrl-C during the first one's handler) runs its handler at the next
+            # slice, not when the trial ends; a wait it interrupts ends at once either way
+            while not future.done():
+                wait([future], timeout=WAIT_SLICE)
             future.result()
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

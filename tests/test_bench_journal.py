@@ -11,7 +11,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -468,17 +468,37 @@ def test_each_trial_running_at_a_time_has_a_cpu_of_its_own(
 
 
 @pytest.fixture
-def ctrl_c() -> Iterator[None]:
+def ctrl_c(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[], None]]:
     """SIGINT raises ``KeyboardInterrupt``, as in a terminal. A shell starts a background job (a
-    CI step, say) with SIGINT ignored, and a sweep then leaves it so."""
+    CI step, say) with SIGINT ignored, and a sweep then leaves it so.
+
+    Yields a Ctrl-C for a thread other than the main one: SIGINT to this process, returning
+    once the sweep's handler has run in the main thread (they used to sleep a while instead,
+    which a loaded machine could outlast: two SIGINTs pending are one)."""
+    handled = threading.Semaphore(0)
+    install = sweeps._handle_sigint
+
+    def handle_and_say(handler: Callable[..., None]) -> Callable[..., object] | int | None:
+        def then_say(*args: object) -> None:
+            try:
+                handler(*args)
+            finally:
+                handled.release()
+
+        return install(then_say)
+
+    def press() -> None:
+        os.kill(os.getpid(), signal.SIGINT)
+        assert handled.acquire(timeout=60.0), "the sweep's SIGINT handler never ran"
+
+    monkeypatch.setattr(sweeps, "_handle_sigint", handle_and_say)
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
+    yield press
     signal.signal(signal.SIGINT, previous)
 
 
-@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ctrl_c: Callable[[], None]
 ) -> None:
     """Ctrl-C during a sweep (``KeyboardInterrupt`` in the main thread): the trial running ends
     and is kept, no other starts, and the sweep says how to go on, with a shell's status 130
@@ -489,8 +509,7 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
         bug, engine, seed = job
         started.append(seed)
         if seed == 1:
-            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C, while the main thread waits for the trials
-            time.sleep(0.2)
+            ctrl_c()  # while the main thread waits for the trials
         return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
 
     bug = bench_deep.BUGS["narrow_band"]
@@ -510,8 +529,7 @@ def test_ctrl_c_starts_no_other_trial_and_keeps_the_finished_ones(
 
     def stop_at_once(job: sweeps.Job, cpu: int | None) -> Run:
         again.append(job[2])
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.2)
+        ctrl_c()
         return trial(job, cpu)
 
     with pytest.raises(SystemExit) as stopped:
@@ -532,9 +550,8 @@ def test_a_trials_processes_run_in_a_session_of_their_own(tmp_path: Path) -> Non
     assert sid != os.getsid(0) and group != os.getpgrp()
 
 
-@pytest.mark.usefixtures("ctrl_c")
 def test_a_second_ctrl_c_kills_the_trials_running_and_keeps_none_of_them(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ctrl_c: Callable[[], None]
 ) -> None:
     """The first Ctrl-C lets the trials running finish (up to a budget plus its margin); a second
     one kills them, and the journal keeps only the trials that had finished. It used to end in
@@ -555,9 +572,8 @@ def test_a_second_ctrl_c_kills_the_trials_running_and_keeps_none_of_them(
             if time.monotonic() > deadline:
                 return
             time.sleep(0.02)
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.3)
-        os.kill(os.getpid(), signal.SIGINT)
+        ctrl_c()
+        ctrl_c()
 
     bug = bench_deep.BUGS["narrow_band"]
     jobs = [(bug, "full", seed) for seed in range(3)]
