@@ -172,3 +172,21 @@ def import_or_skip(module: str) -> Any:
         return importlib.import_module(module)
     except ImportError as exc:
         skip_or_fail(f"{module} is not installed: {exc}")
+
+
+# The poses of the controls' two false positives on 312c459 (benchmarks/results/control-fp-312c459/):
+# just out of reach with joints at a limit or at pi; both IK solvers stall about IK_EPS short,
+# KDL's error just inside its tolerance and the twin's just outside on an AMD EPYC (the split
+# depends on the CPU's rounding). (robot, position in m, orientation as x, y, z, w)
+KNIFE_EDGE_POSES = (
+    (
+        "probot_anno",
+        (-0.22499999999392847, -2.3639033373344096e-07, 0.5458553500026021),
+        (-2.8000036732051035, -0.9999999999915672, -1.8365948965779296e-06, 6.746245984502051e-12),
+    ),
+    (
+        "kinova",
+        (-0.009799999999878066, 0.13504567046898047, 0.29329889484134397),
+        (-4.552628843617489e-13, -0.16504760586081785, 0.986285601537208, 9.999999999999999e-06),
+    ),
+)

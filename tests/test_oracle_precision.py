@@ -25,6 +25,7 @@ from fuzzer.execution.tolerance import Tolerance, default_tolerance
 from fuzzer.input.mapping import CallError, FkCall, IkCall, call_from_json, call_to_json, mapping_for
 from fuzzer.input.testcase import TestCase
 from python_impl.model import ik_rotation_errors
+from tests.support import KNIFE_EDGE_POSES
 
 ROOT = Path(__file__).resolve().parents[1]
 TOL = Tolerance(1e-6, 1e-6)
@@ -394,20 +395,6 @@ def judged_pose(
         ik_case(position, orientation)
     )
     return [o.status for o in result.outcomes], result.comparison.kind
-
-
-KNIFE_EDGE_POSES = (
-    (
-        "probot_anno",
-        (-0.22499999999392847, -2.3639033373344096e-07, 0.5458553500026021),
-        (-2.8000036732051035, -0.9999999999915672, -1.8365948965779296e-06, 6.746245984502051e-12),
-    ),
-    (
-        "kinova",
-        (-0.009799999999878066, 0.13504567046898047, 0.29329889484134397),
-        (-4.552628843617489e-13, -0.16504760586081785, 0.986285601537208, 9.999999999999999e-06),
-    ),
-)
 
 
 @pytest.mark.parametrize("robot,position,orientation", KNIFE_EDGE_POSES, ids=[p[0] for p in KNIFE_EDGE_POSES])

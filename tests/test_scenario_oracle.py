@@ -12,7 +12,7 @@ import pytest
 from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
 from fuzzer.execution.evaluate import Evaluator
 from fuzzer.execution.history import history_of, stored_call
-from fuzzer.execution.records import Comparison, Kind, Outcome, Status
+from fuzzer.execution.records import UNCOUNTED, Comparison, Kind, Outcome, Status
 from fuzzer.execution.targets import Runner
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import MoveCall
@@ -24,6 +24,7 @@ from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge, plan_poin
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api import robots
+from tests.support import KNIFE_EDGE_POSES
 
 TOL = Tolerance(1e-6, 1e-6)
 NAMES = ("native", "python")
@@ -730,6 +731,31 @@ def test_a_plan_failing_in_ik_on_one_target_and_after_it_on_the_other_is_ill_con
     assert {a.steps[4].values["error_code"], b.steps[4].values["error_code"]} == {(-31.0,), (-1.0,)}
     c = evaluation.comparison
     assert (c.kind, c.step, c.field) == (Kind.ILL_CONDITIONED, 4, "plan.error_code")
+
+
+@pytest.mark.parametrize("kind", ["go", "plan"])
+@pytest.mark.parametrize("robot,position,orientation", KNIFE_EDGE_POSES, ids=[p[0] for p in KNIFE_EDGE_POSES])
+def test_a_pose_goal_on_the_convergence_criterions_knife_edge_is_explained_in_a_scenario(
+    robot: str, position: tuple[float, ...], orientation: tuple[float, ...], kind: str
+) -> None:
+    """The two poses of the controls' false positives on 312c459, as a scenario's pose goal
+    from home: the scenario oracle has no knife-edge rule of its own (a single IK call's, step
+    3 of ik_check.judge_status), and needs none for them: on a CPU where they split the
+    targets, PROBOT Anno's split is explained by the dead-zone re-run, Kinova's by the nudges
+    (forty-eighth session; on the AMD EPYC VM: known_limitation and ill_conditioned)."""
+    pose = {
+        "position": dict(zip("xyz", position, strict=True)),
+        "orientation": dict(zip("xyzw", orientation, strict=True)),
+    }
+    steps = [live("pose_target", header=HEADER, pose=pose), live(kind)]
+    evaluation = evaluator("scenario", "python", robot=robot).evaluate(
+        TestCase("rrosfuzz/Scenario", {"steps": steps}), validated=True
+    )
+    statuses = [outcome.steps[1].status for outcome in evaluation.outcomes]
+    if statuses != [Status.OK, Status.FAILED]:
+        pytest.skip(f"{robot}'s pose does not split the targets on this CPU ({statuses})")
+    c = evaluation.comparison
+    assert (c.field, c.step) == (f"{kind}.status", 1) and c.kind in UNCOUNTED, c
 
 
 def test_a_paths_extent_changes_with_its_status_points_or_fraction_not_its_points() -> None:
