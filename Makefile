@@ -26,10 +26,11 @@ $(STAMP): $(BUILD_INPUTS)
 run: setup
 	$(PY) fuzz_diff.py --op scenario corpus-scenario/ -max_total_time=60
 
-## The test suite (what CI runs).
+## The test suite (what CI runs). It ends with its 25 slowest tests, so that every run (CI's
+## included) says where the suite's time goes.
 test: setup
 	scripts/ros-ensure.sh --viz  # ROS 1, RViz and Xvfb from apt, for the ROS tests only (tests/test_ros_*.py)
-	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q
+	RROSFUZZ_REQUIRE_ADAPTERS=1 $(PY) -m pytest -q --durations=25
 
 ## Bug-finding power and throughput (BENCHMARKS.md). Full: every zoo bug x 5 engines x 5 seeds,
 ## then every deep bug x 6 engines x 10 trials x 60 s (3 h 23 min on 2 cores on 2063e32), then every zoo
