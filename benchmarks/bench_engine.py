@@ -10,7 +10,9 @@ and fuzzing time, startup excluded) and, for ``fk``, the batched sweeps' rows
 compared (``stats.jsonl``; half of an ``fk`` campaign's time goes to them). Then
 runs the paper's experiment size, 15,246 executions of ``move``
 (``-runs=15246``), and reports the wall time of the whole command, startup
-included. Medians over the seeds.
+included. Medians over the seeds. Before and after, the machine's speed at that moment
+(``benchmarks.machine``: a fixed Python workload's time), to set figures of different days
+side by side.
 
 ``--sweep`` measures the batched path alone, in this process: ``Sweep.run`` on the
 default robot, native against the twin, 1,024 rows a sweep, for ``--seconds`` per seed
@@ -30,7 +32,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks import cli
+from benchmarks import cli, machine
 
 ROOT = Path(__file__).resolve().parents[1]
 SUMMARY = re.compile(r"executions: (\d+) in ([0-9.]+) s")
@@ -107,6 +109,7 @@ def main() -> None:
     args = parser.parse_args()
     cli.check_sizes(parser, seconds=args.seconds)
     cpus = len(os.sched_getaffinity(0))
+    print(machine.reference_line("before"))
     if args.sweep:
         rates = [sweep_rate(args.seconds, seed) for seed in args.seeds]
         print(f"# {cpus} CPU(s); {args.seconds} s per seed; seeds {args.seeds}")
@@ -114,6 +117,7 @@ def main() -> None:
             f"batched sweeps: median {statistics.median(rates):,.0f} differential FK comparisons/s "
             f"(runs: {', '.join(f'{r:,.0f}' for r in rates)})"
         )
+        print(machine.reference_line("after"))
         return
     extra = [f"--mutator={args.mutator}"] if args.mutator else []
     print(f"# {cpus} CPU(s) available; {args.seconds} s per run; seeds {args.seeds}; medians")
@@ -141,6 +145,7 @@ def main() -> None:
         f"Paper's experiment size, {PAPER_RUNS:,} executions of move (whole command, startup included): "
         f"median {statistics.median(walls):.1f} s (runs: {', '.join(f'{w:.1f}' for w in walls)})"
     )
+    print(machine.reference_line("after"))
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-from benchmarks import cli
+from benchmarks import cli, machine
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
@@ -112,11 +112,13 @@ def main() -> None:
         parser.error(
             "--corpus needs one --ops and a folder" + ("" if args.corpus.is_dir() else f": {args.corpus}")
         )
+    print(machine.reference_line("before"))
     for op in args.ops:
         rates = rate(op, not args.plain, args.rounds, args.seconds, args.seed, args.corpus)
         shown = ", ".join(f"{r:,.0f}" for r in rates)
         kind = "plain" if args.plain else "instrumented"
         print(f"{op} {kind}: median {statistics.median(rates):,.0f} evaluations/s (rounds: {shown})")
+    print(machine.reference_line("after"))
 
 
 if __name__ == "__main__":
