@@ -4,8 +4,11 @@ throughput figures so that figures of different days can be set side by side.
 The VMs these benchmarks run on are shared, and their speed changes from day to day for the
 same CPU model: ``bench_engine`` measured 7ab8b30's ``fk`` at 1,706 single inputs a second on
 2026-12-02 and at 719 on 2026-12-04 (AMD EPYC both days, nothing else running). The model name
-(``journal.cpu_model``) does not tell those days apart; the reference does. It is interpreted
-Python (a generator and integer arithmetic, no I/O, no numpy), as most of a campaign's time is.
+(``journal.cpu_model``) does not tell those days apart; the reference shows how fast the machine
+was around a figure. It moves within minutes too (10.7 ms before and 15.1 ms after one 4-min run
+on 2026-12-04), so it dates a figure and does not correct it: compare only figures measured in
+turn on the same day. It is interpreted Python (a generator and integer arithmetic, no I/O, no
+numpy), as most of a campaign's time is.
 """
 
 from __future__ import annotations
