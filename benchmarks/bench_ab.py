@@ -5,6 +5,7 @@
     .venv/bin/python -m benchmarks.bench_ab --arm off . RROSFUZZ_X=0 --arm on . RROSFUZZ_X=1 ...
     .venv/bin/python -m benchmarks.bench_ab --arm full . --arm uniform . --engines full uniform ...
     .venv/bin/python -m benchmarks.bench_ab --from-json /tmp/ab.jsonl     # tabulate a file
+    .venv/bin/python -m benchmarks.bench_ab --from-json run1.jsonl run2.jsonl   # pool runs
 
 Why paired: two arms run as two sweeps minutes apart differ in start-up by 10-15 ms on these
 shared VMs (docs/benchmarks-log.md, forty-first session), more than most changes to the start-up
@@ -34,7 +35,10 @@ share of pairs in which the second arm was sooner (ties half: the paired A12) an
 at p < 0.05; beside them the unpaired Mann-Whitney U and A12 the tables use. Each finished pair
 is appended to ``--out`` (JSON lines: a header naming the arms, their commits and settings, the
 engines, the budget and the machine; then one trial per line), so ``--resume`` goes on with the
-pairs missing on the same arms, commits and machine.
+pairs missing on the same arms, commits and machine. ``--from-json`` with several files pools
+their pairs (the same arm names, engines and budget in each): a pair is a (file, bug, seed), so
+runs of the same seeds (``make bench-paired`` twice) count twice, which makes p a little
+optimistic, as the table's header says.
 """
 
 from __future__ import annotations
@@ -43,21 +47,17 @@ import argparse
 import json
 import random
 import re
-import statistics
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from scipy.stats import wilcoxon
-
 from benchmarks import cli, journal, sweeps, trials
+from benchmarks.ab_table import FORMAT, pool, read, report
 from benchmarks.bench_deep import BUGS
 from benchmarks.bench_zoo import ALL_ENGINES, Run, run_one
-from benchmarks.deep_stats import ALPHA, compare
 
-FORMAT = "rrosfuzz-bench-ab"
 SETTING = re.compile(r"[A-Za-z_][A-Za-z0-9_]*=[^\0]*")
 """An environment setting as ``env`` takes it."""
 
@@ -113,14 +113,20 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
         help="run a pair's arms one after the other on one CPU (the coin's order) instead of at once",
     )
     parser.add_argument("--resume", action="store_true", help="go on with the pairs --out does not hold yet")
-    parser.add_argument("--from-json", type=Path, help="tabulate a file of pairs instead of running")
+    parser.add_argument(
+        "--from-json",
+        type=Path,
+        nargs="+",
+        metavar="FILE",
+        help="tabulate files of pairs instead of running (several: their pairs pooled)",
+    )
     args = parser.parse_args(argv)
     if args.from_json is not None:
         try:
-            header, runs = read(args.from_json)
+            headers, runs, batches = pool(args.from_json)
         except ValueError as exc:
             parser.error(str(exc))
-        return report(header, runs)
+        return report(headers[0], runs, batches, headers[1:])
     arms = _arms(parser, args)
     if not args.bugs or args.out is None:
         parser.error("--bugs and --out are needed to run (or --from-json FILE to tabulate)")
@@ -270,104 +276,6 @@ def _run(
                 f"[{index}/{len(todo)}] {name} seed {seed}: {arms[0].name} {a} {arms[1].name} {b}", flush=True
             )
     return done
-
-
-def read(path: Path) -> tuple[dict[str, Any], list[tuple[str, Run]]]:
-    """A pairs file's header and its trials as (arm side "a"/"b", run); a last line cut short is
-    left out.
-
-    Raises
-    ------
-    ValueError
-        The file cannot be read, or a line is not what this tool writes (named).
-    """
-    try:
-        lines = path.read_text(encoding="utf-8").split("\n")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: cannot be read ({exc})") from exc
-    complete = lines[:-1]  # every line written ends with a newline
-    try:
-        header = json.loads(complete[0]) if complete else None
-        if not isinstance(header, dict) or header.get("format") != FORMAT:
-            raise ValueError("its first line is not a bench_ab header")
-        names = [arm["name"] for arm in header["arms"]]
-        if len(names) != 2 or not all(isinstance(n, str) for n in names):
-            raise ValueError("its header does not name two arms")
-        runs = []
-        for number, line in enumerate(complete[1:], 2):
-            row = json.loads(line)
-            if not isinstance(row, dict) or row.get("arm") not in names:
-                raise ValueError(f"line {number} is not a trial of one of the arms")
-            runs.append(("a" if row["arm"] == names[0] else "b", journal.run_of(row)))
-    except (ValueError, TypeError, KeyError) as exc:
-        raise ValueError(f"{path}: not a bench_ab file ({exc})") from exc
-    return header, runs
-
-
-def _censored(value: float | None, budget: float) -> float:
-    return budget if value is None else value
-
-
-def paired(a: list[float], b: list[float]) -> tuple[float, float, float, str]:
-    """(Wilcoxon p, median of b - a, share of pairs where b is lower (ties half), verdict for b)."""
-    diffs = [y - x for x, y in zip(a, b, strict=True)]
-    sooner = sum((d < 0) + 0.5 * (d == 0) for d in diffs) / len(diffs)
-    if not any(diffs):
-        return 1.0, 0.0, sooner, "tie"
-    p = float(wilcoxon(a, b, zero_method="zsplit").pvalue)
-    verdict = "tie" if p >= ALPHA else ("faster" if sooner > 0.5 else "slower")
-    return p, statistics.median(diffs), sooner, verdict
-
-
-def report(header: dict[str, Any], runs: list[tuple[str, Run]]) -> dict[str, list[tuple[Run, Run]]]:
-    """Print the table: per bug, the second arm against the first. Returns the pairs by bug."""
-    names = [arm["name"] for arm in header["arms"]]
-    budget = float(header["budget"])
-    sides: dict[tuple[str, int], dict[str, Run]] = {}
-    for side, run in runs:
-        sides.setdefault((run.bug, run.seed), {})[side] = run
-    by_bug: dict[str, list[tuple[Run, Run]]] = {}
-    for (bug, _), both in sorted(sides.items()):
-        if len(both) == 2:
-            by_bug.setdefault(bug, []).append((both["a"], both["b"]))
-    for arm in header["arms"]:
-        print(
-            f"{arm['name']}: {arm['root']} at {arm['commit']}"
-            + (f", {' '.join(arm['env'])}" if arm["env"] else "")
-        )
-    engines = header["engines"]
-    print(
-        f"engines {engines[0]} and {engines[1]}, {budget:g} s per trial, {header['machine']}; "
-        f"'{names[1]}' against '{names[0]}'"
-    )
-    print()
-    print(
-        "| bug | pairs (found) | what | "
-        + f"{names[0]} median (s) | {names[1]} median (s) | median paired difference (ms) | "
-        + f"pairs {names[1]} sooner | Wilcoxon p | {names[1]} is | Mann-Whitney p, A12 |"
-    )
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for bug, pairs in by_bug.items():
-        found = [sum(r.detected_at is not None for r in side) for side in zip(*pairs, strict=True)]
-        for what in ("launch", "search", "start-up"):
-            a, b = ([_value(r, what, budget) for r in side] for side in zip(*pairs, strict=True))
-            p, diff, sooner, verdict = paired(a, b)
-            mw, effect, _ = compare(b, a)
-            share = f" ({found[0]}/{len(pairs)}, {found[1]}/{len(pairs)} found)" if what == "launch" else ""
-            print(
-                f"| {bug} | {len(pairs)}{share} | {what} | "
-                f"{statistics.median(a):.4f} | {statistics.median(b):.4f} | {1000 * diff:+.1f} | "
-                f"{sooner:.2f} | {p:.3g} | {verdict} | {mw:.3g}, {effect:.2f} |"
-            )
-    return by_bug
-
-
-def _value(run: Run, what: str, budget: float) -> float:
-    if what == "launch":
-        return _censored(run.detected_at, budget)
-    if what == "search":
-        return _censored(run.search_time, budget)
-    return _censored(run.first_input, budget)
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import bench_ab
+from benchmarks import ab_table, bench_ab
 from benchmarks.bench_zoo import Run
 from benchmarks.deep_stats import compare
 
@@ -27,27 +27,29 @@ def test_paired_calls_a_consistent_small_gain_faster_that_an_unpaired_test_misse
     # the pairs' levels spread widely (the minute's load), the second arm 2 ms sooner in each
     a = [0.15 + 0.01 * i for i in range(12)]
     b = [x - 0.002 for x in a]
-    p, diff, sooner, verdict = bench_ab.paired(a, b)
+    p, diff, sooner, verdict = ab_table.paired(a, b)
     assert verdict == "faster" and p < 0.01 and sooner == 1.0
     assert diff == pytest.approx(-0.002)
     assert compare(b, a)[2] == "tie"  # the unpaired Mann-Whitney U cannot see it
-    assert bench_ab.paired(b, a)[3] == "slower"
+    assert ab_table.paired(b, a)[3] == "slower"
 
 
 def test_paired_ties() -> None:
-    assert bench_ab.paired([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]) == (1.0, 0.0, 0.5, "tie")
-    p, _, _, verdict = bench_ab.paired([0.2, 0.3, 0.4, 0.5, 0.6], [0.21, 0.29, 0.41, 0.49, 0.6])
+    assert ab_table.paired([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]) == (1.0, 0.0, 0.5, "tie")
+    p, _, _, verdict = ab_table.paired([0.2, 0.3, 0.4, 0.5, 0.6], [0.21, 0.29, 0.41, 0.49, 0.6])
     assert verdict == "tie" and p > 0.5
 
 
-def _file(path: Path, rows: list[tuple[str, Run]], *, cut: bool = False) -> None:
+def _file(
+    path: Path, rows: list[tuple[str, Run]], *, cut: bool = False, engines: tuple[str, str] = ("full", "full")
+) -> None:
     header = {
-        "format": bench_ab.FORMAT,
+        "format": ab_table.FORMAT,
         "arms": [
             {"name": "old", "root": "/x", "commit": "c1", "env": []},
             {"name": "new", "root": "/x", "commit": "c1", "env": ["A=1"]},
         ],
-        "engines": ["full", "full"],
+        "engines": list(engines),
         "budget": 10.0,
         "machine": "m",
     }
@@ -68,13 +70,46 @@ def test_from_json_tabulates_pairs_and_leaves_out_a_line_cut_short(
     rows.append(("old", _run("wrap_past_pi", 99, None)))  # half a pair: not counted
     path = tmp_path / "ab.jsonl"
     _file(path, rows, cut=True)
-    header, runs = bench_ab.read(path)
+    header, runs = ab_table.read(path)
     assert header["engines"] == ["full", "full"] and len(runs) == 16
     by_bug = bench_ab.main(["--from-json", str(path)])
     assert len(by_bug["wrap_past_pi"]) == 8
     out = capsys.readouterr().out
     assert "| wrap_past_pi | 8 (8/8, 8/8 found) | launch |" in out
     assert "| -10.0 | 1.00 |" in out and "| faster |" in out
+
+
+def test_from_json_pools_files_and_counts_a_seed_of_each(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two runs of the same seeds pooled: 16 pairs, not the 8 a (bug, seed) key would keep."""
+    paths = []
+    for run_index in range(2):
+        rows = []
+        for seed in range(8):
+            rows += [
+                ("old", _run("wrap_past_pi", seed, 0.20 + 0.01 * seed + 0.001 * run_index)),
+                ("new", _run("wrap_past_pi", seed, 0.19 + 0.01 * seed)),
+            ]
+        paths.append(tmp_path / f"ab{run_index}.jsonl")
+        _file(paths[-1], rows)
+    by_bug = bench_ab.main(["--from-json", *map(str, paths)])
+    assert len(by_bug["wrap_past_pi"]) == 16
+    out = capsys.readouterr().out
+    assert "2 files pooled" in out and "| wrap_past_pi | 16 (16/16, 16/16 found) | launch |" in out
+    assert len(bench_ab.main(["--from-json", str(paths[0])])["wrap_past_pi"]) == 8
+
+
+def test_files_of_other_tests_are_not_pooled(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rows = [("old", _run("wrap_past_pi", 0, 0.2)), ("new", _run("wrap_past_pi", 0, 0.19))]
+    first, other = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
+    _file(first, rows)
+    _file(other, rows, engines=("full", "uniform"))
+    with pytest.raises(SystemExit) as exit_:
+        bench_ab.main(["--from-json", str(first), str(other)])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert str(other) in err and "engines" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize(
@@ -202,7 +237,7 @@ def test_two_settings_of_this_tree_run_as_pairs_and_resume(
     pairs = by_bug["axis_not_normalized"]
     assert len(pairs) == 2 and {a.seed for a, _ in pairs} == {0, 1}
     assert all(r.detected_at is not None and r.first_input is not None for pair in pairs for r in pair)
-    header, runs = bench_ab.read(out)
+    header, runs = ab_table.read(out)
     assert [a["env"] for a in header["arms"]] == [[], ["RROSFUZZ_BENCH_AB_TEST=1"]]
     assert header["serial"] is serial
     assert sorted(side for side, _ in runs) == ["a", "a", "b", "b"]
