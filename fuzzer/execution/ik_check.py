@@ -39,8 +39,9 @@ Otherwise the divergence stands. The caller still checks each target's own claim
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -181,10 +182,95 @@ def meets_half_turn(replay: Any, call: IkCall, seed: tuple[float, ...]) -> bool:
     ``DEAD_ZONE`` of pi (``replay``: a ``python_impl.RobotModel``; False when it cannot replay)."""
     if len(call.position) != 3 or len(call.orientation) != 4:
         return False
+    return pose_meets_half_turn(replay, Pose(call.position, call.orientation), seed, call.link)
+
+
+def pose_meets_half_turn(replay: Any, pose: Any, seed: Any, link: Any) -> bool:
+    """``meets_half_turn`` for a pose as ``inverse_kinematics`` takes it."""
     try:
         from python_impl.model import ik_rotation_errors
 
-        errors = ik_rotation_errors(replay, Pose(call.position, call.orientation), seed, call.link)
+        errors = ik_rotation_errors(replay, pose, seed, link)
     except Exception:  # noqa: BLE001 - a pose or seed the replay rejects is no evidence either way
         return False
     return any(e >= math.pi - DEAD_ZONE for e in errors)
+
+
+IkRequest = tuple[Any, Any, Any]
+"""One call ``inverse_kinematics(pose, seed, link)`` as the twin received it."""
+
+
+@contextlib.contextmanager
+def recorded_ik(model: Any) -> Iterator[list[IkRequest] | None]:
+    """While active, every ``inverse_kinematics`` call on models of ``model``'s class (the twin,
+    ``python_impl.RobotModel``, or a class built on it) is appended to the yielded list, then
+    answered as before. Yields None (and records nothing) for any other model: a native target,
+    a plugin or a ROS node is not looked into."""
+    try:
+        from python_impl import RobotModel
+    except ImportError:
+        yield None
+        return
+    cls = type(model)
+    if not isinstance(model, RobotModel):
+        yield None
+        return
+    own = cls.__dict__.get("inverse_kinematics")
+    solve = cls.inverse_kinematics
+    requests: list[IkRequest] = []
+
+    def recording(self: Any, pose: Any, seed: Any = None, link: Any = None) -> Any:
+        requests.append((pose, None if seed is None else tuple(seed), link))
+        return solve(self, pose, seed, link)
+
+    cls.inverse_kinematics = recording
+    try:
+        yield requests
+    finally:
+        if own is None:
+            del cls.inverse_kinematics
+        else:
+            cls.inverse_kinematics = own
+
+
+def step_meets_half_turn(
+    runners: Sequence[Runner],
+    replay: Any | None,
+    call: Any,
+    step: int,
+    run: Callable[[Runner, Any], Any],
+) -> bool:
+    """Step 5 for a scenario: whether the one IK call the twin makes at step ``step`` of the
+    scenario ``call`` (a ``go`` or ``plan`` toward a pose goal: from the current state) has a
+    Newton-Raphson iterate at a rotation error within ``DEAD_ZONE`` of pi. ``run(runner, call)``
+    runs a scenario on one target (``fuzzer.scenario.execute.run_scenario``); the twin runs the
+    steps before ``step``, then those and ``step``, and the step's requests are those the second
+    run made past the first's (each run is a new group, the same up to there). False when no
+    runner is the twin, ``replay`` is None, or the step made other than one IK call (a
+    Cartesian path's many: where its half turn falls says nothing of where the paths parted)."""
+    twin = next((r for r in runners if isinstance(r.model, _twin_class())), None)
+    if twin is None or replay is None:
+        return False
+    made = []
+    for last in (step, step + 1):
+        with recorded_ik(twin.model) as requests:
+            if requests is None:
+                return False
+            try:
+                run(twin, replace(call, steps=call.steps[:last]))
+            except Exception:  # noqa: BLE001 - a run that fails is no evidence either way
+                return False
+        made.append(requests)
+    ours = made[1][len(made[0]) :]
+    if len(ours) != 1 or ours[0][1] is None:
+        return False
+    pose, seed, link = ours[0]
+    return pose_meets_half_turn(replay, pose, seed, link)
+
+
+def _twin_class() -> type:
+    try:
+        from python_impl import RobotModel
+    except ImportError:
+        return type(None)
+    return RobotModel
