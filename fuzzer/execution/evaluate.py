@@ -342,7 +342,9 @@ class Evaluator:
         run once more with KDL's rotation dead zone in the twin (``dead_zone``): if the two
         targets then agree at that step (their answers, and the scenario oracle finds no counted
         divergence: a path timed differently from the same answers is not the dead zone's), the
-        documented dead zone is the whole difference, ``known_limitation``. Every re-run stops
+        documented dead zone is the whole difference, ``known_limitation``; before that, an
+        ok-vs-failed step whose one IK call meets KDL's half turn on the twin's replayed
+        iterates is ``known_limitation`` too (``ik_check.step_meets_half_turn``). Every re-run stops
         after that step: only its answer is judged, and each scenario runs on a new
         ``MoveGroup``, so the steps after it cannot change it. The nudges that explained earlier
         divergences go first (``Explainers``): the verdict is the same, from fewer re-runs."""

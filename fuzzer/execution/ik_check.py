@@ -23,7 +23,9 @@ converged, one did not) and decides, in this order:
    is this rule at the seed. The iterates are replayed by the twin's own Newton-Raphson
    (``python_impl.model.ik_rotation_errors``) on a fresh model of the robot, not on a
    campaign target; they are KDL's iterates up to the first tie, as both implement one
-   documented algorithm (docs/api.md, "Inverse kinematics");
+   documented algorithm (docs/api.md, "Inverse kinematics"). A scenario's ``go``/``plan``
+   toward a pose goal has this rule too, after its nudges (``step_meets_half_turn``, called by
+   ``Evaluator._scenario_ik``), on the one IK call the twin makes at that step;
 6. the call re-run with KDL's small-rotation dead zone in the twin
    (``dead_zone.twin_with_kdl_dead_zone``: KDL's ``diff`` reports no rotation below about
    5e-7 rad, the twin's logarithm does): if the two targets then agree (the same status, and
