@@ -49,6 +49,8 @@ def _replay(monkeypatch: pytest.MonkeyPatch) -> tuple[Result, str]:
 def test_the_make_run_false_positive_is_kdls_half_turn(monkeypatch: pytest.MonkeyPatch) -> None:
     assert ik_check.pose_meets_half_turn(RobotModel(str(URDF)), POSE, SEED, None)
     result, kind = _replay(monkeypatch)
+    if result is Result.AGREES:  # as the other IK splits' tests: rounding is the CPU's
+        pytest.skip("the scenario does not split the targets on this CPU")
     assert (result, kind) == (Result.EXPLAINED, "known_limitation")
     monkeypatch.setattr(ik_check, "step_meets_half_turn", lambda *args: False)
     result, kind = _replay(monkeypatch)
