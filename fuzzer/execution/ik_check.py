@@ -208,15 +208,10 @@ def recorded_ik(model: Any) -> Iterator[list[IkRequest] | None]:
     ``python_impl.RobotModel``, or a class built on it) is appended to the yielded list, then
     answered as before. Yields None (and records nothing) for any other model: a native target,
     a plugin or a ROS node is not looked into."""
-    try:
-        from python_impl import RobotModel
-    except ImportError:
+    if not isinstance(model, _twin_class()):
         yield None
         return
-    cls = type(model)
-    if not isinstance(model, RobotModel):
-        yield None
-        return
+    cls: Any = type(model)
     own = cls.__dict__.get("inverse_kinematics")
     solve = cls.inverse_kinematics
     requests: list[IkRequest] = []
@@ -271,6 +266,7 @@ def step_meets_half_turn(
 
 
 def _twin_class() -> type:
+    """``python_impl.RobotModel``, or ``NoneType`` (which no model is) without the twin."""
     try:
         from python_impl import RobotModel
     except ImportError:
