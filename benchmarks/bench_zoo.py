@@ -30,6 +30,9 @@ Each finished run is also appended to a journal beside the results file (``zoo-<
 ``benchmarks.journal``), and the runs go in a seeded random order: a sweep stopped part way
 (``--stop-after MINUTES``, or killed) keeps what it ran, and ``--resume`` runs only the missing
 ones, on the same code. The journal goes once ``zoo-<mode>.json`` holds every run.
+
+``--first-seed N`` runs seeds from N instead of 1 (controls beyond the tables' seeds 1 to
+``--seeds``, say): its files are ``zoo-<mode>-seedsN-M.*``, and it replaces no table.
 """
 
 from __future__ import annotations
@@ -66,6 +69,10 @@ ENGINES = ("full", "libfuzzer", "paper", "hypothesis", "uniform")
 ALL_ENGINES = (*ENGINES, "weights")
 """``weights``: the full engine without its bandit, space-filling inputs and float features
 (``--mutator weights``, the engine before issue 11), for ``benchmarks.bench_deep``."""
+FIRST_SEED = 1
+"""The tables' first ``-seed``, and the least ``--first-seed`` (libFuzzer takes ``-seed=0`` for
+a seed from the clock). A journal written before ``--first-seed`` holds seeds from here
+(``journal.sweep_of``)."""
 CONTROL_ENGINES = ("full",)
 """Engines run on the control configurations (the plain ``control`` entry runs them all)."""
 SCENARIO_ENGINES = ENGINES
@@ -267,10 +274,15 @@ def run_one(
 
 
 def plan_jobs(
-    bugs: tuple[str, ...], engines: tuple[str, ...], seeds: int, ops: tuple[str, ...] = ()
+    bugs: tuple[str, ...],
+    engines: tuple[str, ...],
+    seeds: int,
+    ops: tuple[str, ...] = (),
+    first_seed: int = FIRST_SEED,
 ) -> list[tuple[Bug, str, int]]:
     """The runs of a sweep, as (bug, engine, seed): each bug under its own op, or under each
-    of ``ops``; controls only with CONTROL_ENGINES; scenario runs only with SCENARIO_ENGINES."""
+    of ``ops``; controls only with CONTROL_ENGINES; scenario runs only with SCENARIO_ENGINES;
+    ``seeds`` seeds from ``first_seed``."""
     return [
         (bug, e, s)
         for b in bugs
@@ -278,7 +290,7 @@ def plan_jobs(
         for e in engines
         if (not is_config_control(b) or e in CONTROL_ENGINES)
         and (bug.op != "scenario" or e in SCENARIO_ENGINES)
-        for s in range(1, seeds + 1)
+        for s in range(first_seed, first_seed + seeds)
     ]
 
 
@@ -291,6 +303,7 @@ def result_of(sweep: journal.Sweep, runs: list[Run]) -> dict[str, Any]:
         "bugs": list(bugs),
         "engines": list(engines),
         "seeds": sweep.trials,
+        "first_seed": sweep.first_seed,
         "budget": sweep.budget,
         "runs": [asdict(r) for r in runs],
         "cells": summarize_ops(runs, bugs, sweep.ops) if sweep.ops else summarize(runs, engines, bugs),
@@ -312,7 +325,7 @@ def render(parser: argparse.ArgumentParser, path: Path, write_md: bool) -> dict[
             unknown = sorted({b for b in [*sweep.bugs, *(r.bug for r in runs)] if b not in BY_NAME})
             if unknown:
                 raise ValueError(f"unknown bugs {unknown}")
-            jobs = plan_jobs(sweep.bugs, sweep.engines, sweep.trials, sweep.ops)
+            jobs = plan_jobs(sweep.bugs, sweep.engines, sweep.trials, sweep.ops, sweep.first_seed)
             plan = {sweeps.key_of(job): i for i, job in enumerate(jobs)}
             runs.sort(key=lambda r: plan.get(sweeps.run_key(r), len(plan)))  # the plan's order
             saved = {**result_of(sweep, runs), "jobs": "?", "cpus": "?", "machine": "not recorded"}
@@ -342,6 +355,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--bugs", nargs="+", default=None)
     parser.add_argument("--engines", nargs="+", default=None, choices=ENGINES)
     parser.add_argument("--seeds", type=int, default=None)
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=FIRST_SEED,
+        help=f"the first run's -seed (default {FIRST_SEED}): the runs are seeds FIRST_SEED to "
+        "FIRST_SEED + seeds - 1, e.g. controls beyond the tables' seeds; other seeds than the "
+        "default get files of their own (zoo-<mode>-seedsN-M.*) and replace no table",
+    )
     parser.add_argument("--budget", type=float, default=None)
     parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
     parser.add_argument("--out", type=Path, default=None)
@@ -378,8 +399,20 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     budget = args.budget or mode.budget
     engines = tuple(args.engines or mode.engines)
     replay = args.replay or mode.replay
-    jobs = plan_jobs(bugs, engines, seeds, mode.ops)
-    out = args.out or RESULTS / f"zoo-{args.mode}.json"
+    if args.first_seed < 1:  # libFuzzer takes -seed=0 for a seed from the clock: no replay
+        parser.error(
+            f"--first-seed must be 1 or more (libFuzzer's -seed=0 is the clock's), not {args.first_seed}"
+        )
+    stem = f"zoo-{args.mode}"
+    if args.first_seed != FIRST_SEED:  # other seeds than the tables': files of their own
+        if args.write_md:
+            parser.error(
+                f"--write-md takes the tables' seeds (from {FIRST_SEED}); "
+                "--first-seed's runs get files of their own"
+            )
+        stem += f"-seeds{args.first_seed}-{args.first_seed + seeds - 1}"
+    jobs = plan_jobs(bugs, engines, seeds, mode.ops, args.first_seed)
+    out = args.out or RESULTS / f"{stem}.json"
     keep = args.keep_failures or out.parent / "control-failures"
     cli.check_folder(parser, out.parent)
     path = out.with_suffix(".jsonl")
@@ -393,6 +426,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "bench_zoo",
         mode.ops,
         replay,
+        first_seed=args.first_seed,
         machine=journal.machine_of(),
     )
     load_before = _load()

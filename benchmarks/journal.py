@@ -74,7 +74,7 @@ class Sweep:
     replay : bool
         ``bench_zoo``'s replay of crash files, part of each trial's record.
     first_seed : int
-        The first trial's ``-seed`` (``bench_deep --first-seed``): the trials are seeds
+        The first trial's ``-seed`` (``--first-seed``; ``bench_zoo``'s from 1): the trials are seeds
         ``first_seed`` to ``first_seed + trials - 1``.
     machine : str
         The machine that runs the trials (:func:`machine_of`; "" in journals from before it was
@@ -102,7 +102,9 @@ class Sweep:
 
 def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
     """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``,
-    ``replay``, ``first_seed`` and ``machine`` are their defaults.
+    ``replay``, ``first_seed`` and ``machine`` are their defaults. A ``bench_zoo`` header's
+    ``first_seed`` 0, or none, is 1: its sweeps ran seeds from 1 before it had ``--first-seed``
+    (whose least value is 1, since libFuzzer takes ``-seed=0`` for a seed from the clock).
 
     Raises
     ------
@@ -118,7 +120,7 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
         "machine": str,
         "replay": bool,
     }
-    values = {**_DEFAULTS, **{k: v for k, v in header.items() if k in _FIELDS}}
+    values = _as_written(header, tool)
     for name in (
         "mode",
         "bugs",
@@ -140,6 +142,15 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
             raise JournalError(f"the header's {name} is missing or not what it should be: {value!r}")
     tuples = {k: tuple(values[k]) for k in ("bugs", "engines", "ops")}
     return Sweep(**{**values, **tuples, "budget": float(values["budget"]), "tool": tool})
+
+
+def _as_written(header: dict[str, Any], tool: str) -> dict[str, Any]:
+    """``header``'s sweep fields, an older journal's missing ones at their defaults, and a
+    ``bench_zoo`` journal's ``first_seed`` 0 at 1 (see :func:`sweep_of`)."""
+    values = {**_DEFAULTS, **{k: v for k, v in header.items() if k in _FIELDS}}
+    if tool == "bench_zoo" and type(values["first_seed"]) is int and values["first_seed"] == 0:
+        values["first_seed"] = 1
+    return values
 
 
 SAME_SWEEP = ("mode", "bugs", "engines", "trials", "first_seed", "budget", "ops", "replay")
@@ -277,8 +288,9 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
     """Raise a :class:`JournalError` naming what differs when ``header`` is not ``sweep``'s,
     or when ``root`` does not hold the code of the journal's commit (:func:`same_code`)."""
     mine = json.loads(json.dumps(sweep.header()))  # tuples as lists, as read back
+    written = _as_written(header, sweep.tool)
     for key in SAME_SWEEP:
-        theirs = header.get(key, json.loads(json.dumps(_DEFAULTS.get(key))))  # older journals: none
+        theirs = json.loads(json.dumps(written[key]))  # older journals' defaults, as read back
         if theirs != mine[key]:
             raise JournalError(
                 f"{path}: written for another sweep ({key} {theirs!r}, this run's "

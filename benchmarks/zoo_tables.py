@@ -136,13 +136,20 @@ def _largest_by_field(runs: Iterable[dict[str, Any]]) -> list[str]:
     return [f"`--op {op}` {name}: {d:.2g} {u}".rstrip() for (op, name), (d, u) in sorted(largest.items())]
 
 
+def seed_count(result: dict[str, Any]) -> str:
+    """The seeds of ``result``: "5 seed(s)", named when they do not start at 1 ("10 seed(s) (11-20)"; a
+    result from before ``--first-seed`` holds seeds from 1)."""
+    count, first = int(result["seeds"]), int(result.get("first_seed") or 1)
+    return f"{count} seed(s)" + (f" ({first}-{first + count - 1})" if first != 1 else "")
+
+
 def ops_markdown(result: dict[str, Any]) -> str:
     """The table of ``--mode ops``: which op detects each stateful bug."""
     ops, budget, cells = result["ops"], result["budget"], result["cells"]
     lines = [
         "Each stateful zoo bug (`benchmarks/zoo/stateful.py`: it needs a second call on a live group, or "
         "shows only in a trajectory) against native, full engine, under each op: "
-        f"{result['seeds']} seed(s) x {budget:.0f} s per (bug, op), "
+        f"{seed_count(result)} x {budget:.0f} s per (bug, op), "
         f"{result['jobs']} runs at a time on {result['cpus']} CPUs. "
         f"Command: `{result['command']}`.",
         "",
@@ -184,7 +191,7 @@ def markdown(result: dict[str, Any]) -> str:
     bugs = [b for b in result["bugs"] if not is_config_control(b)]
     cells = result["cells"]
     lines = [
-        f"Mode `{result['mode']}`: {len(bugs)} bugs x {len(engines)} engines x {result['seeds']} seed(s), "
+        f"Mode `{result['mode']}`: {len(bugs)} bugs x {len(engines)} engines x {seed_count(result)}, "
         f"{budget:.0f} s each, {result['jobs']} runs at a time on {result['cpus']} CPUs "
         f"({result['machine']}). Command: `{result['command']}`.",
     ]

@@ -426,6 +426,59 @@ def test_bench_zoo_keeps_a_journal_too_and_runs_in_a_seeded_random_order(
     assert not (tmp_path / "zoo.jsonl").exists() and not (tmp_path / "zoo.jsonl.lock").exists()
 
 
+def test_bench_zoo_first_seed_runs_other_seeds_in_files_of_their_own(
+    fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Controls beyond the tables' seeds 1..N: ``--first-seed`` runs seeds from there, in files of
+    their own, and a journal from before it (seeds from 1) still resumes as what it held."""
+    monkeypatch.setattr(bench_zoo, "run_one", fake)
+    monkeypatch.setattr(bench_zoo, "RESULTS", tmp_path)
+    sweep = ["--mode", "controls", "--bugs", CONTROL.name, "--engines", "full", "--seeds", "3"]
+    sweep += ["--jobs", "1", "--budget", "5"]
+    result = bench_zoo.main([*sweep, "--first-seed", "11"])
+    assert sorted(seed for _, _, seed in fake.calls) == [11, 12, 13]
+    assert sorted(r["seed"] for r in result["runs"]) == [11, 12, 13] and result["first_seed"] == 11
+    assert (tmp_path / "zoo-controls-seeds11-13.json").exists() and not (
+        tmp_path / "zoo-controls.json"
+    ).exists()
+    assert "x 3 seed(s) (11-13)," in capsys.readouterr().out
+    for extra, says in (
+        (("--first-seed", "11", "--write-md"), "--write-md takes the tables' seeds (from 1)"),
+        (("--first-seed", "0"), "--first-seed must be 1 or more (libFuzzer's -seed=0 is the clock's)"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            bench_zoo.main([*sweep, *extra])
+        assert exit_info.value.code == 2 and says in capsys.readouterr().err, extra
+    # the default is the tables' seeds, from 1, in the tables' file
+    fake.calls.clear()
+    out = ["--out", str(tmp_path / "part" / "zoo.json")]
+    bench_zoo.main([*sweep, *out, "--stop-after", "1.5"])
+    first_two = {seed for _, _, seed in fake.calls}  # in the sweep's seeded random order
+    assert len(first_two) == 2 and first_two < {1, 2, 3}
+    held = tmp_path / "part" / "zoo.jsonl"
+    lines = held.read_text().splitlines(keepends=True)
+    header = json.loads(lines[0])
+    assert header["first_seed"] == 1
+    with pytest.raises(SystemExit):  # resumed with other seeds, it is another sweep's
+        bench_zoo.main([*sweep, *out, "--first-seed", "2", "--resume"])
+    assert "written for another sweep (first_seed 1, this run's 2)" in capsys.readouterr().err
+    # a journal written before --first-seed (first_seed 0, bench_deep's default, or none) held
+    # seeds from 1: it resumes with the default and runs only the one it lacks
+    for old in (0, None):
+        if old is None:
+            del header["first_seed"]
+        else:
+            header["first_seed"] = old
+        held.write_text(json.dumps(header) + "\n" + "".join(lines[1:]))
+        assert journal.sweep_of(header, "bench_zoo").first_seed == 1
+        fake.calls.clear()
+        done = bench_zoo.main([*sweep, *out, "--resume"])
+        assert [seed for _, _, seed in fake.calls] == sorted({1, 2, 3} - first_two), old
+        assert sorted(r["seed"] for r in done["runs"]) == [1, 2, 3]
+        (tmp_path / "part" / "zoo.json").unlink()
+    assert journal.sweep_of({**header, "first_seed": 0}, "bench_deep").first_seed == 0
+
+
 def test_each_trial_running_at_a_time_has_a_cpu_of_its_own(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
