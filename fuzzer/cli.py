@@ -73,6 +73,15 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if seed is None:
         value = next((f.split("=", 1)[1] for f in flags if f.startswith("-seed=")), "0")
         seed = int(value) if value.lstrip("-").isdigit() else 0
+    from fuzzer import reporting
+    from fuzzer.processes import drawn_seed
+
+    flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
+    if drawn is not None:
+        reporting.info(
+            f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "
+            f"the same command with -seed={drawn} --seed={seed} repeats its choices"
+        )
     if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
         raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: no such file")
     dictionary = next((f.split("=", 1)[1] for f in flags if f.startswith("-dict=")), None)

@@ -60,6 +60,33 @@ def supervises(flags: tuple[str, ...]) -> bool:
     return any(int_flag(flags, name, 0) > 0 for name in ("-fork", "-jobs"))
 
 
+SINGLE_RUN_FLAGS = ("-merge", "-set_cover_merge", "-minimize_crash", "-cleanse_crash", "-minimize_corpus")
+"""libFuzzer flags that run no campaign of random choices (a merge, a crash's minimization)."""
+
+
+def drawn_seed(flags: tuple[str, ...], corpus: tuple[Path, ...]) -> tuple[tuple[str, ...], int | None]:
+    """``flags`` with a ``-seed`` drawn from the OS for a campaign of one process given none, or
+    ``-seed=0`` (libFuzzer's "draw one from the clock"), and the seed drawn (None when none was).
+
+    libFuzzer draws such a seed itself, and ``-verbosity=0`` hides it: the campaign could not be
+    repeated. Drawn here, it is printed and passed on; the harness's own seed (``--seed``, else
+    the ``-seed`` given, else 0) stays as it was, so ``-seed=N --seed=S`` repeats the campaign's
+    choices (docs/engine.md, "Reproducing a campaign"). Left to libFuzzer: ``-jobs`` and
+    ``-fork`` (one ``-seed`` for every job would run the same choices in each), their workers
+    (``CHILD_ENV``), merges and a crash's minimization (``SINGLE_RUN_FLAGS``), and files among
+    the corpus (libFuzzer runs them).
+    """
+    given = flag_value(flags, "-seed")
+    if given is not None and (not given.isdigit() or int(given) != 0):
+        return flags, None
+    if supervises(flags) or os.environ.get(CHILD_ENV) == "1" or any(p.is_file() for p in corpus):
+        return flags, None
+    if any(int_flag(flags, name, 0) != 0 for name in SINGLE_RUN_FLAGS):
+        return flags, None
+    seed = 1 + int.from_bytes(os.urandom(4), "little") % (2**31 - 1)
+    return (*(f for f in flags if f.partition("=")[0] != "-seed"), f"-seed={seed}"), seed
+
+
 def is_number(text: str) -> bool:
     try:
         return math.isfinite(float(text))

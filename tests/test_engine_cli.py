@@ -167,6 +167,58 @@ def test_a_campaign_repeats_itself_for_a_seed(tmp_path: Path) -> None:
     assert len(kept[0]) > 100 and kept[0] == kept[1]
 
 
+def test_a_campaign_given_no_seed_prints_the_one_it_drew_and_that_seed_repeats_it(tmp_path: Path) -> None:
+    """Without ``-seed`` libFuzzer draws one from the clock, and ``-verbosity=0`` hid it: such a
+    campaign (``make run``'s) could not be repeated. Now the seed is drawn and printed, and the
+    same command with it (and the harness's own seed, 0 as before) keeps the same corpus
+    (``processes.drawn_seed``)."""
+    import re
+
+    kept, drawn = [], []
+    for name, extra in (("a", ()), ("b", ("-seed=0",)), ("again", None)):
+        corpus = tmp_path / name / "corpus"
+        art = f"--artifacts={tmp_path / name / 'art'}"
+        flags = extra if extra is not None else (f"-seed={drawn[0]}", "--seed=0")
+        run = fuzz(str(corpus), "--op=fk", "-runs=600", art, *flags)
+        assert run.returncode == 0, run.stderr[-2000:]
+        said = re.findall(r"libFuzzer's -seed=(\d+): drawn for this campaign", run.stderr)
+        if extra is None:
+            assert said == []  # a seed given is a seed used
+        else:
+            assert len(said) == 1, run.stderr[-2000:]
+            drawn.append(int(said[0]))
+        kept.append(sorted(p.name for p in corpus.iterdir() if p.is_file()))
+    assert all(0 < seed < 2**31 for seed in drawn)
+    assert len(kept[0]) > 100 and kept[2] == kept[0]
+
+
+def test_a_seed_is_drawn_only_for_a_campaign_of_one_process(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from fuzzer import processes
+
+    monkeypatch.delenv(processes.CHILD_ENV, raising=False)
+    folder, file = tmp_path / "corpus", tmp_path / "input"
+    folder.mkdir()
+    file.write_bytes(b"{}")
+    flags, seed = processes.drawn_seed(("-runs=5", "-seed=0", "-seed=0"), (folder,))
+    assert seed is not None and flags == ("-runs=5", f"-seed={seed}")
+    flags, seed = processes.drawn_seed(("-runs=5",), (folder,))
+    assert seed is not None and flags == ("-runs=5", f"-seed={seed}")
+    for flags, corpus in (
+        (("-seed=7",), (folder,)),  # given
+        (("-seed=-3",), (folder,)),  # libFuzzer's to judge
+        (("-jobs=2",), (folder,)),  # one seed for every job would repeat one job's choices
+        (("-fork=2",), (folder,)),
+        (("-merge=1",), (folder, folder)),  # no random choices of a campaign
+        (("-minimize_crash=1",), (file,)),
+        ((), (folder, file)),  # libFuzzer runs the file
+    ):
+        assert processes.drawn_seed(flags, corpus) == (flags, None), flags
+    monkeypatch.setenv(processes.CHILD_ENV, "1")  # a -jobs or -fork worker: its parent's flags
+    assert processes.drawn_seed((), (folder,)) == ((), None)
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
