@@ -87,6 +87,10 @@ class Harness:
     on_exec: Callable[[], None] = lambda: None
     log: CampaignLog | None = None
     joint_names: tuple[str, ...] = ()
+    campaign_seeds: tuple[int | None, int] | None = None
+    """libFuzzer's ``-seed`` (None: libFuzzer drew its own, as with ``-jobs``) and the harness's
+    own seed, recorded in every ``stats.jsonl`` snapshot as ``seed`` (None: not recorded, as in
+    the dry run's processes, which run no libFuzzer)."""
     mutate_message: MessageMutator = mutators.mutate
     """The mutator of one message (``fuzzer.scenario.dispatch.for_registry`` for scenarios). One
     with a true ``uses_other`` attribute gets a second parent as ``context.other``."""
@@ -210,6 +214,8 @@ class Harness:
         if self.log is not None and (force or now >= self._next_snapshot):
             self._next_snapshot = now + SNAPSHOT_SECONDS
             data = self.stats.to_json()
+            if self.campaign_seeds is not None:
+                data["seed"] = {"libfuzzer": self.campaign_seeds[0], "harness": self.campaign_seeds[1]}
             if self.sources is not None:
                 data["bandit"] = self.sources.to_json()
             if self.sweep is not None:

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import python_impl
+from fuzzer.artifacts.divlog import STATS
 from fuzzer.input.testcase import decode
 from fuzzer.selection.state import BOUNDARY, SPACEFILL
 from robot_api.robots import default_robot_path
@@ -188,6 +189,13 @@ def test_a_campaign_given_no_seed_prints_the_one_it_drew_and_that_seed_repeats_i
             assert len(said) == 1, run.stderr[-2000:]
             drawn.append(int(said[0]))
         kept.append(sorted(p.name for p in corpus.iterdir() if p.is_file()))
+        # the campaign log keeps the seeds too (the terminal's lines scroll away): the libFuzzer
+        # process's snapshots (the dry run's processes run no libFuzzer)
+        records = [json.loads(line) for line in (tmp_path / name / "art" / STATS).read_text().splitlines()]
+        logged = [r["seed"] for r in records if "seed" in r]
+        assert logged and all(
+            s == {"libfuzzer": drawn[0 if extra is None else -1], "harness": 0} for s in logged
+        )
     assert all(0 < seed < 2**31 for seed in drawn)
     assert len(kept[0]) > 100 and kept[2] == kept[0]
 
