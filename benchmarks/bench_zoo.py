@@ -131,6 +131,10 @@ class Run:
     first_input: float | None = None
     """Seconds from the process start to the first evaluated test case (the start-up: imports,
     seeds, instrumentation); None when the run logged none."""
+    libfuzzer_seed: int | None = None
+    """libFuzzer's ``-seed`` of the trial's campaign, as its ``stats.jsonl`` records it: the one
+    ``fuzz_diff.py`` drew for ``-seed=0`` (``bench_deep``'s first trial), which ``-seed=N
+    --seed=0`` repeats; None for the baselines (no libFuzzer) and runs from before it was kept."""
 
     @property
     def search_time(self) -> float | None:
@@ -247,6 +251,8 @@ def run_one(
         last: dict[Any, dict[str, Any]] = {}
         for record in read_lines(artifacts / STATS):
             last[record.get("pid")] = record
+        drawn = {r["seed"].get("libfuzzer") for r in last.values() if isinstance(r.get("seed"), dict)}
+        libfuzzer_seed = next(iter(drawn)) if len(drawn) == 1 else None
         starts = [float(r["first_input"]) for r in last.values() if r.get("first_input") is not None]
         started_search = min(starts) - started if starts else None
         executions = sum(int(r.get("execs", 0)) for r in last.values())
@@ -270,6 +276,7 @@ def run_one(
         *fidelity,
         trials.found_fields(hits),
         started_search,
+        libfuzzer_seed if isinstance(libfuzzer_seed, int) and not isinstance(libfuzzer_seed, bool) else None,
     )
 
 

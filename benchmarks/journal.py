@@ -226,6 +226,7 @@ _KINDS: dict[str, tuple[type, ...]] = {
     **dict.fromkeys(("replayed", "replay_same"), (int,)),
     **dict.fromkeys(("budget", "elapsed"), (int, float)),
     **dict.fromkeys(("detected_at", "first_input"), (int, float, type(None))),
+    "libfuzzer_seed": (int, type(None)),
 }
 """The JSON types each field of a trial may have."""
 

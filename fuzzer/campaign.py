@@ -140,6 +140,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         else (0 if usable or len(folders) < len(options.corpus) else 32)
     )
     filling: list[TestCase] = []
+    seeds_of_campaign = (libfuzzer_seed(options.libfuzzer_flags), options.seed)  # in stats.jsonl
     if wanted and not child and folders and dry_ok:
         # fuzzer.dry_run: children evaluate probes, uniform inputs, seeds while libFuzzer starts
         joints = tuple(session.reference.joint_names)
@@ -150,7 +151,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             wanted,
             timeout,
             lambda base, sweep: dry_harness.harness(
-                evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep
+                evaluator, store, CampaignLog(artifacts), sidecar, base, joints, sweep, seeds_of_campaign
             ),
             corpus=None if left else folders[0],
             artifacts=artifacts,
@@ -239,7 +240,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         stop_on_divergence=options.stop_on_divergence,
         log=CampaignLog(artifacts),
         joint_names=tuple(session.reference.joint_names),
-        campaign_seeds=(libfuzzer_seed(options.libfuzzer_flags), options.seed),
+        campaign_seeds=seeds_of_campaign,
     )
     total = flag_value(options.libfuzzer_flags, "-max_total_time")
     progress = reporting.Progress(

@@ -27,9 +27,11 @@ def harness(
     seeds: Sequence[TestCase],
     joint_names: tuple[str, ...],
     sweep: Sweep | None = None,
+    campaign_seeds: tuple[int | None, int] | None = None,
 ) -> Harness:
     """A Harness that evaluates and records, without libFuzzer, coverage or mutation; with
-    ``sweep`` (see ``sweep``), ``evaluate`` runs its sweeps."""
+    ``sweep`` (see ``sweep``), ``evaluate`` runs its sweeps; its snapshots record the campaign's
+    ``campaign_seeds`` (``Harness.campaign_seeds``)."""
     return Harness(
         evaluator=evaluator,
         store=store,
@@ -40,6 +42,7 @@ def harness(
         log=log,
         joint_names=joint_names,
         sweep=sweep,
+        campaign_seeds=campaign_seeds,
     )
 
 

@@ -89,8 +89,8 @@ class Harness:
     joint_names: tuple[str, ...] = ()
     campaign_seeds: tuple[int | None, int] | None = None
     """libFuzzer's ``-seed`` (None: libFuzzer drew its own, as with ``-jobs``) and the harness's
-    own seed, recorded in every ``stats.jsonl`` snapshot as ``seed`` (None: not recorded, as in
-    the dry run's processes, which run no libFuzzer)."""
+    own seed, recorded in every ``stats.jsonl`` snapshot as ``seed`` (the dry run's processes
+    record their campaign's; None: not recorded)."""
     mutate_message: MessageMutator = mutators.mutate
     """The mutator of one message (``fuzzer.scenario.dispatch.for_registry`` for scenarios). One
     with a true ``uses_other`` attribute gets a second parent as ``context.other``."""

@@ -103,7 +103,9 @@ def log(name, record):
     with open(os.path.join(artifacts, name), "a") as handle:
         handle.write(json.dumps(record) + "\\n")
 now = time.time()
-log("stats.jsonl", {"pid": os.getpid(), "first_input": now, "execs": 3, "elapsed": 0.1})
+log("stats.jsonl", {"pid": os.getpid(), "first_input": now, "execs": 3, "elapsed": 0.1,
+                    "seed": {"libfuzzer": 42, "harness": 0}})
+log("stats.jsonl", {"pid": os.getpid() + 1, "execs": 0, "elapsed": 0.1})  # a dry run's: no seed
 log("divergences.jsonl", {"kind": kind, "sig": "s", "t": now + 0.2, "field": "q", "difference": 0.5})
 time.sleep(sleep)
 sys.exit(code)
@@ -131,6 +133,7 @@ def test_a_trial_stops_at_its_first_detection(monkeypatch: pytest.MonkeyPatch) -
     assert run.detected_at is not None and run.first_input is not None
     assert run.detected_at - run.first_input == pytest.approx(0.2)
     assert run.divergences == 1 and run.executions == 3
+    assert run.libfuzzer_seed == 42  # the campaign's, as its log records it
 
 
 def test_a_non_detection_does_not_stop_a_trial(monkeypatch: pytest.MonkeyPatch) -> None:

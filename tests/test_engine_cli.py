@@ -189,10 +189,11 @@ def test_a_campaign_given_no_seed_prints_the_one_it_drew_and_that_seed_repeats_i
             assert len(said) == 1, run.stderr[-2000:]
             drawn.append(int(said[0]))
         kept.append(sorted(p.name for p in corpus.iterdir() if p.is_file()))
-        # the campaign log keeps the seeds too (the terminal's lines scroll away): the libFuzzer
-        # process's snapshots (the dry run's processes run no libFuzzer)
+        # the campaign log keeps the seeds too (the terminal's lines scroll away), in every
+        # snapshot of the campaign's processes (the dry run's too)
         records = [json.loads(line) for line in (tmp_path / name / "art" / STATS).read_text().splitlines()]
-        logged = [r["seed"] for r in records if "seed" in r]
+        logged = [r["seed"] for r in records]
+        assert len({r["pid"] for r in records}) > 1  # the dry run's processes and libFuzzer's
         assert logged and all(
             s == {"libfuzzer": drawn[0 if extra is None else -1], "harness": 0} for s in logged
         )

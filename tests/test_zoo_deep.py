@@ -370,6 +370,12 @@ def test_the_quick_mode_runs_and_the_sweep_finds_the_narrower_band(tmp_path) -> 
     assert len(swept) == 2 and all(r.detected_at is not None and r.detected_at < 10.0 for r in swept)
     assert (tmp_path / "deep-quick.json").is_file() and (tmp_path / "deep-quick.png").is_file()
     assert all(r.first_input is not None and 0.0 < r.first_input < 10.0 for r in runs)  # start-up logged
+    # libFuzzer's seed of each full-engine trial is kept: -seed=1's, and the one drawn for -seed=0
+    # (libFuzzer's "draw one"), which -seed=N --seed=0 repeats; the baseline runs no libFuzzer
+    for r in runs:
+        kept = r.libfuzzer_seed
+        wanted = kept is None if r.engine == "uniform" else kept == 1 if r.seed == 1 else (kept or 0) > 1
+        assert wanted, (r.bug, r.engine, r.seed, kept)
 
 
 def test_an_earlier_results_file_is_tabulated_again(tmp_path) -> None:  # type: ignore[no-untyped-def]
