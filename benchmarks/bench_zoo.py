@@ -251,8 +251,10 @@ def run_one(
         last: dict[Any, dict[str, Any]] = {}
         for record in read_lines(artifacts / STATS):
             last[record.get("pid")] = record
-        drawn = {r["seed"].get("libfuzzer") for r in last.values() if isinstance(r.get("seed"), dict)}
-        libfuzzer_seed = next(iter(drawn)) if len(drawn) == 1 else None
+        kept = {r["seed"].get("libfuzzer") for r in last.values() if isinstance(r.get("seed"), dict)}
+        libfuzzer_seed = kept.pop() if len(kept) == 1 else None
+        if not isinstance(libfuzzer_seed, int) or isinstance(libfuzzer_seed, bool):
+            libfuzzer_seed = None
         starts = [float(r["first_input"]) for r in last.values() if r.get("first_input") is not None]
         started_search = min(starts) - started if starts else None
         executions = sum(int(r.get("execs", 0)) for r in last.values())
@@ -276,7 +278,7 @@ def run_one(
         *fidelity,
         trials.found_fields(hits),
         started_search,
-        libfuzzer_seed if isinstance(libfuzzer_seed, int) and not isinstance(libfuzzer_seed, bool) else None,
+        libfuzzer_seed,
     )
 
 

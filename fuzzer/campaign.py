@@ -47,6 +47,7 @@ from fuzzer.processes import (
     flag_value,
     int_flag,
     is_number,
+    libfuzzer_seed,
     new_artifacts,
     supervises,
 )
@@ -363,14 +364,6 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
         forwarded = [absolute_option(o) for o in forwarded]
         corpus = [str(Path(c).resolve()) for c in corpus]
     return [script, *flags, *forwarded, *corpus]
-
-
-def libfuzzer_seed(flags: tuple[str, ...]) -> int | None:
-    """libFuzzer's ``-seed`` among ``flags`` (``processes.drawn_seed`` has put one there for a
-    campaign of one process), None when libFuzzer draws its own (absent, 0 or not a number: a
-    ``-jobs`` campaign, say; a ``-fork`` job gets its own from its parent)."""
-    value = flag_value(flags, "-seed")
-    return int(value) if value is not None and value.isdigit() and int(value) > 0 else None
 
 
 def check_seconds(timeout: int) -> float | None:

@@ -87,6 +87,14 @@ def drawn_seed(flags: tuple[str, ...], corpus: tuple[Path, ...]) -> tuple[tuple[
     return (*(f for f in flags if f.partition("=")[0] != "-seed"), f"-seed={seed}"), seed
 
 
+def libfuzzer_seed(flags: tuple[str, ...]) -> int | None:
+    """libFuzzer's ``-seed`` among ``flags`` (``drawn_seed`` has put one there for a campaign of
+    one process), None when libFuzzer draws its own (absent, 0 or not a number: a ``-jobs``
+    campaign, say; a ``-fork`` job gets its own from its parent)."""
+    value = flag_value(flags, "-seed")
+    return int(value) if value is not None and value.isdigit() and int(value) > 0 else None
+
+
 def is_number(text: str) -> bool:
     try:
         return math.isfinite(float(text))
