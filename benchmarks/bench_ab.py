@@ -104,7 +104,13 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
         "to race the engine against a baseline in pairs)",
     )
     parser.add_argument("--trials", type=int, default=20, help="pairs per bug (%(default)s)")
-    parser.add_argument("--first-seed", type=int, default=0, help="the first pair's -seed (%(default)s)")
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=1,
+        help="the first pair's -seed (%(default)s; at least 1: libFuzzer takes -seed=0 as 'draw one', "
+        "and each arm would draw its own)",
+    )
     parser.add_argument("--budget", type=float, default=10.0, help="seconds per trial (%(default)s)")
     parser.add_argument("--out", type=Path, help="the pairs' file (JSON lines), appended as each pair ends")
     parser.add_argument(
@@ -131,8 +137,11 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
     if not args.bugs or args.out is None:
         parser.error("--bugs and --out are needed to run (or --from-json FILE to tabulate)")
     cli.check_sizes(parser, trials=args.trials, budget=args.budget)
-    if args.first_seed < 0:
-        parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
+    if args.first_seed < 1:
+        parser.error(
+            f"--first-seed must be 1 or more, not {args.first_seed} (libFuzzer takes -seed=0 as "
+            "'draw a seed', so the two arms of a pair would not share one)"
+        )
     header = {
         "format": FORMAT,
         "arms": [asdict(arm) for arm in arms],

@@ -69,12 +69,13 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)
         travel.check_manifests(folders, config)
+    from fuzzer.processes import drawn_seed, flag_value
+
     seed = args.seed
     if seed is None:
-        value = next((f.split("=", 1)[1] for f in flags if f.startswith("-seed=")), "0")
+        value = flag_value(tuple(flags), "-seed") or "0"  # the last -seed, as libFuzzer takes it
         seed = int(value) if value.lstrip("-").isdigit() else 0
     from fuzzer import reporting
-    from fuzzer.processes import drawn_seed
 
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
     if drawn is not None:
@@ -84,7 +85,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         )
     if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
         raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: no such file")
-    dictionary = next((f.split("=", 1)[1] for f in flags if f.startswith("-dict=")), None)
+    dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
     if dictionary is not None and not Path(dictionary).is_file():
         raise UsageError(f"-dict={dictionary}: no such file")
     options = CampaignOptions(

@@ -192,7 +192,9 @@ def exit_status(status: int | None, found: Found, supervisor: bool, timeout_code
 
 
 def flag_value(flags: tuple[str, ...], name: str) -> str | None:
-    for flag in flags:
+    """The value of libFuzzer flag ``name`` among ``flags``: its last occurrence, the one libFuzzer
+    keeps (each ``-name=value`` it parses overwrites the one before); None when absent."""
+    for flag in reversed(flags):
         key, _, value = flag.partition("=")
         if key == name:
             return value

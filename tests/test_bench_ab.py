@@ -173,6 +173,24 @@ def test_a_bad_file_is_named(
             ],
             "--trials must be a finite number above 0",
         ),
+        (
+            [
+                "--arm",
+                "a",
+                ".",
+                "--arm",
+                "b",
+                ".",
+                "X=1",
+                "--bugs",
+                "wrap_past_pi",
+                "--out",
+                "o.jsonl",
+                "--first-seed",
+                "0",
+            ],
+            "--first-seed must be 1 or more, not 0 (libFuzzer takes -seed=0",
+        ),
     ],
 )
 def test_a_bad_command_line_is_named_before_anything_runs(
@@ -235,7 +253,7 @@ def test_two_settings_of_this_tree_run_as_pairs_and_resume(
     ] + (["--serial"] if serial else [])  # fmt: skip
     by_bug = bench_ab.main(argv)
     pairs = by_bug["axis_not_normalized"]
-    assert len(pairs) == 2 and {a.seed for a, _ in pairs} == {0, 1}
+    assert len(pairs) == 2 and {a.seed for a, _ in pairs} == {1, 2}
     assert all(r.detected_at is not None and r.first_input is not None for pair in pairs for r in pair)
     header, runs = ab_table.read(out)
     assert [a["env"] for a in header["arms"]] == [[], ["RROSFUZZ_BENCH_AB_TEST=1"]]

@@ -201,6 +201,40 @@ def test_a_campaign_given_no_seed_prints_the_one_it_drew_and_that_seed_repeats_i
     assert len(kept[0]) > 100 and kept[2] == kept[0]
 
 
+def test_the_last_seed_flag_is_the_campaigns_as_libfuzzer_takes_it(tmp_path: Path) -> None:
+    """libFuzzer keeps the last of two ``-seed`` flags; the harness took the first, so
+    ``-seed=3 -seed=11`` ran libFuzzer's choices of seed 11 with the harness's of seed 3, a
+    campaign neither seed repeats. Now both take the last: the same corpus as ``-seed=11``."""
+    kept = []
+    for name, seeds in (("twice", ("-seed=3", "-seed=11")), ("once", ("-seed=11",))):
+        corpus = tmp_path / name / "corpus"
+        run = fuzz(str(corpus), "--op=fk", "-runs=600", f"--artifacts={tmp_path / name / 'art'}", *seeds)
+        assert run.returncode == 0, run.stderr[-2000:]
+        records = [json.loads(line) for line in (tmp_path / name / "art" / STATS).read_text().splitlines()]
+        assert records and all(r["seed"] == {"libfuzzer": 11, "harness": 11} for r in records)
+        kept.append(sorted(p.name for p in corpus.iterdir() if p.is_file()))
+    assert len(kept[0]) > 100 and kept[0] == kept[1]
+
+
+def test_flags_read_as_libfuzzer_reads_them_the_last_one_wins(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from fuzzer import processes
+
+    monkeypatch.delenv(processes.CHILD_ENV, raising=False)
+    assert processes.flag_value(("-seed=3", "-runs=9", "-seed=11"), "-seed") == "11"
+    assert processes.flag_value(("-runs=9",), "-seed") is None
+    assert processes.libfuzzer_seed(("-seed=3", "-seed=11")) == 11
+    assert processes.libfuzzer_seed(("-seed=3", "-seed=0")) is None  # libFuzzer draws
+    assert processes.int_flag(("-jobs=2", "-jobs=0"), "-jobs", 5) == 0
+    assert not processes.supervises(("-fork=2", "-fork=0"))
+    folder = tmp_path / "corpus"
+    folder.mkdir()
+    flags, seed = processes.drawn_seed(("-seed=3", "-seed=0"), (folder,))  # libFuzzer would draw
+    assert seed is not None and flags == (f"-seed={seed}",)
+    assert processes.drawn_seed(("-seed=0", "-seed=3"), (folder,)) == (("-seed=0", "-seed=3"), None)
+
+
 def test_a_seed_is_drawn_only_for_a_campaign_of_one_process(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
