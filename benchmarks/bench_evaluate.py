@@ -2,6 +2,7 @@
 
     taskset -c 1 .venv/bin/python -m benchmarks.bench_evaluate --ops fk move
     taskset -c 1 .venv/bin/python -m benchmarks.bench_evaluate --ops fk move --plain
+    taskset -c 1 .venv/bin/python -m benchmarks.bench_evaluate --ops fk move --decompose
     taskset -c 1 .venv/bin/python -m benchmarks.bench_evaluate --ops scenario --corpus corpus-scenario/
 
 A campaign spends each input on libFuzzer, the mutator, the encoding, the features and the
@@ -12,6 +13,15 @@ IK memory emptied before each pass over them, so that ``ik`` measures solving), 
 twin and the oracle instrumented by Atheris as in a campaign and the float-comparison tracer's
 per-input budget, or without instrumentation (``--plain``). No campaign can run more single
 inputs a second than this. Prints the median over ``--rounds`` rounds of ``--seconds`` each.
+
+``--decompose`` splits instrumentation's cost (one op at a time, instrumented): in each round
+the same seeds run under four settings in turn, so that the machine's drift falls on all four:
+as a campaign; the float tracer's budget 0 (its guard alone, the baselines' setting); Atheris'
+edge callback (``atheris._trace_branch``, a pybind11 function the instrumented code looks up on
+the module at each edge) swapped for a C builtin that does nothing (``abs``), the least any
+edge callback can cost, so the bound of what a cheaper one could gain (nothing is counted: not
+a setting to fuzz with); and both. It prints the edges and float comparisons an evaluation
+makes, then each setting's median rate.
 
 ``--corpus DIR`` evaluates the test cases in a folder instead (a campaign's corpus, one op):
 the seeds of a scenario campaign mostly agree, while the inputs a campaign keeps diverge more
@@ -91,6 +101,66 @@ def rate(
     return rates
 
 
+SETTINGS = ("as a campaign", "float tracer's guard alone", "edge callback at a C no-op's cost", "both")
+"""``--decompose``'s settings, in the order each round runs them."""
+
+
+def decompose(op: str, rounds: int, seconds: float, seed: int) -> dict[str, list[float]]:
+    """Evaluations a second under each of :data:`SETTINGS` (instrumented), one figure per round."""
+    import atheris
+
+    from fuzzer.selection.floatcmp import PER_INPUT, FloatCompareTracer
+    from fuzzer.selection.guidance import Features
+    from fuzzer.selection.instrument import instrument
+
+    config = RunConfig(op=op, tolerance=default_tolerance(op))
+    instrument(config)
+    tracer = FloatCompareTracer(Features())
+    session = Session.open(config)
+    evaluator = session.evaluator()
+    cases = corpus.make_seeds(session, 64, seed)
+    branch = atheris._trace_branch
+
+    def one_pass(budget: int) -> None:
+        IK_MEMO.clear()
+        for case in cases:
+            tracer.install(budget)
+            evaluator.evaluate(case)
+
+    edges = [0]
+
+    def counting(index: int) -> None:
+        edges[0] += 1
+        branch(index)
+
+    one_pass(PER_INPUT)  # warm-up (first calls fill caches)
+    atheris._trace_branch = counting
+    before = tracer.traced
+    try:
+        one_pass(10**9)  # every edge and every float comparison counted
+    finally:
+        atheris._trace_branch = branch
+    print(
+        f"{op}: per evaluation, {edges[0] / len(cases):,.0f} edge callbacks and "
+        f"{(tracer.traced - before) / len(cases):,.0f} float comparisons (the first {PER_INPUT} traced)"
+    )
+    rates: dict[str, list[float]] = {name: [] for name in SETTINGS}
+    for _ in range(rounds):
+        for name in SETTINGS:
+            cheap = name in (SETTINGS[2], SETTINGS[3])
+            budget = 0 if name in (SETTINGS[1], SETTINGS[3]) else PER_INPUT
+            atheris._trace_branch = abs if cheap else branch
+            start, n = time.perf_counter(), 0
+            try:
+                while time.perf_counter() - start < seconds:
+                    one_pass(budget)
+                    n += len(cases)
+            finally:
+                atheris._trace_branch = branch
+            rates[name].append(n / (time.perf_counter() - start))
+    return rates
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -106,8 +176,24 @@ def main() -> None:
         metavar="DIR",
         help="evaluate the test cases in DIR (a campaign's corpus) instead of the seeds; one --ops",
     )
+    parser.add_argument(
+        "--decompose",
+        action="store_true",
+        help="split instrumentation's cost: edges and float comparisons per evaluation, and the rate "
+        "as a campaign, with the float tracer's guard alone, with the edge callback at a C no-op's cost",
+    )
     args = parser.parse_args()
     cli.check_sizes(parser, rounds=args.rounds, seconds=args.seconds)
+    if args.decompose and (args.plain or args.corpus is not None):
+        parser.error("--decompose measures the instrumented seeds: not with --plain or --corpus")
+    if args.decompose:
+        print(machine.reference_line("before"))
+        for op in args.ops:
+            for name, rates in decompose(op, args.rounds, args.seconds, args.seed).items():
+                shown = ", ".join(f"{r:,.0f}" for r in rates)
+                print(f"{op} {name}: median {statistics.median(rates):,.0f} evaluations/s (rounds: {shown})")
+        print(machine.reference_line("after"))
+        return
     if args.corpus is not None and (len(args.ops) != 1 or not args.corpus.is_dir()):
         parser.error(
             "--corpus needs one --ops and a folder" + ("" if args.corpus.is_dir() else f": {args.corpus}")

@@ -25,6 +25,7 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_evaluate.main, ["--seconds", "nan"], "--seconds must be a finite number above 0, not nan"),
     (bench_evaluate.main, ["--ops", "scenario", "--corpus", "nosuch"], "and a folder: nosuch"),
     (bench_evaluate.main, ["--ops", "fk", "move", "--corpus", "."], "--corpus needs one --ops"),
+    (bench_evaluate.main, ["--decompose", "--plain"], "--decompose measures the instrumented seeds"),
     (bench_native_cov.main, ["--seeds", "0"], "--seeds must be a finite number above 0, not 0"),
     (bench_native_cov.main, ["--budget", "-1"], "--budget must be a finite number above 0, not -1.0"),
     (bench_zoo.main, ["--mode", "quick", "--seeds", "0"], "--seeds must be a finite number above 0, not 0"),

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 import re
+import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -36,3 +38,21 @@ def test_bench_evaluate_prints_the_reference_around_its_figures(
         "fk plain",
         "# machine reference after",
     ]
+
+
+def test_bench_evaluate_decompose_counts_and_rates_each_setting() -> None:
+    """``--decompose`` (in a process of its own: it instruments the twin and the oracle in place)
+    counts an ``fk`` evaluation's edges and float comparisons and gives each setting a rate."""
+    root = Path(__file__).resolve().parents[1]
+    argv = ["--decompose", "--ops", "fk", "--rounds", "1", "--seconds", "0.05"]
+    run = subprocess.run(
+        [sys.executable, "-m", "benchmarks.bench_evaluate", *argv],
+        cwd=root, capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    counts = re.fullmatch(r"fk: per evaluation, (\d+) edge callbacks and (\d+) float comparisons.*", lines[1])
+    assert counts is not None and int(counts[1]) > 0 and int(counts[2]) > 0, lines
+    rates = [re.fullmatch(r"fk (.+): median ([\d,]+) evaluations/s .*", line) for line in lines[2:-1]]
+    assert [m[1] for m in rates if m] == list(bench_evaluate.SETTINGS)
+    assert all(int(m[2].replace(",", "")) > 0 for m in rates if m)
