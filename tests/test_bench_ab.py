@@ -144,6 +144,10 @@ def test_a_bad_file_is_named(
     assert says in err and str(path) in err and "Traceback" not in err
 
 
+RUNNABLE = ["--arm", "a", ".", "--arm", "b", ".", "X=1", "--bugs", "wrap_past_pi", "--out", "o.jsonl"]
+"""A command line that would run (the cases below add one bad option to it)."""
+
+
 @pytest.mark.parametrize(
     ("argv", "says"),
     [
@@ -155,42 +159,8 @@ def test_a_bad_file_is_named(
         (["--arm", "a", ".", "--arm", "b", "NOSUCH"], "NOSUCH is not an RROSFuzz tree"),
         (["--arm", "a", ".", "--arm", "b", "bare"], "bare has no .venv/bin/python"),
         (["--arm", "a", ".", "--arm", "b", ".", "X=1"], "--bugs and --out are needed"),
-        (
-            [
-                "--arm",
-                "a",
-                ".",
-                "--arm",
-                "b",
-                ".",
-                "X=1",
-                "--bugs",
-                "wrap_past_pi",
-                "--out",
-                "o.jsonl",
-                "--trials",
-                "0",
-            ],
-            "--trials must be a finite number above 0",
-        ),
-        (
-            [
-                "--arm",
-                "a",
-                ".",
-                "--arm",
-                "b",
-                ".",
-                "X=1",
-                "--bugs",
-                "wrap_past_pi",
-                "--out",
-                "o.jsonl",
-                "--first-seed",
-                "0",
-            ],
-            "--first-seed must be 1 or more, not 0 (libFuzzer takes -seed=0",
-        ),
+        ([*RUNNABLE, "--trials", "0"], "--trials must be a finite number above 0"),
+        ([*RUNNABLE, "--first-seed", "0"], "--first-seed must be 1 or more, not 0 (libFuzzer takes -seed=0"),
     ],
 )
 def test_a_bad_command_line_is_named_before_anything_runs(
