@@ -9,7 +9,7 @@ MODULES := build/python-modules.txt
 $(shell mkdir -p build && find fuzzer python_impl robot_api native adapters -name '*.py' -not -path '*/__pycache__/*' \
 	| LC_ALL=C sort > build/python-modules.new && (cmp -s build/python-modules.new $(MODULES) \
 	|| mv build/python-modules.new $(MODULES)); rm -f build/python-modules.new)
-BUILD_INPUTS := $(shell find native/src -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh \
+BUILD_INPUTS := $(shell find native/src fuzzer -name '*.cpp' -o -name '*.hpp') CMakeLists.txt pyproject.toml scripts/setup.sh \
 	constraints.txt \
 	$(MODULES)
 

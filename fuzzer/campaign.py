@@ -52,6 +52,7 @@ from fuzzer.processes import (
     supervises,
 )
 from fuzzer.processes import deadline as child_deadline
+from fuzzer.selection import fastcov
 from fuzzer.selection.instrument import instrument
 from fuzzer.selection.search import search_parts
 
@@ -292,8 +293,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     once = on_exit(finish)
     in_callback = [False]
+    edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
 
     def test_one_input(data: bytes) -> None:
+        if not edge_callback:  # atheris.Fuzz() has put its core module's _trace_branch in place
+            edge_callback.append(fastcov.install(atheris))
+            if edge_callback[0] is not None:
+                reporting.info(f"Atheris' own edge callback kept (slower): {edge_callback[0]}")
         if not data:
             return  # libFuzzer always runs the empty input first: not a test case, not counted
         if deadline is not None and time.time() >= deadline:
