@@ -15,13 +15,17 @@ per-input budget, or without instrumentation (``--plain``). No campaign can run 
 inputs a second than this. Prints the median over ``--rounds`` rounds of ``--seconds`` each.
 
 ``--decompose`` splits instrumentation's cost (one op at a time, instrumented): in each round
-the same seeds run under four settings in turn, so that the machine's drift falls on all four:
-as a campaign; the float tracer's budget 0 (its guard alone, the baselines' setting); Atheris'
-edge callback (``atheris._trace_branch``, a pybind11 function the instrumented code looks up on
-the module at each edge) swapped for a C builtin that does nothing (``abs``), the least any
-edge callback can cost, so the bound of what a cheaper one could gain (nothing is counted: not
-a setting to fuzz with); and both. It prints the edges and float comparisons an evaluation
-makes, then each setting's median rate.
+the same seeds run under five settings in turn, so that the machine's drift falls on all five:
+with Atheris' own edge callback (``atheris._trace_branch`` of its core module, a pybind11
+function the instrumented code looks up on the module at each edge; a campaign's until the
+fifty-second session); the float tracer's budget 0 (its guard alone, the baselines' setting);
+the edge callback swapped for a C builtin that does nothing (``abs``), the least any edge
+callback can cost, so the bound of what a cheaper one could gain (nothing is counted: not a
+setting to fuzz with); both; and as a campaign runs now, with ``fuzzer.selection.fastcov``'s
+edge callback. Atheris' core module is imported, as ``atheris.Fuzz()`` does, for its callback
+(outside a campaign its counters are not allocated, so the increments do nothing; the calls
+cost what they cost). It prints the edges and float comparisons an evaluation makes, then each
+setting's median rate.
 
 ``--corpus DIR`` evaluates the test cases in a folder instead (a campaign's corpus, one op):
 the seeds of a scenario campaign mostly agree, while the inputs a campaign keeps diverge more
@@ -101,7 +105,13 @@ def rate(
     return rates
 
 
-SETTINGS = ("as a campaign", "float tracer's guard alone", "edge callback at a C no-op's cost", "both")
+SETTINGS = (
+    "with Atheris' own edge callback",
+    "float tracer's guard alone",
+    "edge callback at a C no-op's cost",
+    "both",
+    "as a campaign (the fast edge callback)",
+)
 """``--decompose``'s settings, in the order each round runs them."""
 
 
@@ -119,7 +129,18 @@ def decompose(op: str, rounds: int, seconds: float, seed: int) -> dict[str, list
     session = Session.open(config)
     evaluator = session.evaluator()
     cases = corpus.make_seeds(session, 64, seed)
-    branch = atheris._trace_branch
+    # as atheris.Fuzz() does: its core module's pybind11 _trace_branch (counters not allocated
+    # outside a campaign, so Atheris' increment does nothing; the calls cost what they cost)
+    import atheris.core_with_libfuzzer as core
+
+    from fuzzer.selection import fastcov
+
+    atheris._trace_branch = branch = core._trace_branch
+    why = fastcov.install(atheris)
+    if why is not None:
+        raise SystemExit(f"bench_evaluate --decompose: the fast edge callback: {why}")
+    fast = atheris._trace_branch
+    atheris._trace_branch = branch
 
     def one_pass(budget: int) -> None:
         IK_MEMO.clear()
@@ -149,7 +170,7 @@ def decompose(op: str, rounds: int, seconds: float, seed: int) -> dict[str, list
         for name in SETTINGS:
             cheap = name in (SETTINGS[2], SETTINGS[3])
             budget = 0 if name in (SETTINGS[1], SETTINGS[3]) else PER_INPUT
-            atheris._trace_branch = abs if cheap else branch
+            atheris._trace_branch = abs if cheap else fast if name == SETTINGS[4] else branch
             start, n = time.perf_counter(), 0
             try:
                 while time.perf_counter() - start < seconds:

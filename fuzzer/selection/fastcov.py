@@ -33,7 +33,9 @@ def install(atheris: Any = None) -> str | None:
         None once installed (or already); else why not (Atheris' function is left in place).
     """
     if atheris is None:
-        import atheris
+        import atheris as module
+
+        atheris = module
     try:
         from fuzzer.selection import _fastcov  # type: ignore[attr-defined]
     except ImportError as exc:
