@@ -7,7 +7,8 @@
 // few (BENCHMARKS.md, "Instrumentation's cost, split"). This module finds that
 // same C++ function in the core module already loaded (dlopen with RTLD_NOLOAD,
 // dlsym of its mangled name) and calls it from a METH_O builtin: the same counters
-// bumped, the same index range checks (Atheris' own), without the dispatch.
+// bumped, by Atheris' own code (nothing before its counters are allocated, an index
+// past them wrapped), without the dispatch.
 // `fuzzer.selection.fastcov` is its Python facade.
 //
 // Plain CPython API, no pybind11: its dispatch is what this saves.
