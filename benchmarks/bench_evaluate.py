@@ -70,39 +70,50 @@ def corpus_cases(session: Session, directory: Path) -> list[TestCase]:
     return cases
 
 
+class Seeds:
+    """One op's session, evaluator and test cases (the seeds, or ``corpus_dir``'s), the twin and
+    the oracle instrumented by Atheris with the float tracer as in a campaign if ``instrumented``."""
+
+    def __init__(self, op: str, instrumented: bool, seed: int, corpus_dir: Path | None = None) -> None:
+        config = RunConfig(op=op, tolerance=default_tolerance(op))
+        self.tracer = None
+        if instrumented:
+            from fuzzer.selection.floatcmp import FloatCompareTracer
+            from fuzzer.selection.guidance import Features
+            from fuzzer.selection.instrument import instrument
+
+            instrument(config)
+            self.tracer = FloatCompareTracer(Features())
+        session = Session.open(config)
+        self.evaluator = session.evaluator()
+        self.cases = (
+            corpus.make_seeds(session, 64, seed) if corpus_dir is None else corpus_cases(session, corpus_dir)
+        )
+
+    def one_pass(self, budget: int | None = None) -> None:
+        """Evaluate every case once; the tracer gets ``budget`` (its own by default) per input."""
+        IK_MEMO.clear()  # each pass solves its IK problems, as the first did
+        for case in self.cases:
+            if self.tracer is not None:
+                self.tracer.install(budget)  # a fresh budget per input, as the harness does
+            self.evaluator.evaluate(case)
+
+    def timed(self, seconds: float, budget: int | None = None) -> float:
+        """Evaluations a second over whole passes for at least ``seconds``."""
+        start, n = time.perf_counter(), 0
+        while time.perf_counter() - start < seconds:
+            self.one_pass(budget)
+            n += len(self.cases)
+        return n / (time.perf_counter() - start)
+
+
 def rate(
     op: str, instrumented: bool, rounds: int, seconds: float, seed: int, corpus_dir: Path | None = None
 ) -> list[float]:
     """Evaluations a second, one figure per round (of the seeds, or of ``corpus_dir``'s test cases)."""
-    config = RunConfig(op=op, tolerance=default_tolerance(op))
-    tracer = None
-    if instrumented:
-        from fuzzer.selection.floatcmp import FloatCompareTracer
-        from fuzzer.selection.guidance import Features
-        from fuzzer.selection.instrument import instrument
-
-        instrument(config)
-        tracer = FloatCompareTracer(Features())
-    session = Session.open(config)
-    evaluator = session.evaluator()
-    cases = corpus.make_seeds(session, 64, seed) if corpus_dir is None else corpus_cases(session, corpus_dir)
-
-    def one_pass() -> None:
-        IK_MEMO.clear()  # each pass solves its IK problems, as the first did
-        for case in cases:
-            if tracer is not None:
-                tracer.install()  # a fresh budget per input, as the harness does
-            evaluator.evaluate(case)
-
-    one_pass()  # warm-up
-    rates = []
-    for _ in range(rounds):
-        start, n = time.perf_counter(), 0
-        while time.perf_counter() - start < seconds:
-            one_pass()
-            n += len(cases)
-        rates.append(n / (time.perf_counter() - start))
-    return rates
+    seeds = Seeds(op, instrumented, seed, corpus_dir)
+    seeds.one_pass()  # warm-up
+    return [seeds.timed(seconds) for _ in range(rounds)]
 
 
 SETTINGS = (
@@ -119,66 +130,54 @@ def decompose(op: str, rounds: int, seconds: float, seed: int) -> dict[str, list
     """Evaluations a second under each of :data:`SETTINGS` (instrumented), one figure per round."""
     import atheris
 
-    from fuzzer.selection.floatcmp import PER_INPUT, FloatCompareTracer
-    from fuzzer.selection.guidance import Features
-    from fuzzer.selection.instrument import instrument
+    from fuzzer.selection import fastcov
+    from fuzzer.selection.floatcmp import PER_INPUT
 
-    config = RunConfig(op=op, tolerance=default_tolerance(op))
-    instrument(config)
-    tracer = FloatCompareTracer(Features())
-    session = Session.open(config)
-    evaluator = session.evaluator()
-    cases = corpus.make_seeds(session, 64, seed)
+    seeds = Seeds(op, True, seed)
+    assert seeds.tracer is not None
     # as atheris.Fuzz() does: its core module's pybind11 _trace_branch (counters not allocated
     # outside a campaign, so Atheris' increment does nothing; the calls cost what they cost)
     import atheris.core_with_libfuzzer as core
-
-    from fuzzer.selection import fastcov
 
     atheris._trace_branch = branch = core._trace_branch
     why = fastcov.install(atheris)
     if why is not None:
         raise SystemExit(f"bench_evaluate --decompose: the fast edge callback: {why}")
     fast = atheris._trace_branch
-    atheris._trace_branch = branch
-
-    def one_pass(budget: int) -> None:
-        IK_MEMO.clear()
-        for case in cases:
-            tracer.install(budget)
-            evaluator.evaluate(case)
-
+    settings = dict(
+        zip(
+            SETTINGS,
+            ((branch, PER_INPUT), (branch, 0), (abs, PER_INPUT), (abs, 0), (fast, PER_INPUT)),
+            strict=True,
+        )
+    )  # each setting's edge callback and float tracer budget
     edges = [0]
 
     def counting(index: int) -> None:
         edges[0] += 1
         branch(index)
 
-    one_pass(PER_INPUT)  # warm-up (first calls fill caches)
+    atheris._trace_branch = branch
+    seeds.one_pass(PER_INPUT)  # warm-up (first calls fill caches)
     atheris._trace_branch = counting
-    before = tracer.traced
+    before = seeds.tracer.traced
     try:
-        one_pass(10**9)  # every edge and every float comparison counted
+        seeds.one_pass(10**9)  # every edge and every float comparison counted
     finally:
         atheris._trace_branch = branch
+    cases = len(seeds.cases)
     print(
-        f"{op}: per evaluation, {edges[0] / len(cases):,.0f} edge callbacks and "
-        f"{(tracer.traced - before) / len(cases):,.0f} float comparisons (the first {PER_INPUT} traced)"
+        f"{op}: per evaluation, {edges[0] / cases:,.0f} edge callbacks and "
+        f"{(seeds.tracer.traced - before) / cases:,.0f} float comparisons (the first {PER_INPUT} traced)"
     )
     rates: dict[str, list[float]] = {name: [] for name in SETTINGS}
     for _ in range(rounds):
-        for name in SETTINGS:
-            cheap = name in (SETTINGS[2], SETTINGS[3])
-            budget = 0 if name in (SETTINGS[1], SETTINGS[3]) else PER_INPUT
-            atheris._trace_branch = abs if cheap else fast if name == SETTINGS[4] else branch
-            start, n = time.perf_counter(), 0
+        for name, (callback, budget) in settings.items():
+            atheris._trace_branch = callback
             try:
-                while time.perf_counter() - start < seconds:
-                    one_pass(budget)
-                    n += len(cases)
+                rates[name].append(seeds.timed(seconds, budget))
             finally:
                 atheris._trace_branch = branch
-            rates[name].append(n / (time.perf_counter() - start))
     return rates
 
 
@@ -201,7 +200,8 @@ def main() -> None:
         "--decompose",
         action="store_true",
         help="split instrumentation's cost: edges and float comparisons per evaluation, and the rate "
-        "as a campaign, with the float tracer's guard alone, with the edge callback at a C no-op's cost",
+        "with Atheris' own edge callback, with the float tracer's guard alone, with the edge callback "
+        "at a C no-op's cost, with both, and as a campaign (the fast edge callback)",
     )
     args = parser.parse_args()
     cli.check_sizes(parser, rounds=args.rounds, seconds=args.seconds)
