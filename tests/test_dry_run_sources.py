@@ -101,8 +101,9 @@ def _stages(op: str, seed: int = 1, wanted: int = 8) -> dry_run.Stages:
 def test_the_dry_run_sweeps_do_not_import_scipy_stats_or_numpy_random() -> None:
     """They run before the campaign imports scipy.stats (0.55 s on one CPU): a sweep of the dry
     run and its uniform and aligned configurations must not pull it in. The first stage's
-    inputs (a first sweep without centres, a move's first stage) must not import numpy.random
-    either (7-10 ms, which the first input would wait for)."""
+    inputs (a first sweep without centres, a move's first stage, a scenario's tutorial and
+    uniform scripts) must not import numpy.random either (7-11 ms, which the first input would
+    wait for)."""
     program = """
 import sys
 from fuzzer import dry_harness, dry_run
@@ -111,7 +112,7 @@ from fuzzer.generation.corpus import make_seeds
 session = Session.open(RunConfig(op="fk"))
 sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
 sweep.run([r.model for r in session.evaluator().runners], [])
-for op in ("fk", "move"):
+for op in ("fk", "move", "scenario"):
     dry_run.Stages(Session.open(RunConfig(op=op)), "rrosfuzz", 1, 4, 0, None).first_cases()
 first_stage = "numpy.random" in sys.modules
 move = Session.open(RunConfig(op="move"))

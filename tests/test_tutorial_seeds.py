@@ -61,22 +61,34 @@ def test_the_scripts_repeat_with_their_seed_and_fit_max_steps() -> None:
     assert tutorial_seeds(Session.open(RunConfig(op="move")), 0) == []
 
 
-@pytest.mark.parametrize("robot", ["probot_anno", "kinova"])
-def test_correct_targets_report_no_divergence_on_the_scripts(robot: str) -> None:
-    """The Cartesian paths are followed to their end and the moves succeed, on both targets,
-    and nothing they show is counted as a finding."""
+@pytest.mark.parametrize("robot", ["probot_anno", "kinova", "ur5"])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_correct_targets_report_no_divergence_on_the_scripts(robot: str, seed: int) -> None:
+    """Nothing the scripts show is counted as a finding: where a Cartesian path stops short or
+    a move fails, both targets do alike."""
     session = scenario_session(robot)
     evaluator = session.evaluator()
-    for case in tutorial_seeds(session, 0):
-        evaluation = evaluator.evaluate(case)
-        comparison = evaluation.comparison
+    for case in tutorial_seeds(session, seed):
+        comparison = evaluator.evaluate(case).comparison
         assert not comparison.divergent or comparison.kind in UNCOUNTED, (robot, case.sequence, comparison)
-        a, _ = evaluation.outcomes
+
+
+def test_the_shipped_scripts_are_followed_to_their_end() -> None:
+    """``corpus-scenario/``'s scripts (the default robot, ``-seed`` 0): their Cartesian paths
+    are followed to the end and every ``/plan``, ``/go`` and ``/execute`` succeeds, so they
+    reach what the scaling-factor tests below look at. Not every seed's do: a straight line
+    between two reachable poses may stop short (over seeds 0-29 on PROBOT Anno, Kinova and
+    UR5, 9 of 360 scripts; with numpy's PCG64 stream, used until 2026-12-05, 15), so only the
+    shipped ones are held to it."""
+    session = scenario_session()
+    evaluator = session.evaluator()
+    for case in tutorial_seeds(session, 0):
+        a, _ = evaluator.evaluate(case).outcomes
         for step, outcome in zip(case.message["steps"], a.steps, strict=True):
             if step["topic"] == "/cartesian_path":
-                assert outcome.values["fraction"] == (1.0,), (robot, case.sequence)
+                assert outcome.values["fraction"] == (1.0,), case.sequence
             if step["topic"] in ("/plan", "/go", "/execute"):
-                assert outcome.values["success"] == (1.0,), (robot, case.sequence, step["topic"])
+                assert outcome.values["success"] == (1.0,), (case.sequence, step["topic"])
 
 
 @pytest.mark.parametrize(
