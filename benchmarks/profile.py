@@ -101,10 +101,11 @@ def tabulate(lines: Iterable[str]) -> Counter[str]:
         line = line.rstrip("\n")
         if not line.strip():
             continue
-        stack, _, count = line.rpartition(" ")
-        if not stack or not count.isdigit():
+        stack, space, count = line.rpartition(" ")
+        if not space or not count.isdigit():
             raise ProfileError(f"line {number}: not 'frame;frame;... count': {line[:80]!r}")
-        counts[part_of_stack(stack.split(";"))] += int(count)
+        # an empty stack (' 1'): py-spy caught the process with no Python frame on it
+        counts[part_of_stack(stack.split(";") if stack else [])] += int(count)
     return counts
 
 
@@ -163,7 +164,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seconds", type=float, default=30.0, help="campaign length (s)")
     parser.add_argument("--seed", type=int, default=1, help="the campaign's -seed")
     parser.add_argument("--rate", type=int, default=200, help="samples a second")
-    parser.add_argument("--out", type=Path, help="where the raw profile goes (default: build/profiles/)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        help="where the raw profile goes: a file, or a folder for the default name (default build/profiles/)",
+    )
     parser.add_argument("--from", dest="source", type=Path, help="tabulate this raw profile instead")
     args = parser.parse_args(argv)
     if args.seconds <= 0 or args.rate <= 0:
@@ -171,7 +176,10 @@ def main(argv: list[str] | None = None) -> None:
     if args.source is not None:
         path, title = args.source, args.source.name
     else:
-        path = args.out or ROOT / "build" / "profiles" / f"profile-{args.op}-seed{args.seed}.txt"
+        name = f"profile-{args.op}-seed{args.seed}.txt"
+        path = args.out or ROOT / "build" / "profiles" / name
+        if path.is_dir():
+            path = path / name
         path.parent.mkdir(parents=True, exist_ok=True)
         title = f"{args.op}, {args.seconds:g} s, seed {args.seed}"
         record(args.op, args.seconds, args.seed, args.rate, path)

@@ -70,6 +70,13 @@ def test_tabulate_and_markdown() -> None:
     ]
 
 
+def test_a_sample_with_no_python_frame_counts_in_the_rest() -> None:
+    # py-spy writes ' 1' for a sample that caught the process with no Python frame on it
+    assert tabulate([" 2\n", ";".join(stack()) + " 3\n"]) == {REST: 5}
+    with pytest.raises(ProfileError, match="line 1"):
+        tabulate(["7"])
+
+
 def test_a_broken_profile_is_named_not_a_traceback(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -98,6 +105,21 @@ def test_a_failed_recording_is_an_error_not_an_old_profile(
     with pytest.raises(SystemExit, match="py-spy wrote no profile"):
         profile.record("fk", 1.0, 1, 200, out)
     assert not out.exists()
+
+
+def test_a_folder_as_out_gets_the_default_name_inside_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    recorded: list[Path] = []
+
+    def fake_record(op: str, seconds: float, seed: int, rate: int, out: Path) -> None:
+        recorded.append(out)
+        out.write_text(";".join(stack()) + " 3\n")
+
+    monkeypatch.setattr(profile, "record", fake_record)
+    profile.main(["--op", "move", "--seed", "4", "--seconds", "1", "--out", str(tmp_path)])
+    assert recorded == [tmp_path / "profile-move-seed4.txt"]
+    assert "| part (% of 3 samples) |" in capsys.readouterr().out
 
 
 @pytest.mark.slow
