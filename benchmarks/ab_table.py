@@ -37,18 +37,44 @@ def read(path: Path) -> tuple[dict[str, Any], list[tuple[str, Run]]]:
         header = json.loads(complete[0]) if complete else None
         if not isinstance(header, dict) or header.get("format") != FORMAT:
             raise ValueError("its first line is not a bench_ab header")
+        _check_header(header)
         names = [arm["name"] for arm in header["arms"]]
-        if len(names) != 2 or not all(isinstance(n, str) for n in names):
-            raise ValueError("its header does not name two arms")
         runs = []
         for number, line in enumerate(complete[1:], 2):
             row = json.loads(line)
             if not isinstance(row, dict) or row.get("arm") not in names:
                 raise ValueError(f"line {number} is not a trial of one of the arms")
             runs.append(("a" if row["arm"] == names[0] else "b", journal.run_of(row)))
-    except (ValueError, TypeError, KeyError) as exc:
+    except (ValueError, TypeError, KeyError, RecursionError) as exc:
         raise ValueError(f"{path}: not a bench_ab file ({exc})") from exc
     return header, runs
+
+
+def _check_header(header: dict[str, Any]) -> None:
+    """Raise ValueError naming the first field of a bench_ab header that is not as this tool
+    writes it (two arms with a name, root, commit and env; two engines; a budget; a machine)."""
+    arms = header.get("arms")
+    if not isinstance(arms, list) or len(arms) != 2 or not all(isinstance(arm, dict) for arm in arms):
+        raise ValueError("its header does not name two arms")
+    for arm in arms:
+        for key in ("name", "root", "commit"):
+            if not isinstance(arm.get(key), str):
+                raise ValueError(f"its header's arm {key} is not a string")
+        env = arm.get("env")
+        if not isinstance(env, list) or not all(isinstance(item, str) for item in env):
+            raise ValueError("its header's arm env is not a list of strings")
+    engines = header.get("engines")
+    if not isinstance(engines, list) or len(engines) != 2 or not all(isinstance(e, str) for e in engines):
+        raise ValueError("its header does not name two engines")
+    budget = header.get("budget")
+    if (
+        isinstance(budget, bool)
+        or not isinstance(budget, (int, float))
+        or not journal.seconds_ok(budget, "> 0")
+    ):
+        raise ValueError(f"its header's budget {budget!r} is not a finite number of seconds above 0")
+    if not isinstance(header.get("machine"), str):
+        raise ValueError("its header does not name the machine")
 
 
 POOLED = ("engines", "budget")

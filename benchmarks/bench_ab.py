@@ -136,7 +136,9 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
     arms = _arms(parser, args)
     if not args.bugs or args.out is None:
         parser.error("--bugs and --out are needed to run (or --from-json FILE to tabulate)")
-    cli.check_sizes(parser, trials=args.trials, budget=args.budget)
+    cli.check_sizes(parser, trials=args.trials)
+    cli.check_campaign_seconds(parser, budget=args.budget)
+    cli.check_unique(parser, bugs=args.bugs)
     if args.first_seed < 1:
         parser.error(
             f"--first-seed must be 1 or more, not {args.first_seed} (libFuzzer takes -seed=0 as "
@@ -211,10 +213,20 @@ def _open(
     for key in ("arms", "engines", "budget", "machine", "serial"):
         if held.get(key, False) != json.loads(json.dumps(header[key])):  # as the file holds it
             parser.error(f"{out}: another test ({key}: {held.get(key)!r}, here {header[key]!r})")
+    _cut_partial_line(out)
     by_pair: dict[tuple[str, int], dict[str, Run]] = {}
     for side, run in runs:
         by_pair.setdefault((run.bug, run.seed), {})[side] = run
     return {pair: [both["a"], both["b"]] for pair, both in by_pair.items() if len(both) == 2}
+
+
+def _cut_partial_line(out: Path) -> None:
+    """Drop a last line cut short (a process killed while writing it; ``read`` leaves it out and
+    its pair runs again), so the next pair appended starts a line of its own."""
+    with out.open("r+b") as handle:
+        data = handle.read()
+        if data and not data.endswith(b"\n"):
+            handle.truncate(data.rfind(b"\n") + 1)
 
 
 def _flat(done: dict[Any, list[Run]]) -> list[tuple[str, Run]]:

@@ -117,7 +117,11 @@ def main(argv: list[str] | None = None) -> list[Run]:
     parser.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2: one per core)")
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
     parser.add_argument(
-        "--results", type=Path, default=RESULTS, help="folder for deep-<mode>.json and .png (%(default)s)"
+        "--results",
+        type=Path,
+        default=None,
+        help=f"folder for deep-<mode>.json and .png ({RESULTS}; with --from-json, no plot is written "
+        "unless --results or --write-md is given)",
     )
     sweeps.add_arguments(parser, "--results' deep-<mode>.jsonl")
     parser.add_argument(
@@ -139,7 +143,12 @@ def main(argv: list[str] | None = None) -> list[Run]:
     )
     if mode.engines[0] != "full":
         parser.error("the first engine must be 'full' (the one compared against the others)")
-    cli.check_sizes(parser, trials=args.trials, budget=args.budget)
+    cli.check_sizes(parser, trials=args.trials)
+    cli.check_campaign_seconds(parser, budget=args.budget)
+    cli.check_unique(parser, bugs=args.bugs, engines=args.engines)
+    # tabulating a file writes a plot only where asked: not over the tables' own deep-<mode>.png
+    args.plot = args.from_json is None or args.write_md or args.results is not None
+    args.results = args.results or RESULTS
     if args.first_seed < 0:
         parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
     args.stem = f"deep-{args.mode}"
@@ -165,7 +174,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
                 max(float(r.budget) for r in runs),
                 tuple(sorted({r.engine for r in runs}, key=lambda e: (e != "full", ALL_ENGINES.index(e)))),
             )
-        except (OSError, ValueError, TypeError, AttributeError) as exc:
+        except (OSError, ValueError, TypeError, AttributeError, RecursionError) as exc:
             parser.error(f"{args.from_json}: not a bench_deep results file ({exc})")
         if mode.engines[0] != "full":
             parser.error(f"{args.from_json}: no runs of the full engine")
@@ -230,7 +239,8 @@ def _report(
     ``note``), and with --write-md put them into BENCHMARKS.md."""
     if copy:  # the results folder: made by main's check_folder
         (args.results / f"{args.stem}.json").write_text(json.dumps([asdict(r) for r in runs], indent=1))
-    plot(runs, mode, args.results / f"{args.stem}.png")
+    if args.plot:
+        plot(runs, mode, args.results / f"{args.stem}.png")
     cmd = "python -m benchmarks.bench_deep " + " ".join(sys.argv[1:] if argv is None else argv)
     text = note + markdown(runs, mode, cmd.strip(), args.jobs if copy else None)
     print(text)

@@ -103,11 +103,17 @@ def main() -> None:
     )
     parser.add_argument("--seconds", type=int, default=20)
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
-    parser.add_argument("--ops", nargs="+", default=["fk", "move", "ik"])
+    parser.add_argument(
+        "--ops", nargs="+", default=["fk", "move", "ik"], choices=("fk", "move", "ik", "scenario")
+    )
     parser.add_argument("--mutator", default=None, help="pass --mutator to fuzz_diff.py (e.g. weights)")
     parser.add_argument("--sweep", action="store_true", help="measure the batched FK path alone")
     args = parser.parse_args()
     cli.check_sizes(parser, seconds=args.seconds)
+    if min(args.seeds) < 1:
+        parser.error(
+            f"--seeds must be 1 or more (libFuzzer takes -seed=0 as the clock's seed), not {min(args.seeds)}"
+        )
     cpus = len(os.sched_getaffinity(0))
     print(machine.reference_line("before"))
     if args.sweep:

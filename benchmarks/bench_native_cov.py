@@ -173,11 +173,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--configs", default=",".join(CONFIGS))
     parser.add_argument("--write-md", action="store_true")
     args = parser.parse_args(argv)
-    cli.check_sizes(parser, seeds=args.seeds, budget=args.budget)
+    cli.check_sizes(parser, seeds=args.seeds)
+    cli.check_campaign_seconds(parser, budget=args.budget)
     configs = [c for c in args.configs.split(",") if c]
-    unknown = [c for c in configs if c not in BY_NAME]
-    if unknown:
-        parser.error(f"unknown configuration(s): {', '.join(unknown)}")
+    unknown = [c for c in configs if c not in CONFIGS]
+    if unknown or not configs:  # the table has a row for each of CONFIGS only
+        parser.error(
+            f"--configs: unknown configuration(s) {', '.join(unknown) or '(none given)'}; "
+            f"known: {', '.join(CONFIGS)}"
+        )
+    cli.check_unique(parser, configs=configs)
     native_env()  # fail early when the coverage build is missing
     runs: list[Run] = []
     for seed in range(args.seeds):

@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any
 from unittest import mock
 
+from benchmarks import cli
 from benchmarks.zoo_tables import ROOT, replace_section
 from fuzzer.artifacts.divlog import STATS, read_lines
 from fuzzer.execution.session import RunConfig, Session
@@ -330,15 +331,28 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--write-md", action="store_true", help="update BENCHMARKS.md")
     parser.add_argument("--render", type=Path, default=None, help="only render a saved result (JSON)")
     args = parser.parse_args(argv)
-    if args.runs < 1 or args.seconds <= 0:
-        parser.error("--runs must be >= 1 and --seconds > 0")
+    cli.check_sizes(parser, runs=args.runs)
+    cli.check_campaign_seconds(parser, seconds=args.seconds)
     if args.render is not None:
-        result: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
+        try:
+            result: dict[str, Any] = json.loads(args.render.read_text(encoding="utf-8"))
+            text = markdown(result)
+        except (
+            OSError,
+            UnicodeDecodeError,
+            RecursionError,
+            ValueError,
+            TypeError,
+            LookupError,
+            ArithmeticError,
+        ) as exc:
+            # a saved result is data from anywhere: any shape it does not have is named, not a traceback
+            parser.error(f"{args.render}: not a bench_scenario result ({type(exc).__name__}: {exc})")
     else:
+        cli.check_out_file(parser, args.out)
         result = measure(args.runs, args.seconds, not args.no_campaign)
-        args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(result, indent=1), encoding="utf-8")
-    text = markdown(result)
+        text = markdown(result)
     print(text)
     if args.write_md:
         replace_section(text, MARKS, TITLE)

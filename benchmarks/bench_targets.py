@@ -64,8 +64,10 @@ def main() -> None:
     cli.check_sizes(parser, rounds=args.rounds, repeat=args.repeat)
     try:
         urdf = str(robots.resolve(args.robot))
+        for impl in (native, python_impl):  # a URDF either target refuses: named before any timing
+            impl.RobotModel(urdf)
     except URDFError as exc:
-        parser.error(str(exc))
+        parser.error(f"--robot {args.robot}: {exc}")
     cpus = len(os.sched_getaffinity(0))
     print(
         f"# {platform.machine()}, {cpus} CPU(s) available, robot {args.robot}, "

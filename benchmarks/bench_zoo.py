@@ -343,7 +343,16 @@ def render(parser: argparse.ArgumentParser, path: Path, write_md: bool) -> dict[
         else:
             saved = json.loads(path.read_text(encoding="utf-8"))
         text = note + markdown(saved)
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
+    except (
+        OSError,
+        UnicodeDecodeError,
+        ValueError,
+        KeyError,
+        TypeError,
+        AttributeError,
+        RecursionError,
+        ArithmeticError,
+    ) as exc:
         parser.error(f"{path}: not a bench_zoo result or journal ({type(exc).__name__}: {exc})")
     print(text)
     if write_md:
@@ -396,7 +405,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     args = parser.parse_args(argv)
     sweeps.check_arguments(parser, args)
-    cli.check_sizes(parser, seeds=args.seeds, budget=args.budget)
+    cli.check_sizes(parser, seeds=args.seeds)
+    cli.check_campaign_seconds(parser, budget=args.budget)
+    cli.check_unique(parser, bugs=args.bugs, engines=args.engines)
     if args.render is not None:
         return render(parser, args.render, args.write_md)
     mode = MODES[args.mode]
@@ -423,8 +434,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     jobs = plan_jobs(bugs, engines, seeds, mode.ops, args.first_seed)
     out = args.out or RESULTS / f"{stem}.json"
     keep = args.keep_failures or out.parent / "control-failures"
-    cli.check_folder(parser, out.parent)
+    cli.check_out_file(parser, out)
     path = out.with_suffix(".jsonl")
+    if path == out:
+        parser.error(f"--out {out}: a .jsonl name is the sweep's journal; name the results file .json")
     sweep = journal.Sweep(
         args.mode,
         bugs,

@@ -23,3 +23,34 @@ def check_folder(parser: argparse.ArgumentParser, folder: Path) -> None:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         parser.error(f"{folder}: cannot hold the results ({exc.strerror or exc})")
+
+
+def check_campaign_seconds(parser: argparse.ArgumentParser, **given: float | None) -> None:
+    """The parser's error for a campaign's length (given as in :func:`check_sizes`) that libFuzzer
+    cannot keep: ``-max_total_time`` counts whole seconds, and 0 means no limit at all, so 0.5 s
+    would run a campaign until its trial's timeout and 2.5 s would give the full engine 2 s and the
+    baselines 2.5."""
+    check_sizes(parser, **given)
+    for name, value in given.items():
+        if value is not None and value != int(value):
+            parser.error(
+                f"--{name.replace('_', '-')} must be a whole number of seconds (libFuzzer's "
+                f"-max_total_time), not {value}"
+            )
+
+
+def check_unique(parser: argparse.ArgumentParser, **given: list[str] | tuple[str, ...] | None) -> None:
+    """The parser's error for a name given twice in a list option (``--bugs a a``): a sweep keys its
+    trials by name, so a duplicate would be planned twice and run once."""
+    for name, values in given.items():
+        repeated = sorted({v for v in values or () if list(values or ()).count(v) > 1})
+        if repeated:
+            parser.error(f"--{name.replace('_', '-')} names {', '.join(repeated)} more than once")
+
+
+def check_out_file(parser: argparse.ArgumentParser, path: Path) -> None:
+    """The parser's error when the results file ``path`` cannot be written (a folder, or a folder
+    that cannot be made), before the measurement instead of after it."""
+    if path.is_dir():
+        parser.error(f"{path} is a folder: name the results file")
+    check_folder(parser, path.parent)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import fcntl
 import json
+import math
 import os
 import platform
 import subprocess
@@ -100,6 +101,11 @@ class Sweep:
         return {"journal": format_of(row.pop("tool")), **row}
 
 
+MAX_TRIALS = 10_000
+"""The most trials (or seeds) per cell a journal's header may name: a sweep plans every one of
+them, so a damaged header's 10**7 would fill the memory before anything is read."""
+
+
 def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
     """The sweep a journal's ``header`` (of ``tool``) names; an older header's missing ``ops``,
     ``replay``, ``first_seed`` and ``machine`` are their defaults. A ``bench_zoo`` header's
@@ -140,6 +146,15 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
             good = isinstance(value, kinds[name]) and (name == "replay" or not isinstance(value, bool))
         if not good:
             raise JournalError(f"the header's {name} is missing or not what it should be: {value!r}")
+    if not 1 <= values["trials"] <= MAX_TRIALS or not 0 <= values["first_seed"] <= 2**31:
+        raise JournalError(
+            f"the header's trials {values['trials']!r} or first_seed {values['first_seed']!r} is out of "
+            f"range (trials 1..{MAX_TRIALS})"
+        )
+    if not seconds_ok(values["budget"], "> 0"):
+        raise JournalError(
+            f"the header's budget {values['budget']!r} is not a finite number of seconds above 0"
+        )
     tuples = {k: tuple(values[k]) for k in ("bugs", "engines", "ops")}
     return Sweep(**{**values, **tuples, "budget": float(values["budget"]), "tool": tool})
 
@@ -231,6 +246,19 @@ _KINDS: dict[str, tuple[type, ...]] = {
 """The JSON types each field of a trial may have."""
 
 
+_SECONDS: dict[str, str] = {"budget": "> 0", "elapsed": "> 0", "detected_at": ">= 0", "first_input": ">= 0"}
+"""The times of a trial, and the least each may be (a zero budget or elapsed time would be divided by)."""
+
+
+def seconds_ok(value: float, least: str) -> bool:
+    """Whether ``value`` is a finite number of seconds ``least`` (``'> 0'`` or ``'>= 0'``)."""
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond any float
+        return False
+    return math.isfinite(number) and (number > 0 if least == "> 0" else number >= 0)
+
+
 def run_of(row: Any) -> Run:
     """A trial from its JSON object (fields this version does not know are dropped).
 
@@ -248,6 +276,10 @@ def run_of(row: Any) -> Run:
         if name in fields and (isinstance(fields[name], bool) or not isinstance(fields[name], kinds)):
             names = " or ".join("null" if k is type(None) else k.__name__ for k in kinds)
             raise TypeError(f"{name}: {fields[name]!r} is not {names}")
+    for name, least in _SECONDS.items():
+        value = fields.get(name)
+        if value is not None and not seconds_ok(value, least):
+            raise TypeError(f"{name}: {value!r} is not a finite number of seconds {least}")
     for name in ("replay_misses", "fields"):
         value = fields.get(name, ())
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
@@ -272,7 +304,7 @@ def read(path: Path, tool: str = "bench_deep") -> tuple[dict[str, Any], list[Run
     complete = lines[:-1]  # every line a writer finished ends with a newline
     try:
         header = json.loads(complete[0]) if complete else None
-    except ValueError:
+    except (ValueError, RecursionError):  # RecursionError: JSON nested past the interpreter's limit
         header = None
     if not isinstance(header, dict) or header.get("journal") != format_of(tool):
         raise JournalError(f"{path}: not a {tool} journal (its first line is not the header)")
@@ -280,7 +312,7 @@ def read(path: Path, tool: str = "bench_deep") -> tuple[dict[str, Any], list[Run
     for number, line in enumerate(complete[1:], start=2):
         try:
             runs.append(run_of(json.loads(line)))
-        except (ValueError, TypeError) as exc:
+        except (ValueError, TypeError, RecursionError) as exc:
             raise JournalError(f"{path}, line {number}: not a trial ({exc})") from exc
     return header, runs
 
@@ -311,6 +343,17 @@ def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
             f"checked). Resume from a checkout of that commit (git worktree add DIR COMMIT), or "
             f"--restart"
         )
+
+
+def _aside(path: Path) -> Path:
+    """Where ``--restart`` keeps an unfinished journal: ``<name>.old``, or ``<name>.old.N`` (the
+    first free N from 2) so that a second restart does not overwrite the first one's."""
+    aside = path.with_name(path.name + ".old")
+    number = 2
+    while aside.exists():
+        aside = path.with_name(f"{path.name}.old.{number}")
+        number += 1
+    return aside
 
 
 def _lock_of(path: Path) -> Path:
@@ -389,7 +432,7 @@ def open_sweep(
             if not resume:
                 raise JournalError(
                     f"{path} holds an unfinished sweep: --resume goes on with it, --restart starts "
-                    f"over (keeping it as {path.name}.old)"
+                    f"over (keeping it as {path.name}.old, or .old.N when that is taken)"
                 )
             header, done = read(path, sweep.tool)
             check(path, header, sweep, root)
@@ -397,7 +440,7 @@ def open_sweep(
         if resume:
             raise JournalError(f"nothing to resume: {path} does not exist")
         if path.exists():
-            path.replace(path.with_name(path.name + ".old"))
+            path.replace(_aside(path))
         return Journal(path, sweep, True, lock), []
     except BaseException:
         _lock_of(path).unlink(missing_ok=True)

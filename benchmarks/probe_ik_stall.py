@@ -137,6 +137,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.problems < 1:
         parser.error(f"--problems must be at least 1, got {args.problems}")
+    if args.seed < 0:
+        parser.error(f"--seed must be 0 or more (numpy's generators take no negative seed), got {args.seed}")
     for robot in args.robots:
         try:
             result = probe(robot, args.problems, args.seed)

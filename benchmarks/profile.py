@@ -33,6 +33,7 @@ from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 
+from benchmarks import cli
 from benchmarks.bench_engine import ROOT, campaign_command
 
 SWEEPS = "batched sweeps"
@@ -171,8 +172,8 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--from", dest="source", type=Path, help="tabulate this raw profile instead")
     args = parser.parse_args(argv)
-    if args.seconds <= 0 or args.rate <= 0:
-        parser.error("--seconds and --rate must be positive")
+    cli.check_sizes(parser, rate=args.rate)
+    cli.check_campaign_seconds(parser, seconds=args.seconds)
     if args.source is not None:
         path, title = args.source, args.source.name
     else:
@@ -180,7 +181,7 @@ def main(argv: list[str] | None = None) -> None:
         path = args.out or ROOT / "build" / "profiles" / name
         if path.is_dir():
             path = path / name
-        path.parent.mkdir(parents=True, exist_ok=True)
+        cli.check_out_file(parser, path)
         title = f"{args.op}, {args.seconds:g} s, seed {args.seed}"
         record(args.op, args.seconds, args.seed, args.rate, path)
         print(f"raw profile: {path}", file=sys.stderr)

@@ -3,6 +3,7 @@ and one real pair of trials of two settings of this tree."""
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict
 from pathlib import Path
@@ -16,7 +17,11 @@ from benchmarks.deep_stats import compare
 ROOT = Path(__file__).resolve().parents[1]
 
 
-HEAD = '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}, {"name": "b"}]}\n'
+ARM = '"root": "/x", "commit": "c1", "env": []'
+HEAD = (
+    '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a", ' + ARM + '}, {"name": "b", ' + ARM + "}], "
+    '"engines": ["full", "uniform"], "budget": 10, "machine": "m"}\n'
+)
 
 
 def _run(bug: str, seed: int, detected: float | None, first: float | None = 0.1) -> Run:
@@ -118,18 +123,27 @@ def test_files_of_other_tests_are_not_pooled(tmp_path: Path, capsys: pytest.Capt
         ("", "its first line is not a bench_ab header"),
         ('{"format": "other"}\n', "its first line is not a bench_ab header"),
         ('{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}]}\n', "does not name two arms"),
+        (HEAD + '{"arm": "c"}\n', "line 2 is not a trial of one of the arms"),
         (
-            '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}, {"name": "b"}]}\n{"arm": "c"}\n',
-            "line 2 is not a trial of one of the arms",
+            '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}, {"name": "b"}]}\n',
+            "arm root is not a string",
+        ),
+        (HEAD.replace('"env": []', '"env": [1]', 1), "arm env is not a list of strings"),
+        (HEAD.replace('["full", "uniform"]', "[]"), "does not name two engines"),
+        (HEAD.replace('"budget": 10', '"budget": "10"'), "budget '10' is not a finite number of seconds"),
+        (HEAD.replace('"budget": 10', '"budget": 1' + "0" * 400), "is not a finite number of seconds"),
+        (HEAD.replace('"budget": 10', '"budget": NaN'), "budget nan is not a finite number of seconds"),
+        (HEAD.replace(', "machine": "m"', ""), "does not name the machine"),
+        (
+            HEAD + '{"arm": "a", "bug": "b", "engine": "full", "seed": 1, "budget": 10, "detected_at": -1, '
+            '"signatures": 1, "executions": 1, "elapsed": 1, "op": "fk", "returncode": 0}\n',
+            "detected_at: -1 is not a finite number of seconds >= 0",
         ),
         (
             HEAD + '{"arm": "a", "bug": 3}\n',
             "bug: 3 is not str",
         ),
-        (
-            '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}, {"name": "b"}]}\n[1,\n',
-            "not a bench_ab file",
-        ),
+        (HEAD + "[1,\n", "not a bench_ab file"),
     ],
 )
 def test_a_bad_file_is_named(
@@ -161,6 +175,11 @@ RUNNABLE = ["--arm", "a", ".", "--arm", "b", ".", "X=1", "--bugs", "wrap_past_pi
         (["--arm", "a", ".", "--arm", "b", ".", "X=1"], "--bugs and --out are needed"),
         ([*RUNNABLE, "--trials", "0"], "--trials must be a finite number above 0"),
         ([*RUNNABLE, "--first-seed", "0"], "--first-seed must be 1 or more, not 0 (libFuzzer takes -seed=0"),
+        ([*RUNNABLE, "--budget", "0.5"], "--budget must be a whole number of seconds (libFuzzer's"),
+        (
+            [*RUNNABLE, "--bugs", "wrap_past_pi", "narrow_band", "wrap_past_pi"],
+            "--bugs names wrap_past_pi more than once",
+        ),
     ],
 )
 def test_a_bad_command_line_is_named_before_anything_runs(
@@ -262,3 +281,16 @@ def test_a_trial_runs_in_its_arm_s_tree_with_its_python_and_settings(
     (full, cwd), (uniform, _) = seen
     assert cwd == tree and full[:4] == ["env", "X=1", "/py", str(tree / "fuzz_diff.py")]
     assert uniform[:3] == ["/py", "-m", "benchmarks.baselines"] and "-seed=3" in full
+
+
+def test_resume_drops_a_last_line_cut_short_before_the_next_pair_is_appended(tmp_path: Path) -> None:
+    out = tmp_path / "ab.jsonl"
+    pair = [("old", _run("wrap_past_pi", 0, 0.2)), ("new", _run("wrap_past_pi", 0, 0.19))]
+    _file(out, [*pair, ("old", _run("wrap_past_pi", 1, 0.2))], cut=True)  # killed while writing
+    header = {**json.loads(out.read_text().split("\n")[0]), "serial": False}
+    done = bench_ab._open(argparse.ArgumentParser(), out, header, resume=True)
+    assert list(done) == [("wrap_past_pi", 0)]
+    with out.open("a") as handle:  # as _run appends the pair it runs again
+        for arm, run in [("old", _run("wrap_past_pi", 1, 0.2)), ("new", _run("wrap_past_pi", 1, 0.18))]:
+            handle.write(json.dumps({"arm": arm, **asdict(run)}) + "\n")
+    assert len(ab_table.read(out)[1]) == 4

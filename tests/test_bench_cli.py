@@ -11,7 +11,18 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import baselines, bench_engine, bench_evaluate, bench_native_cov, bench_targets, bench_zoo
+from benchmarks import (
+    baselines,
+    bench_deep,
+    bench_engine,
+    bench_evaluate,
+    bench_native_cov,
+    bench_scenario,
+    bench_targets,
+    bench_zoo,
+    probe_ik_stall,
+    profile,
+)
 
 BASELINE = ["uniform", "--seconds", "1", "--artifacts", "a"]
 """A baseline run's options (the folder relative to the test's own)."""
@@ -36,6 +47,32 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     ),
     (bench_zoo.main, ["--mode", "quick", "--jobs", "0"], "--jobs must be 1 or more, not 0"),
     (bench_zoo.main, ["--out", "a-file/zoo.json"], "a-file: cannot hold the results"),
+    # a campaign's length goes to libFuzzer's -max_total_time, whole seconds, 0 for no limit: 0.5 ran
+    # each trial until its timeout (2026-12-05)
+    (bench_zoo.main, ["--budget", "0.5"], "--budget must be a whole number of seconds (libFuzzer's"),
+    (bench_deep.main, ["--budget", "2.5"], "--budget must be a whole number of seconds"),
+    (bench_native_cov.main, ["--budget", "0.5"], "--budget must be a whole number of seconds"),
+    (bench_scenario.main, ["--seconds", "0.5"], "--seconds must be a whole number of seconds"),
+    (profile.main, ["--seconds", "0.5"], "--seconds must be a whole number of seconds"),
+    (profile.main, ["--seconds", "nan"], "--seconds must be a finite number above 0, not nan"),
+    # a name twice: planned twice, run once, and the sweep never ends (each --resume "interrupted")
+    (bench_zoo.main, ["--bugs", "silent_clamp", "silent_clamp"], "--bugs names silent_clamp more than once"),
+    (bench_deep.main, ["--engines", "full", "uniform", "uniform"], "--engines names uniform more than once"),
+    (bench_native_cov.main, ["--configs", "control,control"], "--configs names control more than once"),
+    # results that could not be written once the measurement was done, or that a journal took
+    (bench_zoo.main, ["--out", "."], ". is a folder: name the results file"),
+    (bench_zoo.main, ["--out", "zoo.jsonl"], "a .jsonl name is the sweep's journal"),
+    (bench_scenario.main, ["--no-campaign", "--out", "."], ". is a folder: name the results file"),
+    (profile.main, ["--out", "a-file/p.txt"], "a-file: cannot hold the results"),
+    # configurations outside the table's (which wrote an empty table over native-cov.json)
+    (bench_native_cov.main, ["--configs", ","], "unknown configuration(s) (none given)"),
+    (bench_native_cov.main, ["--configs", "mimic_ignored"], "unknown configuration(s) mimic_ignored"),
+    (bench_engine.main, ["--seeds", "-1"], "--seeds must be 1 or more"),
+    (bench_engine.main, ["--ops", "nosuch"], "invalid choice: 'nosuch'"),
+    (probe_ik_stall.main, ["probot_anno", "--seed", "-1"], "--seed must be 0 or more"),
+    (bench_targets.main, ["--robot", "a-file"], "--robot a-file:"),
+    (bench_scenario.main, ["--render", "a-file"], "a-file: not a bench_scenario result (JSONDecodeError"),
+    (bench_scenario.main, ["--render", "."], ".: not a bench_scenario result (IsADirectoryError"),
     (baselines.main, [*BASELINE, "--seconds", "0"], "--seconds must be a finite number above 0, not 0.0"),
     (baselines.main, [*BASELINE, "--targets", "native"], "--targets takes two targets, as in native,python"),
     (baselines.main, [*BASELINE, "--robot", "nosuch"], "--robot: robot 'nosuch' is neither a URDF file"),
@@ -61,10 +98,7 @@ def test_a_bad_option_is_named_before_anything_runs(
     (tmp_path / "a-file").write_text("not a folder")
     monkeypatch.setattr(sys, "argv", [main.__module__, *argv])
     with pytest.raises(SystemExit) as exit_info:
-        if main is bench_zoo.main:
-            bench_zoo.main(argv)
-        else:
-            main()
+        main()
     said = capsys.readouterr()
     assert exit_info.value.code == 2 and says in said.err and "Traceback" not in said.err
     assert said.out == ""  # nothing measured, nothing printed as a result

@@ -113,6 +113,22 @@ def test_stop_after_starts_no_trial_past_its_minutes(
     assert len(_sweep(tmp_path, "--resume")) == 8
 
 
+def test_tabulating_a_file_writes_no_plot_over_the_tables_own(
+    fake: FakeTrials, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _sweep(tmp_path / "done")
+    monkeypatch.setattr(bench_deep, "RESULTS", tmp_path / "repository")  # benchmarks/results
+    tables = tmp_path / "repository"
+    tables.mkdir()
+    (tables / "deep-quick.png").write_bytes(b"the table's own plot")
+    bench_deep.main(["--mode", "quick", "--from-json", str(tmp_path / "done" / "deep-quick.json")])
+    assert (tables / "deep-quick.png").read_bytes() == b"the table's own plot"
+    bench_deep.main(
+        ["--from-json", str(tmp_path / "done" / "deep-quick.json"), "--results", str(tmp_path / "t")]
+    )
+    assert (tmp_path / "t" / "deep-quick.png").is_file()  # asked for: written
+
+
 def test_an_unfinished_journal_is_neither_overwritten_nor_resumed_by_another_sweep(
     fake: FakeTrials, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -139,6 +155,10 @@ def test_an_unfinished_journal_is_neither_overwritten_nor_resumed_by_another_swe
     assert "nothing to resume" in capsys.readouterr().err
     _sweep(tmp_path, "--restart", "--stop-after", "0.5")
     assert (tmp_path / "deep-quick.jsonl.old").read_bytes() == kept
+    second = path.read_bytes()
+    _sweep(tmp_path, "--restart", "--stop-after", "0.5")  # a second restart keeps both
+    assert (tmp_path / "deep-quick.jsonl.old").read_bytes() == kept
+    assert (tmp_path / "deep-quick.jsonl.old.2").read_bytes() == second
 
 
 def test_first_seed_runs_other_seeds_in_files_of_their_own(
@@ -173,6 +193,10 @@ def test_first_seed_runs_other_seeds_in_files_of_their_own(
     assert journal.sweep_of(header, "bench_deep").first_seed == 0
     with pytest.raises(journal.JournalError, match="first_seed"):
         journal.sweep_of({**header, "first_seed": "10"}, "bench_deep")
+    # a damaged header's counts: 10**7 trials were planned before anything was read (memory filled)
+    for bad in ({"trials": 10**7}, {"trials": 0}, {"first_seed": -1}, {"budget": float("nan")}):
+        with pytest.raises(journal.JournalError, match=r"out of range|budget"):
+            journal.sweep_of({**header, **bad}, "bench_deep")
 
 
 def test_a_journal_resumes_only_on_the_kind_of_machine_that_began_it(
@@ -259,6 +283,11 @@ def test_a_last_line_cut_short_runs_again_and_a_bad_line_is_named(
         (lines[0] + _changed(lines[1], seed=True), "seed: True is not int"),
         (lines[0] + _changed(lines[1], fields=[1]), "fields: not a list of strings"),
         ("\x00\xff\n", "not a bench_deep journal"),
+        (lines[0] + _changed(lines[1], elapsed=0), "elapsed: 0 is not a finite number of seconds > 0"),
+        (lines[0] + _changed(lines[1], budget=-10), "budget: -10 is not a finite number of seconds > 0"),
+        (lines[0] + _changed(lines[1], detected_at=10**400), "is not a finite number of seconds >= 0"),
+        (lines[0] + "[" * 100_000 + "\n" + lines[1], "line 2: not a trial"),  # nested past the limit
+        ("[" * 100_000 + "\n", "not a bench_deep journal"),
     ):
         path.write_text(bad)
         with pytest.raises(SystemExit):
