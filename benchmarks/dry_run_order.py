@@ -37,7 +37,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from benchmarks import baselines
+from benchmarks import baselines, cli
 from benchmarks.bench_deep import BUGS
 from benchmarks.trials import NOT_DETECTIONS
 from benchmarks.zoo import Bug
@@ -188,6 +188,8 @@ def main(argv: Sequence[str] | None = None) -> list[SeedResult]:
         )
     if args.seeds < 1 or args.uniform_inputs < 1:
         parser.error("--seeds and --uniform-inputs must be at least 1")
+    if args.out is not None:
+        cli.check_out_file(parser, args.out)  # before the first bug's seeds, not after
     everything: list[SeedResult] = []
     for name in args.bugs:
         bug = BUGS[name]

@@ -69,7 +69,13 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)
         travel.check_manifests(folders, config)
+    from fuzzer.input.libfuzzer_flags import check_dictionary, check_int_flags
     from fuzzer.processes import drawn_seed, flag_value
+
+    try:
+        check_int_flags(tuple(flags))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
 
     seed = args.seed
     if seed is None:
@@ -88,6 +94,11 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
     if dictionary is not None and not Path(dictionary).is_file():
         raise UsageError(f"-dict={dictionary}: no such file")
+    if dictionary is not None:
+        try:  # libFuzzer refuses a bad one only after start-up, with an exit status of its own
+            check_dictionary(Path(dictionary))
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
     options = CampaignOptions(
         corpus=tuple(args.corpus),
         artifacts=args.artifacts,

@@ -14,6 +14,7 @@ from typing import Any
 from fuzzer.execution.session import RunConfig
 from fuzzer.execution.tolerance import Tolerance, default_tolerance
 from fuzzer.input.mapping import OPS
+from fuzzer.input.paths import given_path
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT
 from robot_api import robots
 
@@ -143,7 +144,9 @@ def campaign_parser() -> argparse.ArgumentParser:
         "       fuzz_diff.py CRASH_FILE [options]\n"
         f"       fuzz_diff.py {{{','.join(SUBCOMMANDS)}}} ... (see below)",
     )
-    parser.add_argument("corpus", nargs="+", type=Path, help="corpus folder(s); the first receives new seeds")
+    parser.add_argument(
+        "corpus", nargs="+", type=given_path, help="corpus folder(s); the first receives new seeds"
+    )
     config_options(parser)
     parser.add_argument(
         "--seeds",
@@ -156,14 +159,14 @@ def campaign_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--seeds-from-bag",
-        type=Path,
+        type=given_path,
         default=None,
         metavar="FILE.bag",
         help="write the bag's messages of the campaign's type (any topic) into the corpus as seeds "
         "(ROS 1 from apt: scripts/ros-ensure.sh)",
     )
     parser.add_argument(
-        "--artifacts", type=Path, default=Path("artifacts"), help="crash files (default artifacts/)"
+        "--artifacts", type=given_path, default=Path("artifacts"), help="crash files (default artifacts/)"
     )
     parser.add_argument(
         "--stop-on-divergence",
@@ -199,7 +202,7 @@ def replay_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py replay", description="Replay crash files or folders; exit 1 if any still diverges."
     )
-    parser.add_argument("paths", nargs="+", type=Path)
+    parser.add_argument("paths", nargs="+", type=given_path)
     config_options(parser)
     parser.add_argument("--no-progress", action="store_true", help="accepted for symmetry; replay shows none")
     return parser

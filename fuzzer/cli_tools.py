@@ -14,6 +14,7 @@ from typing import Any
 from fuzzer import reporting
 from fuzzer.cli_options import UsageError, config_from, config_options, replay_parser, trust_option
 from fuzzer.execution.session import ConfigError
+from fuzzer.input.paths import given_path
 
 
 def replay_main(argv: Sequence[str]) -> int:
@@ -67,7 +68,10 @@ def triage_main(argv: Sequence[str]) -> int:
 
     parser = argparse.ArgumentParser(prog="fuzz_diff.py triage", description="List divergence buckets.")
     parser.add_argument(
-        "paths", nargs="+", type=Path, help="an artifacts folder, or crash files of one folder (globs work)"
+        "paths",
+        nargs="+",
+        type=given_path,
+        help="an artifacts folder, or crash files of one folder (globs work)",
     )
     parser.add_argument("--json", action="store_true", help="machine-readable output")
     args = parser.parse_args(argv)
@@ -99,13 +103,13 @@ def minimize_main(argv: Sequence[str]) -> int:
         description="Shrink crash files to the simplest input with the same signature, under the "
         "configuration their sidecars record (options given here override it).",
     )
-    parser.add_argument("paths", nargs="+", type=Path, help="crash files with sidecars (globs work)")
+    parser.add_argument("paths", nargs="+", type=given_path, help="crash files with sidecars (globs work)")
     config_options(parser)
     parser.add_argument("--budget", type=int, default=2000, help="evaluations per file (default 2000)")
     parser.add_argument(
         "-o",
         "--output",
-        type=Path,
+        type=given_path,
         default=None,
         help="folder for minimized files (default: next to each crash file)",
     )
@@ -156,8 +160,10 @@ def report_main(argv: Sequence[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py report", description="Write a self-contained HTML report of an artifacts folder."
     )
-    parser.add_argument("directory", type=Path)
-    parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default DIR/report)")
+    parser.add_argument("directory", type=given_path)
+    parser.add_argument(
+        "-o", "--output", type=given_path, default=None, help="output folder (default DIR/report)"
+    )
     trust_option(parser)
     args = parser.parse_args(argv)
     if not args.directory.is_dir():
@@ -181,10 +187,10 @@ def promote_main(argv: Sequence[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py promote", description="Add a crash file to the regression suite."
     )
-    parser.add_argument("crash", nargs="+", type=Path, help="crash files with sidecars (globs work)")
+    parser.add_argument("crash", nargs="+", type=given_path, help="crash files with sidecars (globs work)")
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
-    parser.add_argument("--suite", type=Path, default=SUITE, help=f"suite folder (default {SUITE})")
+    parser.add_argument("--suite", type=given_path, default=SUITE, help=f"suite folder (default {SUITE})")
     trust_option(parser)
     args = parser.parse_args(argv)
     status = 0
@@ -205,9 +211,9 @@ def coverage_main(argv: Sequence[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py coverage", description="Line and branch coverage of python_impl over a corpus."
     )
-    parser.add_argument("corpus", nargs="+", type=Path)
+    parser.add_argument("corpus", nargs="+", type=given_path)
     config_options(parser)
-    parser.add_argument("--html", type=Path, default=Path("coverage_html"), help="HTML output folder")
+    parser.add_argument("--html", type=given_path, default=Path("coverage_html"), help="HTML output folder")
     args = parser.parse_args(argv)
     from fuzzer.input.paths import PathError, check_input_file
 

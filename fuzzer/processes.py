@@ -147,7 +147,7 @@ def _sidecar_kind(path: Path) -> str | None:
         return None  # no reader accepts it
     try:
         data = json.loads(path.read_bytes())
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
     signature = data.get("signature") if isinstance(data, dict) else None
     kind = signature.get("kind") if isinstance(signature, dict) else None

@@ -52,10 +52,23 @@ HOSTILE = [
     (["--seed=x"], "invalid int value: 'x'"),
     (["--robot=/nonexistent/robot.urdf"], "--robot"),
     (["--robot=ur5", "--tip-link=nope"], "tip link 'nope'"),
+    (["--tolerance=m=1e-5,m=1e-6"], "m given twice"),
+    (["--tolerance=,"], "an empty part"),
     (["--msg-type=sensor_msgs/Nope"], "--msg-type"),
     (["--op=ik", "--msg-type=sensor_msgs/JointState"], "supported: geometry_msgs/PoseStamped"),
     (["--msg-path=/nonexistent/msgs"], "--msg-path /nonexistent/msgs: not a folder"),
     (["-dict=/nonexistent.dict"], "-dict=/nonexistent.dict: no such file"),
+    # libFuzzer's integer flags: Atheris' stoul raised (then the interpreter crashed, exit 139,
+    # under a summary saying "exit status 0"); -jobs=-1 started jobs without end
+    (["-seed=abc"], "-seed=abc: libFuzzer's -seed takes an integer from 0 to 4294967295"),
+    (["-seed=99999999999999999999"], "-seed takes an integer from 0 to 4294967295"),
+    (["-timeout=abc"], "-timeout=abc: libFuzzer's -timeout takes an integer"),
+    (["-max_len=-1"], "-max_len=-1: libFuzzer's -max_len takes an integer from 0"),
+    (["-jobs=-1"], "-jobs=-1: libFuzzer's -jobs takes an integer from 0"),
+    (["-fork=-1"], "-fork=-1: libFuzzer's -fork takes an integer from 0"),
+    (["-runs=1x"], "-runs=1x: libFuzzer's -runs takes an integer from -1"),
+    # an empty path is the current folder: an unset shell variable wrote seeds there
+    (["--artifacts="], "argument --artifacts: an empty path (an unset shell variable?)"),
     (["--no-such-option"], "unrecognized arguments: --no-such-option"),
 ]
 
@@ -161,3 +174,22 @@ def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyP
     assert argv("-fork=2") == [] and argv("-jobs=2") == []
     monkeypatch.setenv(CHILD_ENV, "1")
     assert argv() == []
+
+
+def test_a_dictionary_libfuzzer_would_refuse_is_named_before_start_up(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.dict"
+    bad.write_text('# a comment\nkw="ok"\n"value"  # a comment after it\n')
+    run = fuzz(str(tmp_path / "corpus"), "-runs=10", f"--artifacts={tmp_path / 'a'}", f"-dict={bad}")
+    assert run.returncode == 2, run.stderr[-1500:]
+    assert f"-dict={bad}: line 3 is not a libFuzzer dictionary entry" in run.stderr
+    assert "ParseDictionaryFile" not in run.stderr + run.stdout and "Traceback" not in run.stderr
+
+
+@pytest.mark.slow
+def test_a_dictionary_the_check_accepts_libfuzzer_accepts(tmp_path: Path) -> None:
+    good = tmp_path / "good.dict"
+    good.write_text('# joints\n\n  kw1="0.5"\n"1.5707963"\nx="\\x41\\\\\\"q"\n  \t\n"a b"\r\n')
+    run = fuzz(str(tmp_path / "c"), "-runs=5", f"--artifacts={tmp_path / 'a'}", f"-dict={good}", "--verbose")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "ParseDictionaryFile" not in run.stderr + run.stdout
+    assert "Dictionary: 4 entries" in run.stderr + run.stdout

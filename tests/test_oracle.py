@@ -126,6 +126,11 @@ def test_tolerance_parsing() -> None:
     for bad in ("0", "-1e-6", "nan", "inf", "x", "deg=1", "m=", "m=abc"):
         with pytest.raises(ValueError):
             Tolerance.parse(bad)
+    # a part left out or given twice was the defaults or the last value, silently
+    for bad, says in (("", "an empty part"), (",", "an empty part"), ("1e-6,", "an empty part"),
+                      ("m=1e-5,,rad=1e-6", "an empty part"), ("m=1e-5,m=1e-6", "m given twice")):  # fmt: skip
+        with pytest.raises(ValueError, match=says):
+            Tolerance.parse(bad)
 
 
 def test_signatures_are_stable_and_discriminating() -> None:

@@ -51,3 +51,21 @@ def test_promote_refuses_contradicting_claims(tmp_path: Path) -> None:
     done = promote(known, fixed=False, note="copy", suite=tmp_path, trust=True)
     assert done.expect == "diverge" and (tmp_path / known.name).is_file()
     assert load_sidecar(tmp_path / known.name)["regression"]["note"] == "copy"  # type: ignore[index]
+
+
+def test_promote_again_in_place_and_a_suite_that_is_a_file_are_named(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(ROOT)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+    first = promote(known, fixed=False, note="first", suite=tmp_path, trust=True)
+    data = first.path.read_bytes()
+    # promoting the suite's own copy again (a new note; --fixed once it is fixed) was SameFileError
+    again = promote(first.path, fixed=False, note="again", suite=tmp_path, trust=True)
+    assert again.path == first.path and first.path.read_bytes() == data
+    assert load_sidecar(first.path)["regression"]["note"] == "again"  # type: ignore[index]
+    a_file = tmp_path / "a-file"
+    a_file.write_text("not a folder")
+    for suite in (a_file, a_file / "sub"):
+        with pytest.raises(PromoteError, match="cannot hold the crash file"):
+            promote(known, fixed=False, suite=suite, trust=True)

@@ -163,3 +163,43 @@ def test_export_bag_writes_the_input_and_each_targets_answer(ros: Any, tmp_path:
     )  # Debian's own reader
     bad = _fuzz("export-bag", str(tmp_path / "nope"), cwd=tmp_path)
     assert bad.returncode == 2 and "no such file" in bad.stderr
+
+
+def test_export_bag_writes_only_a_bag_file_and_names_what_it_cannot_use(ros: Any, tmp_path: Path) -> None:
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 42, "nsecs": 0}, "frame_id": ""},
+        "name": [f"joint_{i}" for i in range(1, 7)], "position": [0.1] * 6, "velocity": [], "effort": [],
+    }  # fmt: skip
+    crash = tmp_path / "crash-0123456789abcdef0123456789abcdef01234567"
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    data = crash.read_bytes()
+    sidecar = crash.with_name(crash.name + ".json")
+    config = {"op": "move", "robot": "probot_anno", "targets": ["native", "python"]}
+    sidecar.write_text(json.dumps({"config": config, "signature": {"key": "k"}, "outcomes": []}))
+    refused = [
+        (tmp_path, "a folder"),
+        (crash, "the crash file's own data"),
+        (sidecar, "the crash file's own data"),
+        (tmp_path / "no" / "x.bag", "does not exist"),
+    ]
+    for output, says in refused:
+        run = _fuzz("export-bag", str(crash), "-o", str(output), cwd=tmp_path)
+        assert run.returncode == 2 and says in run.stderr and "Traceback" not in run.stderr, run.stderr[-800:]
+    assert crash.read_bytes() == data  # it wrote the bag over the crash file, exit 0
+    # a symlink planted at the bag's name is replaced, not followed out of the folder
+    elsewhere = tmp_path / "elsewhere.txt"
+    elsewhere.write_text("keep")
+    link = crash.with_name(crash.name + ".bag")
+    link.symlink_to(elsewhere)
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-800:]
+    assert elsewhere.read_text() == "keep" and not link.is_symlink() and link.stat().st_size > 0
+    # a sidecar whose tip link no longer loads; a message that is not its type
+    sidecar.write_text(json.dumps({"config": {**config, "tip_link": "nope"}, "signature": {"key": "k"}}))
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 2 and "does not load" in run.stderr and "Traceback" not in run.stderr
+    sidecar.write_text(json.dumps({"config": config, "signature": {"key": "k"}}))
+    crash.write_bytes(TestCase("geometry_msgs/PoseStamped", message).encode())
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 2 and "is not a geometry_msgs/PoseStamped" in run.stderr, run.stderr[-800:]
+    assert "Traceback" not in run.stderr

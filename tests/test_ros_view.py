@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from fuzzer.input.testcase import TestCase
 from tests.support import skip_or_fail
@@ -84,3 +85,16 @@ def test_view_refuses_a_missing_crash_file(tmp_path: Path) -> None:
         capture_output=True, text=True, timeout=60, cwd=tmp_path, check=False,
     )  # fmt: skip
     assert run.returncode == 2 and "no such file" in run.stderr
+
+
+def test_a_sidecar_whose_robot_no_longer_loads_is_named(tmp_path: Path) -> None:
+    from fuzzer.execution.session import ConfigError
+    from fuzzer.ros.view import load
+
+    crash = tmp_path / "crash-0123456789abcdef0123456789abcdef01234567"
+    crash.write_bytes(TestCase("std_msgs/Float64MultiArray", {"data": [0.0] * 6}).encode())
+    config = {"op": "move", "robot": "probot_anno", "tip_link": "nope"}
+    sidecar = {"config": config, "signature": {"key": "k"}}
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    with pytest.raises(ConfigError, match="its sidecar's robot probot_anno does not load: UnknownNameError"):
+        load(crash)  # UnknownNameError from the view's loader until 2026-12-05

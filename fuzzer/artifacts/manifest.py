@@ -29,6 +29,7 @@ from typing import Any, NamedTuple
 from fuzzer.artifacts.store import atomic_write
 from fuzzer.execution.session import RunConfig
 from robot_api import robots
+from robot_api.errors import RobotAPIError
 
 MANIFEST = Path(".rrosfuzz") / "manifest.json"
 FORMAT = 1
@@ -42,7 +43,7 @@ def robot_digest(spec: str) -> str | None:
     """SHA-256 of the robot file a spec resolves to, or None when it does not resolve."""
     try:
         return hashlib.sha256(robots.resolve(spec).read_bytes()).hexdigest()
-    except (OSError, ValueError):
+    except (OSError, ValueError, RobotAPIError):  # URDFError: neither a file nor a known robot
         return None
 
 

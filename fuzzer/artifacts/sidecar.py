@@ -87,7 +87,7 @@ def read_json_file(path: Path, what: str = "sidecar") -> dict[str, Any]:
         raise SidecarError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
         raise SidecarError(f"{path}: the {what} is not UTF-8 text") from None
-    except (json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:  # ValueError: bad JSON, or an int past 4,300 digits
         raise SidecarError(f"{path}: the {what} is not valid JSON ({exc})") from None
     if not isinstance(data, dict):
         raise SidecarError(f"{path}: the {what} is a JSON {_type_name(data)}, expected an object")

@@ -227,7 +227,7 @@ class ArtifactStore:
             if not side.is_file() or oversized(side):  # never open a FIFO or device planted here
                 continue
             name = side.name.removeprefix(TMP_PREFIX).split(".json", 1)[0]
-            with contextlib.suppress(OSError, ValueError, AttributeError, TypeError):
+            with contextlib.suppress(OSError, ValueError, AttributeError, TypeError, RecursionError):
                 key = json.loads(side.read_text(encoding="utf-8"))["signature"]["key"]
                 names.setdefault(str(key), name)
         return names
@@ -297,6 +297,6 @@ def load_sidecar(crash: Path) -> dict[str, Any] | None:
         return None
     try:
         data = json.loads(path.read_text(encoding="utf-8", errors="replace"))
-    except (OSError, json.JSONDecodeError):
+    except (OSError, ValueError, RecursionError):  # bad JSON, an int past 4,300 digits, nesting
         return None  # a damaged sidecar is treated as none
     return data if isinstance(data, dict) else None

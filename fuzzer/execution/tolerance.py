@@ -22,15 +22,21 @@ class Tolerance:
         ValueError
             With a message naming the bad part.
         """
-        parts = [p.strip() for p in text.split(",") if p.strip()]
+        parts = [p.strip() for p in text.split(",")]
+        if not all(parts):  # '', ',', '1e-6,': a part left out (the defaults silently, before)
+            raise ValueError(f"tolerance {text!r}: an empty part; expected 1e-6 or m=<value>,rad=<value>")
         if len(parts) == 1 and "=" not in parts[0]:
             value = _positive(parts[0])
             return cls(value, value)
         values = {"m": cls.metres, "rad": cls.radians}
+        given: set[str] = set()
         for part in parts:
             key, sep, raw = part.partition("=")
             if not sep or key.strip() not in values:
                 raise ValueError(f"tolerance {part!r}: expected m=<value> or rad=<value>")
+            if key.strip() in given:  # m=1e-5,m=1e-6: the last one won silently
+                raise ValueError(f"tolerance {text!r}: {key.strip()} given twice")
+            given.add(key.strip())
             values[key.strip()] = _positive(raw)
         return cls(values["m"], values["rad"])
 

@@ -170,7 +170,7 @@ def _load(path: Path) -> tuple[list[float], list[float]] | None:
     """The (middles, numbers) of a cache file, or None when there is none or it does not fit."""
     try:
         entry = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):  # a cache: a bad file means parsing
+    except (OSError, ValueError, RecursionError):  # a cache: a bad file means parsing
         return None
     if not (isinstance(entry, list) and len(entry) == 3 and entry[0] == CACHE_MAGIC):
         return None

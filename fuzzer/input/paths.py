@@ -8,6 +8,8 @@
   as root, where permission bits do not apply.
 * :func:`contained` tells whether a path inside a folder really stays inside it
   (symlinks resolved), for the report, which must never read outside.
+* :func:`given_path` is every path option's argparse type: an empty one is an error, not
+  the current folder.
 """
 
 from __future__ import annotations
@@ -26,6 +28,17 @@ class PathError(ConfigError):
 
 
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
+
+
+def given_path(text: str) -> Path:
+    """argparse's ``type`` for a path option: ``Path(text)``, but an empty one is the parser's
+    error. ``Path("")`` is the current folder, so an unset shell variable (``--artifacts=$OUT``)
+    silently wrote seeds, crash files or a bag there."""
+    if not text:
+        import argparse
+
+        raise argparse.ArgumentTypeError("an empty path (an unset shell variable?); '.' names this folder")
+    return Path(text)
 
 
 def _kind(mode: int) -> str:

@@ -52,9 +52,15 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
     cov = coverage.Coverage(branch=True, source_pkgs=["python_impl"], data_file=None)
     cov.start()
     try:
+        from fuzzer.execution.session import ConfigError
         from fuzzer.execution.targets import Runner
+        from robot_api.errors import RobotAPIError
 
-        runner = Runner.create("python", robots.resolve(config.robot), config.tip_link)
+        try:
+            runner = Runner.create("python", robots.resolve(config.robot), config.tip_link)
+        except RobotAPIError as exc:  # a robot that does not load, a tip link not in it
+            tip = f", --tip-link {config.tip_link}" if config.tip_link else ""
+            raise ConfigError(f"--robot {config.robot}{tip}: {type(exc).__name__}: {exc}") from None
         registry = MessageRegistry(config.msg_path)
         msg_type = config.message_type
         mapping = mapping_for(config.op, msg_type)

@@ -288,15 +288,17 @@ def outside_links(directory: Path) -> list[Path]:
 
 def _sidecars(directory: Path) -> list[dict[str, Any]]:
     """Every readable sidecar of the folder (all crash files, not only representatives)."""
+    from fuzzer.artifacts.store import oversized
     from fuzzer.input.paths import contained
 
     out = []
     for path in sorted(directory.glob("*.json")) if directory.is_dir() else []:
-        if not contained(directory, path):
+        # never open a FIFO or a device planted under a sidecar's name (reading one never returns)
+        if not contained(directory, path) or not path.is_file() or oversized(path):
             continue
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        except (OSError, ValueError, RecursionError):  # not UTF-8, bad JSON, an int past 4,300 digits
             continue
         if isinstance(data, dict) and "signature" in data:
             out.append(data)

@@ -43,7 +43,7 @@ def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
                 continue
             try:
                 record = json.loads(line)
-            except (json.JSONDecodeError, RecursionError):
+            except (ValueError, RecursionError):  # ValueError: bad JSON, or an int past 4,300 digits
                 skipped += 1
                 continue
             if isinstance(record, dict):

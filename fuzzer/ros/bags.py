@@ -11,12 +11,15 @@ plain data (:func:`to_data`) and pass the campaign's own validation.
 from __future__ import annotations
 
 import argparse
+import os
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
 from fuzzer.execution.session import ConfigError
+from fuzzer.input.paths import given_path
 from fuzzer.ros import env
 
 TOPICS = {
@@ -143,6 +146,7 @@ def export_bag(crash: Path, output: Path) -> list[str]:
     from fuzzer.artifacts.sidecar import read_sidecar, safe_robot
     from fuzzer.input.testcase import decode
     from robot_api import robots
+    from robot_api.errors import RobotAPIError
 
     try:
         case = decode(crash.read_bytes())
@@ -153,15 +157,24 @@ def export_bag(crash: Path, output: Path) -> list[str]:
     rosbag = env.import_module("rosbag")
     rospy = env.import_module("rospy")
     sensor_msgs = env.import_module("sensor_msgs.msg")
-    model = python_impl.RobotModel(
-        robots.resolve(safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)), config.get("tip_link")
-    )
+    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)
+    try:
+        model = python_impl.RobotModel(robots.resolve(robot), config.get("tip_link"))
+    except RobotAPIError as exc:  # a robot file since changed or gone, a tip link not in it
+        raise BagError(
+            f"{crash}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
+        ) from None
     stamp = case.message.get("header", {}).get("stamp", {})
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
     records: list[tuple[str, Any]] = []
     if case.msg_type in TOPICS:
-        records.append((TOPICS[case.msg_type], from_data(message_class(case.msg_type), case.message)))
+        try:
+            records.append((TOPICS[case.msg_type], from_data(message_class(case.msg_type), case.message)))
+        except (LookupError, TypeError, ValueError, AttributeError) as exc:
+            raise BagError(
+                f"{crash}: its message is not a {case.msg_type}: {type(exc).__name__}: {exc}"
+            ) from None
     for k, outcome in enumerate(sidecar.get("outcomes", [])[:2]):
         values = outcome.get("values", {}) if isinstance(outcome, dict) else {}
         joints = values.get("joint_values")
@@ -176,14 +189,39 @@ def export_bag(crash: Path, output: Path) -> list[str]:
             records.append((f"/rrosfuzz/target_{k}/pose", pose))
     if not records:
         raise BagError(f"{crash}: nothing to export ({case.msg_type}, no outcome values in its sidecar)")
+    _check_output(output, crash)
+    # written beside it and renamed over it once whole: a failure leaves an existing file as it
+    # was, and a symlink planted at the name is replaced, never followed
     try:
-        with rosbag.Bag(str(output), "w") as bag:
+        handle, name = tempfile.mkstemp(prefix=f".{output.name}.", suffix=".tmp", dir=output.parent)
+    except OSError as exc:
+        raise BagError(f"{output}: cannot write the bag: {exc.strerror or exc}") from None
+    os.close(handle)
+    try:
+        with rosbag.Bag(name, "w") as bag:
             for topic, message in records:
                 bag.write(topic, message, start)
+        os.replace(name, output)
     except Exception as exc:  # noqa: BLE001 - genpy's serialization errors name the field
-        output.unlink(missing_ok=True)
+        Path(name).unlink(missing_ok=True)
         raise BagError(f"{output}: cannot write the bag: {type(exc).__name__}: {exc}") from None
     return [topic for topic, _ in records]
+
+
+def _check_output(output: Path, crash: Path) -> None:
+    """Raise BagError when ``output`` may not receive the bag: a folder, a device or FIFO, a
+    folder that does not exist, or the crash file or its sidecar themselves."""
+    from fuzzer.artifacts.store import sidecar_path
+
+    if output.is_dir():
+        raise BagError(f"{output}: a folder; -o names the bag file")
+    if output.exists() and not output.is_symlink() and not output.is_file():
+        raise BagError(f"{output}: not a regular file; -o names the bag file")
+    if not output.parent.is_dir():
+        raise BagError(f"{output}: its folder {output.parent} does not exist")
+    for own in (crash, sidecar_path(crash)):
+        if output.exists() and own.exists() and output.resolve() == own.resolve():
+            raise BagError(f"{output}: the crash file's own data; -o names another file")
 
 
 def export_bag_main(argv: Sequence[str]) -> int:
@@ -192,8 +230,8 @@ def export_bag_main(argv: Sequence[str]) -> int:
         prog="fuzz_diff.py export-bag",
         description="write a divergence as a bag for `rosbag play` (ROS 1 from apt: scripts/ros-ensure.sh)",
     )
-    parser.add_argument("crash", type=Path)
-    parser.add_argument("-o", "--output", type=Path, help="the bag to write (default: CRASH.bag)")
+    parser.add_argument("crash", type=given_path)
+    parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
     args = parser.parse_args(argv)
     if not args.crash.is_file():
         raise BagError(f"{args.crash}: no such file")

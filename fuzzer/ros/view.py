@@ -36,6 +36,7 @@ import numpy as np
 
 from fuzzer import reporting
 from fuzzer.execution.session import ConfigError
+from fuzzer.input.paths import given_path
 from fuzzer.ros import env, processes
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -199,6 +200,7 @@ def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
     from fuzzer.input.testcase import decode
     from python_impl.urdf import load_urdf
     from robot_api import robots
+    from robot_api.errors import RobotAPIError
 
     try:
         case = decode(crash.read_bytes())
@@ -206,8 +208,14 @@ def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
         raise ConfigError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}
     config = sidecar.get("config", {})
-    urdf = robots.resolve(safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash))
-    model = python_impl.RobotModel(urdf, config.get("tip_link"))
+    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)
+    try:
+        urdf = robots.resolve(robot)
+        model = python_impl.RobotModel(urdf, config.get("tip_link"))
+    except RobotAPIError as exc:  # a robot file since changed or gone, a tip link not in it
+        raise ConfigError(
+            f"{crash}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
+        ) from None
     return case, sidecar, model, load_urdf(str(urdf), True)
 
 
@@ -318,10 +326,10 @@ def view_main(argv: Sequence[str]) -> int:
         prog="fuzz_diff.py view",
         description="show a divergence in RViz, both targets' arms overlaid (scripts/ros-ensure.sh --viz)",
     )
-    parser.add_argument("crash", type=Path)
+    parser.add_argument("crash", type=given_path)
     parser.add_argument(
         "--screenshot",
-        type=Path,
+        type=given_path,
         help="run under Xvfb, save the screen (PPM) to this file once both arms are drawn, and exit",
     )
     parser.add_argument(

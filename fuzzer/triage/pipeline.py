@@ -164,7 +164,9 @@ def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
 
 def collect(directory: Path, files: list[Path] | None = None) -> list[Bucket]:
     """The buckets of an artifacts folder (or of some of its ``files``), most severe first."""
-    counts: Counter[str] = Counter(r["sig"] for r in read_lines(directory / DIVERGENCES) if "sig" in r)
+    counts: Counter[str] = Counter(
+        r["sig"] for r in read_lines(directory / DIVERGENCES) if isinstance(r.get("sig"), str)
+    )
     representatives: dict[str, tuple[Path, dict[str, Any]]] = {}
     minimized: dict[str, Path] = {}
     buckets: list[Bucket] = []

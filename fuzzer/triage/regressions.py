@@ -63,9 +63,13 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:
         raise PromoteError(f"{crash}: {result.result}; promote it with --fixed if it is fixed")
-    suite.mkdir(parents=True, exist_ok=True)
     target = suite / crash.name
-    shutil.copyfile(crash, target)
+    try:
+        suite.mkdir(parents=True, exist_ok=True)
+        if not (target.exists() and target.samefile(crash)):  # promoted again (--fixed): in place
+            shutil.copyfile(crash, target)
+    except OSError as exc:
+        raise PromoteError(f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})") from None
     entry: dict[str, Any] = dict(sidecar)
     entry["regression"] = {
         "expect": "agree" if fixed else "diverge",

@@ -21,7 +21,7 @@ from typing import Any
 
 from fuzzer import reporting
 from fuzzer.execution.session import ConfigError
-from fuzzer.input.paths import PathError, crash_inputs
+from fuzzer.input.paths import PathError, crash_inputs, given_path
 from fuzzer.input.testcase import MAX_BYTES, TestCaseError, decode
 
 
@@ -50,7 +50,7 @@ def show_main(argv: Sequence[str]) -> int:
         prog="fuzz_diff.py show",
         description="print crash or corpus files' test cases as JSON (read as data: nothing is run)",
     )
-    parser.add_argument("files", type=Path, nargs="+", help="crash or corpus files, or folders of them")
+    parser.add_argument("files", type=given_path, nargs="+", help="crash or corpus files, or folders of them")
     args = parser.parse_args(argv)
     try:
         paths = crash_inputs(args.files)

@@ -1,0 +1,68 @@
+"""JSON from anywhere (corpus files, sidecars, a campaign's logs) with what Python's parser
+raises besides ``JSONDecodeError``: an integer past 4,300 digits (``ValueError``), nesting past
+the recursion limit (``RecursionError``). Each reader names it, skips it or treats it as damaged,
+as it does bad JSON; a helper's probe found each one ending in a traceback (2026-12-05)."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from fuzzer.artifacts.divlog import read_lines
+from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
+from fuzzer.artifacts.store import load_sidecar
+from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.report.records import read_records
+
+BIG = "1" + "0" * 5000
+"""An integer literal past CPython's 4,300-digit limit of int(str)."""
+DEEP = "[" * 100_000 + "]" * 100_000
+
+CRASH = "crash-0123456789abcdef0123456789abcdef01234567"
+
+
+def _case_with(value: str) -> bytes:
+    good = TestCase("std_msgs/Float64MultiArray", {"data": [0.5]}).encode().decode()
+    return good.replace("0.5", value, 1).encode()
+
+
+@pytest.mark.parametrize("value", [BIG, DEEP])
+def test_a_test_case_is_not_json_not_a_traceback(value: str) -> None:
+    with pytest.raises(TestCaseError, match="not JSON"):
+        decode(_case_with(value))
+
+
+@pytest.mark.parametrize("text", ['{"signature": {"key": ' + BIG + "}}", DEEP])
+def test_a_sidecar_is_damaged_not_a_traceback(tmp_path: Path, text: str) -> None:
+    crash = tmp_path / CRASH
+    crash.write_bytes(b"{}")
+    crash.with_name(CRASH + ".json").write_text(text)
+    with pytest.raises(SidecarError, match="not valid JSON"):
+        read_sidecar(crash)
+    assert load_sidecar(crash) is None  # triage and report: a damaged sidecar counts as none
+
+
+def test_log_lines_past_the_parser_are_skipped(tmp_path: Path) -> None:
+    log = tmp_path / "divergences.jsonl"
+    log.write_text("\n".join(['{"sig": "a"}', '{"n": ' + BIG + "}", DEEP, '{"sig": "b"}']) + "\n")
+    assert [r["sig"] for r in read_lines(log)] == ["a", "b"]
+    records, skipped = read_records(log)
+    assert [r["sig"] for r in records] == ["a", "b"] and skipped == 2
+
+
+def test_triage_counts_only_string_signatures(tmp_path: Path) -> None:
+    from fuzzer.triage.pipeline import collect
+
+    (tmp_path / "divergences.jsonl").write_text('{"sig": [1, 2]}\n{"sig": {"a": 1}}\n')
+    assert collect(tmp_path) == []  # TypeError: unhashable type: 'list' before
+
+
+def test_the_report_opens_no_fifo_planted_as_a_sidecar(tmp_path: Path) -> None:
+    from fuzzer.report.data import _sidecars
+
+    os.mkfifo(tmp_path / (CRASH + ".json"))  # reading it would wait for a writer for ever
+    (tmp_path / "crash-1.json").write_text(json.dumps({"signature": {"key": "k"}}))
+    assert _sidecars(tmp_path) == [{"signature": {"key": "k"}}]
