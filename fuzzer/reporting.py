@@ -29,8 +29,12 @@ def warn(text: str) -> None:
 
 
 def out(text: str = "") -> None:
-    """Primary output (verdicts, tables): stdout."""
-    sys.stdout.write(text + "\n")
+    """Primary output (verdicts, tables): stdout. A character UTF-8 cannot hold (a lone surrogate:
+    a file name's undecodable byte) is written as its escape, as stderr does, not raised."""
+    try:
+        sys.stdout.write(text + "\n")
+    except UnicodeEncodeError:
+        sys.stdout.write(text.encode("utf-8", "backslashreplace").decode("utf-8") + "\n")
     sys.stdout.flush()
 
 

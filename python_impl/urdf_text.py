@@ -2,7 +2,7 @@
 urdfdom's number grammar (``python_impl.urdf`` builds the robot from what this returns).
 
 The contract's own XML rules (size limit, UTF-8 only, well-formed, no DOCTYPE, no processing
-instructions, no '%' in attribute values but file names, limits on depth and links, valid
+instructions, no '%' in attribute values but file names, limits on depth, links and attributes, valid
 ``<origin>`` vectors) are checked in document order by an expat pass that mirrors the native
 side's (``native/src/xml_guard.cpp``) handler for handler. The same pass builds the tree,
 without namespace processing, as urdfdom's TinyXML reads it (``v:name`` is a plain attribute
@@ -22,6 +22,8 @@ from robot_api.errors import ErrorCode, URDFError
 
 MAX_XML_DEPTH = 1000
 MAX_LINKS = 10000
+MAX_ATTRIBUTES = 256
+"""Attributes on one element: urdfdom's TinyXML looks each up in a list (80,000 took 21 s)."""
 MAX_URDF_BYTES = 16 << 20
 """Largest URDF accepted, in bytes (a file, or text encoded as UTF-8): 16 MiB."""
 
@@ -123,6 +125,10 @@ class _Guard:
             self.links += 1
             if self.links > MAX_LINKS:
                 raise self.fail(f"has more than {MAX_LINKS} links", ErrorCode.URDF_UNSUPPORTED)
+        if len(attrs) > MAX_ATTRIBUTES:
+            raise self.fail(
+                f"<{_clip(name)}> has more than {MAX_ATTRIBUTES} attributes", ErrorCode.URDF_UNSUPPORTED
+            )
         if self.colon_name is None:
             self.colon_name = next((key for key in attrs if key.startswith(":")), None)
         for key, value in attrs.items():

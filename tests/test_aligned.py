@@ -6,6 +6,7 @@ import math
 import random
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fuzzer.execution.session import RunConfig, Session
@@ -97,3 +98,16 @@ def test_without_an_aligned_source_that_arm_mutates() -> None:
     assert made.make(ALIGNED, {}, random.Random(0)) is None
     assert made.make(MUTATE, {}, random.Random(0)) is None
     assert made.make(SPACEFILL, {}, random.Random(0)) == ({}, SPACEFILL)
+
+
+def test_wide_limits_give_a_bounded_stream_and_finite_samples() -> None:
+    # a URDF's "unbounded" written as +-1e7 listed 13 million multiples per joint (1.4 GB), and
+    # +-1e308 overflowed the span: every space-filling sample was inf
+    from fuzzer.generation.spacefill import ALIGNED_TURNS, Uniform
+
+    wide = Aligned([-1e7, -1e308, -1.0], [1e7, 1e308, 1.0], seed=3)
+    assert len(wide.choices[0]) == len(wide.choices[1]) == 8 * ALIGNED_TURNS + 1 + 2
+    assert wide.choices[0][0] == -1e7 and wide.choices[0][-1] == 1e7  # its limits stay among them
+    assert wide.choices[2] == (-1.0, 0.0, 1.0)
+    points = Uniform([-1e308, -1.0], [1e308, 1.0], seed=1).block(64)
+    assert np.isfinite(points).all()

@@ -20,6 +20,7 @@ from benchmarks import (
     bench_scenario,
     bench_targets,
     bench_zoo,
+    dry_run_order,
     probe_ik_stall,
     profile,
 )
@@ -64,6 +65,7 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_zoo.main, ["--out", "zoo.jsonl"], "a .jsonl name is the sweep's journal"),
     (bench_scenario.main, ["--no-campaign", "--out", "."], ". is a folder: name the results file"),
     (profile.main, ["--out", "a-file/p.txt"], "a-file: cannot hold the results"),
+    (dry_run_order.main, ["--bugs", "wrap_past_pi", "--out", "."], ". is a folder: name the results file"),
     # configurations outside the table's (which wrote an empty table over native-cov.json)
     (bench_native_cov.main, ["--configs", ","], "unknown configuration(s) (none given)"),
     (bench_native_cov.main, ["--configs", "mimic_ignored"], "unknown configuration(s) mimic_ignored"),

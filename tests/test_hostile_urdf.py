@@ -119,6 +119,12 @@ PRINTF_ROWS: dict[str, str] = {
     ),
 }
 
+
+def _attributes(extra: int) -> str:
+    """A robot whose one link has ``name`` and ``extra`` more attributes."""
+    return '<robot name="r"><link name="a" ' + " ".join(f'a{i}="x"' for i in range(extra)) + "/></robot>"
+
+
 ROWS: dict[str, Row] = {f"printf_{k}": Row("text", v, INV) for k, v in PRINTF_ROWS.items()}
 ROWS.update(
     {
@@ -236,6 +242,10 @@ ROWS.update(
         "file_one_byte_over_limit": Row("special", "file_over_limit", UNS),
         "file_at_limit": Row("special", "file_at_limit", OK),
         "text_one_byte_over_limit": Row("special", "text_over_limit", UNS),
+        # attributes on one element: TinyXML's lookup is quadratic (80,000 took 21 s natively)
+        "attributes_at_limit": Row("text", _attributes(255), OK),
+        "attributes_one_over_limit": Row("text", _attributes(256), UNS),
+        "attributes_200000": Row("text", _attributes(200_000), UNS),
     }
 )
 

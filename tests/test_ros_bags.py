@@ -203,3 +203,23 @@ def test_export_bag_writes_only_a_bag_file_and_names_what_it_cannot_use(ros: Any
     run = _fuzz("export-bag", str(crash), cwd=tmp_path)
     assert run.returncode == 2 and "is not a geometry_msgs/PoseStamped" in run.stderr, run.stderr[-800:]
     assert "Traceback" not in run.stderr
+
+
+def test_a_bag_s_chunks_and_messages_are_read_within_bounds(
+    ros: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # an 8 KB bz2 bag declaring a 600 MB chunk took 1.3 GB to read; 3 x 10**7 positions made
+    # seeds of 120 MB each, past the 1 MiB a test case may be (the bounds scaled down here)
+    from fuzzer.ros import bags
+
+    rosbag, sensor_msgs, _std_msgs = ros
+    path = tmp_path / "big.bag"
+    with rosbag.Bag(str(path), "w", compression="bz2") as bag:
+        bag.write("/joint_states", _state(sensor_msgs, [0.1] * 6, 10))
+        bag.write("/joint_states", _state(sensor_msgs, [0.0] * 1000, 11))  # 8 KB serialized
+    monkeypatch.setattr(bags, "MAX_BYTES", 4096)
+    seeds = bags.read_seeds(path, "sensor_msgs/JointState", lambda m: None)
+    assert [len(s["position"]) for s in seeds] == [6]  # the large one skipped before it is read
+    monkeypatch.setattr(bags, "MAX_CHUNK_BYTES", 1024)
+    with pytest.raises(bags.BagError, match=r"a chunk of \d+ bytes uncompressed \(at most 1024"):
+        bags.read_seeds(path, "sensor_msgs/JointState", lambda m: None)

@@ -72,3 +72,15 @@ def test_a_file_among_corpus_folders_is_a_usage_error_not_a_campaign(tmp_path: P
     assert done.returncode == 2, done
     assert "a file among corpus folders" in done.stderr and "fuzz_diff.py show FILE" in done.stderr
     assert not folder.exists()
+
+
+def test_a_lone_surrogate_is_shown_as_json_s_escape(tmp_path: Path) -> None:
+    # "\ud800" is valid JSON but no UTF-8 text: printing it raised UnicodeEncodeError
+    path = tmp_path / "crash-surrogate"
+    path.write_text(
+        '{"rrosfuzz":1,"msg_type":"sensor_msgs/JointState","sequence":0,"origin":"hypothesis",'
+        '"lineage":[],"lineage_length":0,"message":{"name":["\\ud800"],"position":[0.0]}}'
+    )
+    done = fuzz("show", str(path))
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr[-800:]
+    assert "\\ud800" in done.stdout and json.loads(done.stdout)["message"]["name"] == ["\ud800"]

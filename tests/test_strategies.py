@@ -301,3 +301,18 @@ def test_seeds_top_up_with_later_seeds() -> None:
     seeds = generate_seeds(strategy, 50, seed=5)
     assert sorted(s["i"] for s in seeds) == list(range(50))
     assert len(generate_seeds(strategy, 60, seed=5)) == 50
+
+
+def test_seeds_hypothesis_cannot_draw_are_a_usage_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a chain of 1,300 joints: every message past Hypothesis' buffer, Unsatisfiable as a traceback
+    from hypothesis.errors import Unsatisfiable
+
+    from fuzzer.execution.session import ConfigError, RunConfig, Session
+    from fuzzer.generation import corpus, seeds
+
+    def refuse(*_: object) -> None:
+        raise Unsatisfiable("459 of 459 test cases were too large")
+
+    monkeypatch.setattr(seeds, "generate_seeds", refuse)
+    with pytest.raises(ConfigError, match="Hypothesis draws no seed message for a chain of 6 joints"):
+        corpus.make_seeds(Session.open(RunConfig()), 4, 1)

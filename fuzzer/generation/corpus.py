@@ -12,7 +12,8 @@ from pathlib import Path
 from fuzzer import reporting
 from fuzzer.artifacts.store import atomic_write, clean_temporaries
 from fuzzer.execution.session import ConfigError, Session
-from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.input.paths import contained
+from fuzzer.input.testcase import MAX_BYTES, TestCase, TestCaseError, decode
 
 
 def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
@@ -33,7 +34,15 @@ def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
             hints=seed_hints(msg_type, session.facts()),
             allow_special_floats=special,
         )
-    messages = generate_seeds(strategy, n, seed)
+    from hypothesis.errors import Unsatisfiable
+
+    try:
+        messages = generate_seeds(strategy, n, seed)
+    except Unsatisfiable as exc:  # a chain of 1,300 joints: every message past Hypothesis' buffer
+        dof = len(session.reference.joint_names)
+        raise ConfigError(
+            f"--robot: Hypothesis draws no seed message for a chain of {dof} joints ({exc})"
+        ) from None
     return [TestCase(msg_type, m, sequence=i, origin="hypothesis") for i, m in enumerate(messages)]
 
 
@@ -358,6 +367,10 @@ def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestC
         clean_temporaries(directory)
         for path in sorted(p for p in directory.iterdir() if p.is_file() and not p.name.startswith(".")):
             try:
+                if path.is_symlink() and not contained(directory, path):  # a link out of the folder: not read
+                    raise TestCaseError("a link to a file outside the corpus folder")
+                if path.stat().st_size > MAX_BYTES:  # read whole, a 3 GB file filled the memory
+                    raise TestCaseError(f"larger than a test case may be ({MAX_BYTES} bytes)")
                 case = decode(path.read_bytes())
                 if case.msg_type != msg_type:
                     raise TestCaseError(f"message type {case.msg_type}, this campaign fuzzes {msg_type}")

@@ -31,11 +31,17 @@ BLOCK = 256
 """Points drawn at a time (a power of two keeps Sobol's balance properties per block)."""
 
 
+WIDEST = 1e300
+"""The widest bound a sampler uses (rad, m): a URDF may write +-1e308 for "unbounded", and the
+span of such a box overflowed to inf, so every sample was inf."""
+
+
 def finite_box(lower: Sequence[float], upper: Sequence[float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Joint limits (rad, m) with an infinite bound (a continuous joint's) replaced by -pi / pi."""
+    """Joint limits (rad, m) with an infinite bound (a continuous joint's) replaced by -pi / pi,
+    and a finite one beyond :data:`WIDEST` brought to it."""
     return (
-        tuple(float(x) if math.isfinite(x) else -math.pi for x in lower),
-        tuple(float(x) if math.isfinite(x) else math.pi for x in upper),
+        tuple(max(float(x), -WIDEST) if math.isfinite(x) else -math.pi for x in lower),
+        tuple(min(float(x), WIDEST) if math.isfinite(x) else math.pi for x in upper),
     )
 
 
@@ -153,6 +159,11 @@ class Uniform:
         return points
 
 
+ALIGNED_TURNS = 16
+"""The aligned stream's multiples of pi/2 lie within this many turns of 0 (and each joint's two
+limits are always among its values): enough for any joint of the shipped robots."""
+
+
 @dataclass
 class Aligned:
     """An endless stream of aligned joint configurations: each joint independently at a
@@ -186,9 +197,12 @@ class Aligned:
         if len(self.lower) != len(self.upper) or not self.lower:
             raise ValueError("Aligned needs lower and upper limits of the same non-zero length")
         self.choices = []
+        quarter = math.pi / 2
         for lo, hi in zip(*finite_box(self.lower, self.upper), strict=True):
-            quarter = math.pi / 2
-            multiples = [k * quarter for k in range(math.ceil(lo / quarter), math.floor(hi / quarter) + 1)]
+            # the multiples within ALIGNED_TURNS turns of 0: limits of +-1e7 listed 13 million
+            first = max(math.ceil(lo / quarter), -4 * ALIGNED_TURNS)
+            last = min(math.floor(hi / quarter), 4 * ALIGNED_TURNS)
+            multiples = [k * quarter for k in range(first, last + 1)]
             self.choices.append(tuple(sorted({lo, hi, *multiples})))
         self._rng = random.Random(self.seed)
 

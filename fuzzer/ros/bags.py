@@ -20,6 +20,7 @@ from typing import Any
 from fuzzer import reporting
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import given_path
+from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
 
 TOPICS = {
@@ -32,6 +33,10 @@ TOPICS = {
 
 MAX_SEEDS = 1000
 """At most this many messages of a bag become seeds (the first ones)."""
+
+MAX_CHUNK_BYTES = 64 << 20
+"""The largest chunk a bag may declare, uncompressed (rosbag writes 768 KiB chunks): rosbag
+decompresses a chunk whole, and an 8 KB bz2 bag declaring 600 MB took 1.3 GB to read."""
 
 
 class BagError(ConfigError):
@@ -101,7 +106,17 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
     try:
         with rosbag.Bag(str(path), "r") as bag:
             types = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
-            for _topic, message, _t in bag.read_messages(connection_filter=wanted):
+            largest = max((h.uncompressed_size for h in bag._chunk_headers.values()), default=0)
+            if largest > MAX_CHUNK_BYTES:  # as declared: a chunk that lies is decompressed whole still
+                raise BagError(
+                    f"--seeds-from-bag {path}: a chunk of {largest} bytes uncompressed "
+                    f"(at most {MAX_CHUNK_BYTES} are read)"
+                )
+            for _topic, raw, _t in bag.read_messages(connection_filter=wanted, raw=True):
+                if len(raw[1]) > MAX_BYTES:  # its test case could not be larger than this
+                    continue  # 3 x 10**7 joint positions made seeds of 120 MB each
+                message = cls()
+                message.deserialize(raw[1])
                 data = to_data(message)
                 try:
                     validate(data)
@@ -110,6 +125,8 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
                 out.append(data)
                 if len(out) >= MAX_SEEDS:
                     break
+    except BagError:
+        raise
     except Exception as exc:  # noqa: BLE001 - rosbag, genpy, struct, bz2/lz4: all mean "not readable"
         raise BagError(f"--seeds-from-bag {path}: not a readable bag: {type(exc).__name__}: {exc}") from None
     if not out:

@@ -58,5 +58,10 @@ def show_main(argv: Sequence[str]) -> int:
         raise ConfigError(str(exc)) from None
     cases = {str(p): load(p) for p in paths}
     shown: Any = next(iter(cases.values())) if len(cases) == 1 else cases
-    reporting.out(json.dumps(shown, indent=1, ensure_ascii=False))
+    text = json.dumps(shown, indent=1, ensure_ascii=False)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:  # a lone surrogate ("\ud800" in the file): JSON's own escape for it
+        text = json.dumps(shown, indent=1)
+    reporting.out(text)
     return 0

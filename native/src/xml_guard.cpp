@@ -89,8 +89,8 @@ struct GuardState {
   }
 };
 
-// Checks run in this order for every element, as the twin's (python_impl/urdf.py):
-// depth, link count, '%' in any attribute but a file name, <origin> vectors.
+// Checks run in this order for every element, as the twin's (python_impl/urdf_text.py):
+// depth, link count, attribute count, '%' in any attribute but a file name, <origin> vectors.
 void XMLCALL on_start(void* data, const XML_Char* name, const XML_Char** attrs) {
   auto* st = static_cast<GuardState*>(data);
   if (!st->error.empty()) return;
@@ -102,6 +102,13 @@ void XMLCALL on_start(void* data, const XML_Char* name, const XML_Char** attrs) 
   if (st->depth == 1) st->root_is_robot = std::strcmp(name, "robot") == 0;
   if (st->depth == 2 && st->root_is_robot && std::strcmp(name, "link") == 0 && ++st->links > kMaxLinks) {
     st->stop(ErrorCode::kUrdfUnsupported, "more than " + std::to_string(kMaxLinks) + " links");
+    return;
+  }
+  int count = 0;
+  while (attrs[2 * count]) ++count;
+  if (count > kMaxAttributes) {
+    st->stop(ErrorCode::kUrdfUnsupported,
+             std::string("<") + clip(name) + "> has more than " + std::to_string(kMaxAttributes) + " attributes");
     return;
   }
   for (int i = 0; attrs[i]; i += 2) {

@@ -21,6 +21,9 @@ namespace rrosfuzz {
 
 constexpr int kMaxXmlDepth = 1000;
 constexpr int kMaxLinks = 10000;
+// Attributes on one element: TinyXML 2.6 (urdfdom's parser) looks each one up in a list, so
+// 80,000 on one element took 21 s to parse (a 2.3 MB file).
+constexpr int kMaxAttributes = 256;
 // Largest URDF accepted, in bytes (file or UTF-8 text): 16 MiB.
 constexpr std::size_t kMaxUrdfBytes = std::size_t{16} << 20;
 
