@@ -281,6 +281,10 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "triage-glob-with-sidecars": lambda t: Row(
         ["triage", *_glob(copy_crash(t, DIVERGE))], 0, "1 bucket", stream="stdout"
     ),
+    # art/* also matches the campaign's logs: they were listed as a bucket "stats.jsonl"
+    "triage-glob-with-campaign-logs": lambda t: Row(
+        ["triage", *_all(_logs(copy_crash(t, DIVERGE).parent))], 0, r"^1 bucket\(s\)", stream="stdout"
+    ),
     "triage-missing-folder": lambda t: Row(["triage", str(t / "nothing")], 2, "no such file"),
     "triage-two-folders": lambda t: Row(
         ["triage", str(copy_crash(t)), str(shutil.copyfile(AGREE, t / "crash-other"))], 2, "several folders"
@@ -379,6 +383,18 @@ def _prefixed(row: Row, command: str) -> Row:
 def _glob(crash: Path) -> list[str]:
     """What the shell makes of ``art/<prefix>*``: the crash file and its sidecar, sorted."""
     return sorted(str(p) for p in crash.parent.glob(crash.name.split("-")[0] + "-*"))
+
+
+def _logs(art: Path) -> Path:
+    """``art`` with a campaign's two logs in it."""
+    (art / "stats.jsonl").write_text('{"execs": 1}\n')
+    (art / "divergences.jsonl").write_text('{"sig": "x"}\n')
+    return art
+
+
+def _all(art: Path) -> list[str]:
+    """What the shell makes of ``art/*``."""
+    return sorted(str(p) for p in art.iterdir())
 
 
 def _write(path: Path, data: bytes) -> Path:

@@ -90,11 +90,13 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
             )
         elif not stat.S_ISREG(mode):
             raise PathError(f"{path}: is {_kind(mode)}, not a regular file")
-        elif not is_sidecar(path):
+        elif not is_sidecar(path) and not path.name.endswith(".jsonl"):  # a glob's campaign logs too
             out.append(path)
     if not out:
-        if given and all(is_sidecar(p) for p in given):
-            raise PathError("only sidecars (.json) given: give the crash files they describe")
+        if given and all(is_sidecar(p) or p.name.endswith(".jsonl") for p in given):
+            raise PathError(
+                "only sidecars (.json) or campaign logs (.jsonl) given: give the crash files they describe"
+            )
         raise PathError("no files to work on")
     return list(dict.fromkeys(out))
 
