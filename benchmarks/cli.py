@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections import Counter
 from pathlib import Path
 
 
@@ -43,7 +44,7 @@ def check_unique(parser: argparse.ArgumentParser, **given: list[str] | tuple[str
     """The parser's error for a name given twice in a list option (``--bugs a a``): a sweep keys its
     trials by name, so a duplicate would be planned twice and run once."""
     for name, values in given.items():
-        repeated = sorted({v for v in values or () if list(values or ()).count(v) > 1})
+        repeated = sorted(v for v, n in Counter(values or ()).items() if n > 1)
         if repeated:
             parser.error(f"--{name.replace('_', '-')} names {', '.join(repeated)} more than once")
 

@@ -92,9 +92,9 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
         raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: no such file")
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
-    if dictionary is not None and not Path(dictionary).is_file():
-        raise UsageError(f"-dict={dictionary}: no such file")
     if dictionary is not None:
+        if not Path(dictionary).is_file():
+            raise UsageError(f"-dict={dictionary}: no such file")
         try:  # libFuzzer refuses a bad one only after start-up, with an exit status of its own
             check_dictionary(Path(dictionary))
         except ValueError as exc:

@@ -34,7 +34,8 @@ def out(text: str = "") -> None:
     try:
         sys.stdout.write(text + "\n")
     except UnicodeEncodeError:
-        sys.stdout.write(text.encode("utf-8", "backslashreplace").decode("utf-8") + "\n")
+        encoding = sys.stdout.encoding or "utf-8"
+        sys.stdout.write(text.encode(encoding, "backslashreplace").decode(encoding) + "\n")
     sys.stdout.flush()
 
 

@@ -310,6 +310,29 @@ def safe_robot(spec: str, source: Path) -> str:
     return spec
 
 
+def sidecar_model(config: dict[str, Any], source: Path) -> tuple[Path, Any]:
+    """The URDF and the twin's model of the robot a sidecar's ``config`` names (the default robot
+    when it names none), for the commands that draw or export a crash (``export-bag``, ``view``).
+
+    Raises
+    ------
+    SidecarError
+        The robot is neither a shipped one nor a regular file (:func:`safe_robot`), or it no
+        longer loads (a file changed or gone since, a tip link not in it).
+    """
+    import python_impl
+    from robot_api.errors import RobotAPIError
+
+    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), source)
+    try:
+        urdf = robots.resolve(robot)
+        return urdf, python_impl.RobotModel(urdf, config.get("tip_link"))
+    except RobotAPIError as exc:
+        raise SidecarError(
+            f"{source}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
+        ) from None
+
+
 def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust: bool = False) -> RunConfig:
     """The run configuration a validated sidecar (or manifest) records, with ``given`` on top.
 

@@ -32,12 +32,13 @@ class Tolerance:
         given: set[str] = set()
         for part in parts:
             key, sep, raw = part.partition("=")
-            if not sep or key.strip() not in values:
+            key = key.strip()
+            if not sep or key not in values:
                 raise ValueError(f"tolerance {part!r}: expected m=<value> or rad=<value>")
-            if key.strip() in given:  # m=1e-5,m=1e-6: the last one won silently
-                raise ValueError(f"tolerance {text!r}: {key.strip()} given twice")
-            given.add(key.strip())
-            values[key.strip()] = _positive(raw)
+            if key in given:  # m=1e-5,m=1e-6: the last one won silently
+                raise ValueError(f"tolerance {text!r}: {key} given twice")
+            given.add(key)
+            values[key] = _positive(raw)
         return cls(values["m"], values["rad"])
 
 

@@ -58,6 +58,11 @@ def is_sidecar(path: Path) -> bool:
     return path.name.endswith(".json") and path.with_name(path.name[: -len(".json")]).is_file()
 
 
+def _beside_crash_files(path: Path) -> bool:
+    """A sidecar, or a campaign's log (``.jsonl``), which a glob such as ``art/*`` also matches."""
+    return is_sidecar(path) or path.name.endswith(".jsonl")
+
+
 def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
     """Files to work on: files as given, folders expanded to their files; sidecars skipped.
 
@@ -90,10 +95,10 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
             )
         elif not stat.S_ISREG(mode):
             raise PathError(f"{path}: is {_kind(mode)}, not a regular file")
-        elif not is_sidecar(path) and not path.name.endswith(".jsonl"):  # a glob's campaign logs too
+        elif not _beside_crash_files(path):
             out.append(path)
     if not out:
-        if given and all(is_sidecar(p) or p.name.endswith(".jsonl") for p in given):
+        if given and all(_beside_crash_files(p) for p in given):
             raise PathError(
                 "only sidecars (.json) or campaign logs (.jsonl) given: give the crash files they describe"
             )

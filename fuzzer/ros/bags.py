@@ -159,11 +159,8 @@ def export_bag(crash: Path, output: Path) -> list[str]:
     BagError
         The crash file or its sidecar cannot be used, or the bag cannot be written.
     """
-    import python_impl
-    from fuzzer.artifacts.sidecar import read_sidecar, safe_robot
+    from fuzzer.artifacts.sidecar import read_sidecar, sidecar_model
     from fuzzer.input.testcase import decode
-    from robot_api import robots
-    from robot_api.errors import RobotAPIError
 
     try:
         case = decode(crash.read_bytes())
@@ -174,13 +171,7 @@ def export_bag(crash: Path, output: Path) -> list[str]:
     rosbag = env.import_module("rosbag")
     rospy = env.import_module("rospy")
     sensor_msgs = env.import_module("sensor_msgs.msg")
-    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)
-    try:
-        model = python_impl.RobotModel(robots.resolve(robot), config.get("tip_link"))
-    except RobotAPIError as exc:  # a robot file since changed or gone, a tip link not in it
-        raise BagError(
-            f"{crash}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
-        ) from None
+    _, model = sidecar_model(config, crash)
     stamp = case.message.get("header", {}).get("stamp", {})
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)

@@ -195,12 +195,9 @@ def start_xvfb(log_dir: str) -> tuple[str, processes.Process]:
 
 def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
     """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
-    import python_impl
-    from fuzzer.artifacts.sidecar import read_sidecar, safe_robot
+    from fuzzer.artifacts.sidecar import read_sidecar, sidecar_model
     from fuzzer.input.testcase import decode
     from python_impl.urdf import load_urdf
-    from robot_api import robots
-    from robot_api.errors import RobotAPIError
 
     try:
         case = decode(crash.read_bytes())
@@ -208,14 +205,7 @@ def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
         raise ConfigError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}
     config = sidecar.get("config", {})
-    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), crash)
-    try:
-        urdf = robots.resolve(robot)
-        model = python_impl.RobotModel(urdf, config.get("tip_link"))
-    except RobotAPIError as exc:  # a robot file since changed or gone, a tip link not in it
-        raise ConfigError(
-            f"{crash}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
-        ) from None
+    urdf, model = sidecar_model(config, crash)
     return case, sidecar, model, load_urdf(str(urdf), True)
 
 
