@@ -129,7 +129,9 @@ def trust_option(parser: argparse.ArgumentParser) -> None:
         "--trust-sidecar",
         action="store_true",
         help="import the targets a crash file's sidecar (or a corpus manifest) names, even if they are "
-        "not the builtins; without it such a file is refused unless --targets is given",
+        "not the builtins, and read the robot file and message folders it names even outside the "
+        "working directory and the file's folder; without it such a file is refused unless "
+        "--targets (--robot, --msg-path) is given",
     )
 
 

@@ -124,6 +124,11 @@ def _fifo(path: Path) -> Path:
     return path
 
 
+def _link(path: Path, target: Path) -> Path:
+    path.symlink_to(target)
+    return path
+
+
 def foreign_target(
     tmp: Path, *extra: str, status: int = 2, message: str = "--trust-sidecar", stream: str = "stderr"
 ) -> Row:
@@ -237,12 +242,39 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "sidecar-json-list": sidecar_row(lambda s: b"[1, 2]", "expected an object"),
     "sidecar-not-utf8": sidecar_row(lambda s: b'{"config": "\xff\xfe"}', "not UTF-8"),
     "sidecar-deeply-nested": sidecar_row(lambda s: b"[" * 200000 + b"]" * 200000, "not valid JSON"),
-    "sidecar-robot-missing": sidecar_row(
-        _set("config.robot", "/nonexistent/robot.urdf"), "neither a shipped"
+    # (the runs' working directory is the test's folder, the crash file in its art/)
+    "sidecar-robot-missing": sidecar_row(_set("config.robot", "nonexistent/robot.urdf"), "neither a shipped"),
+    "sidecar-robot-folder": sidecar_row(_set("config.robot", "art"), "not a regular file"),
+    "sidecar-robot-fifo": lambda t: Row(
+        [str(copy_crash(t, edit=_set("config.robot", str(_fifo(t / "robot.urdf")))))], 2, "not a regular file"
     ),
-    "sidecar-robot-folder": sidecar_row(_set("config.robot", "/tmp"), "not a regular file"),
-    "sidecar-robot-device": sidecar_row(_set("config.robot", "/dev/zero"), "not a regular file"),
-    "sidecar-msg-path-missing": sidecar_row(_set("config.msg_path", ["/nonexistent/msgs"]), "msg_path"),
+    "sidecar-msg-path-missing": sidecar_row(_set("config.msg_path", ["nonexistent/msgs"]), "is not a folder"),
+    # -- nothing is read outside the working directory and the file's folder -----------------------
+    "sidecar-robot-device": sidecar_row(_set("config.robot", "/dev/zero"), "'/dev/zero' leads outside"),
+    "sidecar-robot-outside": sidecar_row(_set("config.robot", str(ROOT / "README.md")), "leads outside"),
+    "sidecar-robot-missing-outside": sidecar_row(
+        _set("config.robot", "/nonexistent/robot.urdf"), "leads outside"
+    ),
+    "sidecar-robot-dot-dot": sidecar_row(_set("config.robot", "../robot.urdf"), "leads outside"),
+    "sidecar-robot-symlink-out": lambda t: Row(
+        [str(copy_crash(t, edit=_set("config.robot", str(_link(t / "r.urdf", ROOT / "README.md")))))],
+        2,
+        "r.urdf' leads outside .* \\(symlinks followed\\)",
+    ),
+    "sidecar-msg-path-outside": sidecar_row(
+        _set("config.msg_path", ["/usr/share"]), "msg_path '/usr/share' leads"
+    ),
+    "sidecar-robot-outside-trusted": lambda t: Row(
+        [str(copy_crash(t, edit=_set("config.robot", str(ROOT / "README.md")))), "--trust-sidecar"],
+        2,
+        "cannot load .*README.md: URDFError",
+    ),
+    "sidecar-robot-outside-given": lambda t: Row(
+        [str(copy_crash(t, edit=_set("config.robot", "/nonexistent/robot.urdf"))), "--robot", "probot_anno"],
+        0,
+        "agree",
+        stream="stdout",
+    ),
     "sidecar-symlink-to-fifo": lambda t: Row([str(_sidecar_fifo(t))], 2, "not a regular file"),
     # -- crash files are data: no import of what a sidecar names -----------------------------------
     "replay-import-refused": lambda t: foreign_target(t),
@@ -361,9 +393,14 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         [str(_damaged_manifest(t)), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "manifest is not valid JSON"
     ),
     "corpus-manifest-bad-robot": lambda t: Row(
-        [str(_corpus_with_manifest(t, robot="/nonexistent.urdf")), *CAMPAIGN, f"--artifacts={t / 'a'}"],
+        [str(_corpus_with_manifest(t, robot="nonexistent.urdf")), *CAMPAIGN, f"--artifacts={t / 'a'}"],
         2,
         "neither a shipped robot",
+    ),
+    "corpus-manifest-robot-outside": lambda t: Row(
+        [str(_corpus_with_manifest(t, robot=str(ROOT / "README.md"))), *CAMPAIGN, f"--artifacts={t / 'a'}"],
+        2,
+        "manifest.json: robot .*README.md' leads outside",
     ),
     "corpus-manifest-import-refused": lambda t: _manifest_foreign(t),
     "failed-campaign-records-no-manifest": lambda t: _no_manifest_for_a_bad_robot(t),

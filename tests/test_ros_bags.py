@@ -203,6 +203,15 @@ def test_export_bag_writes_only_a_bag_file_and_names_what_it_cannot_use(ros: Any
     run = _fuzz("export-bag", str(crash), cwd=tmp_path)
     assert run.returncode == 2 and "is not a geometry_msgs/PoseStamped" in run.stderr, run.stderr[-800:]
     assert "Traceback" not in run.stderr
+    # a robot file outside the working directory and the crash file's folder is not read,
+    # unless the user vouches for the file
+    outside = str(Path(__file__).resolve().parents[1] / "README.md")
+    sidecar.write_text(json.dumps({"config": {**config, "robot": outside}, "signature": {"key": "k"}}))
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 2 and "README.md' leads outside" in run.stderr, run.stderr[-800:]
+    run = _fuzz("export-bag", str(crash), "--trust-sidecar", cwd=tmp_path)
+    assert run.returncode == 2 and "README.md does not load: URDFError" in run.stderr, run.stderr[-800:]
+    assert "Traceback" not in run.stderr
 
 
 def test_a_bag_s_chunks_and_messages_are_read_within_bounds(

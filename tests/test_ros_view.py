@@ -98,3 +98,21 @@ def test_a_sidecar_whose_robot_no_longer_loads_is_named(tmp_path: Path) -> None:
     crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
     with pytest.raises(ConfigError, match="its sidecar's robot probot_anno does not load: UnknownNameError"):
         load(crash)  # UnknownNameError from the view's loader until 2026-12-05
+
+
+def test_a_sidecar_robot_outside_the_folders_is_not_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from fuzzer.execution.session import ConfigError
+    from fuzzer.ros.view import load
+
+    monkeypatch.chdir(tmp_path)
+    crash = tmp_path / "crash-0123456789abcdef0123456789abcdef01234567"
+    crash.write_bytes(TestCase("std_msgs/Float64MultiArray", {"data": [0.0] * 6}).encode())
+    outside = ROOT / "README.md"
+    sidecar = {"config": {"op": "move", "robot": str(outside)}, "signature": {"key": "k"}}
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    with pytest.raises(ConfigError, match=r"README\.md' leads outside"):
+        load(crash)
+    with pytest.raises(ConfigError, match=r"README\.md does not load: URDFError"):
+        load(crash, trust=True)  # read, as the user vouched for the file

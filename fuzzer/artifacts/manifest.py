@@ -130,7 +130,8 @@ def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, 
     """Options to take from the manifest (command-line spelling), for those not in ``given``.
 
     Targets are taken only when they are builtins (or with ``trust``); the robot
-    only when it is a shipped name or an existing regular file.
+    only when it is a shipped name or an existing regular file in the corpus folder or the
+    working directory (anywhere with ``trust``).
     """
     from fuzzer.artifacts.sidecar import foreign_targets, safe_robot
 
@@ -139,7 +140,7 @@ def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, 
     if "op" not in given and "op" in c:
         out["op"] = c["op"]
     if "robot" not in given and "robot" in c:
-        out["robot"] = safe_robot(c["robot"], manifest.path)
+        out["robot"] = safe_robot(c["robot"], manifest.path, trust, folder=manifest.path.parent.parent)
     if "tip_link" not in given and c.get("tip_link"):
         out["tip_link"] = c["tip_link"]
     if "msg_type" not in given and c.get("msg_type"):

@@ -13,14 +13,21 @@ and nothing it names is imported or opened without the user's say-so:
   else (missing, a folder, a FIFO, a device) is refused; pass ``--robot``.
 * **message paths** (``msg_path``): only existing folders; .msg files are parsed
   as data, never executed.
+* **where**: a robot file or message folder a file names is read only inside the
+  working directory or the file's own folder (symlinks followed, :func:`outside`).
+  A path elsewhere (``/home/me/.ssh/...``, ``../../x``) is refused unread, not even
+  tested for existence, unless the user passes it (``--robot``, ``--msg-path``) or
+  vouches for the file (``--trust-sidecar``).
 
 The same rules apply to a corpus manifest (:mod:`fuzzer.artifacts.manifest`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 import stat
 from collections.abc import Callable
 from dataclasses import replace
@@ -287,8 +294,38 @@ def foreign_targets(targets: tuple[str, ...] | list[str]) -> list[str]:
     return [t for t in targets if t not in BUILTIN_TARGETS and t not in BUILTIN]
 
 
-def safe_robot(spec: str, source: Path) -> str:
-    """A robot named by a file: a shipped name, or an existing regular file.
+def readable_folders(source: Path, folder: Path | None = None) -> tuple[Path, ...]:
+    """Where a file's settings may point: ``folder`` (default: ``source``'s own folder) and
+    the working directory."""
+    out = [folder if folder is not None else source.parent]
+    with contextlib.suppress(OSError):  # the working directory was removed
+        out.append(Path.cwd())
+    return tuple(out)
+
+
+def outside(spec: str, folders: tuple[Path, ...]) -> bool:
+    """Whether the path ``spec`` (relative to the working directory, symlinks followed) lies
+    outside every one of ``folders``; a path that cannot be resolved counts as outside."""
+    try:
+        real = Path(os.path.realpath(spec))
+        return not any(real.is_relative_to(os.path.realpath(f)) for f in folders)
+    except (OSError, ValueError):
+        return True
+
+
+def _refuse_outside(what: str, spec: str, source: Path, folders: tuple[Path, ...], option: str) -> None:
+    if outside(spec, folders):
+        where = " and ".join(dict.fromkeys(os.path.realpath(f) for f in folders))
+        raise SidecarError(
+            f"{source}: {what} {spec!r} leads outside {where} (symlinks followed), and a file's "
+            f"settings are never followed elsewhere; pass {option} (the same path if you trust it) "
+            "or --trust-sidecar"
+        )
+
+
+def safe_robot(spec: str, source: Path, trust: bool = False, folder: Path | None = None) -> str:
+    """A robot named by a file: a shipped name, or an existing regular file inside the working
+    directory or ``folder`` (default: ``source``'s folder; anywhere with ``trust``).
 
     Raises
     ------
@@ -297,6 +334,8 @@ def safe_robot(spec: str, source: Path) -> str:
     """
     if spec in robots.known_robots():
         return spec
+    if not trust:
+        _refuse_outside("robot", spec, source, readable_folders(source, folder), "--robot NAME_OR_URDF")
     path = Path(spec)
     try:
         info = path.stat()
@@ -310,20 +349,21 @@ def safe_robot(spec: str, source: Path) -> str:
     return spec
 
 
-def sidecar_model(config: dict[str, Any], source: Path) -> tuple[Path, Any]:
+def sidecar_model(config: dict[str, Any], source: Path, trust: bool = False) -> tuple[Path, Any]:
     """The URDF and the twin's model of the robot a sidecar's ``config`` names (the default robot
     when it names none), for the commands that draw or export a crash (``export-bag``, ``view``).
 
     Raises
     ------
     SidecarError
-        The robot is neither a shipped one nor a regular file (:func:`safe_robot`), or it no
-        longer loads (a file changed or gone since, a tip link not in it).
+        The robot is neither a shipped one nor a regular file where a file may point
+        (:func:`safe_robot`; ``trust``: anywhere), or it no longer loads (a file changed or
+        gone since, a tip link not in it).
     """
     import python_impl
     from robot_api.errors import RobotAPIError
 
-    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), source)
+    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), source, trust)
     try:
         urdf = robots.resolve(robot)
         return urdf, python_impl.RobotModel(urdf, config.get("tip_link"))
@@ -345,7 +385,8 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
     given : dict
         Options given on the command line; they replace the recorded ones.
     trust : bool
-        ``--trust-sidecar``: import whatever targets the file names.
+        ``--trust-sidecar``: import whatever targets the file names, and read its robot and
+        message folders wherever they are.
 
     Raises
     ------
@@ -367,10 +408,12 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
             )
     robot = config.get("robot", robots.DEFAULT_ROBOT)
     if "robot" not in given:
-        robot = safe_robot(robot, source)
+        robot = safe_robot(robot, source, trust)
     msg_path = tuple(config.get("msg_path", ()))
     if "msg_path" not in given:
         for root in msg_path:
+            if not trust:
+                _refuse_outside("msg_path", root, source, readable_folders(source), "--msg-path DIR")
             if not Path(root).is_dir():
                 raise SidecarError(f"{source}: msg_path {root!r} is not a folder; pass --msg-path")
     tol = config.get("tolerance", {})

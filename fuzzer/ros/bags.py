@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
+from fuzzer.cli_options import trust_option
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import given_path
 from fuzzer.input.testcase import MAX_BYTES
@@ -145,7 +146,7 @@ def _pose_stamped(values: dict[str, Any], frame: str) -> Any:
     return pose
 
 
-def export_bag(crash: Path, output: Path) -> list[str]:
+def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     """Write a divergence as a bag: its input, and each target's final joint state and pose.
 
     Topics: the input on ``TOPICS[msg_type]`` (``/joint_states`` for a JointState);
@@ -171,7 +172,7 @@ def export_bag(crash: Path, output: Path) -> list[str]:
     rosbag = env.import_module("rosbag")
     rospy = env.import_module("rospy")
     sensor_msgs = env.import_module("sensor_msgs.msg")
-    _, model = sidecar_model(config, crash)
+    _, model = sidecar_model(config, crash, trust)
     stamp = case.message.get("header", {}).get("stamp", {})
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
@@ -240,6 +241,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("crash", type=given_path)
     parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
+    trust_option(parser)
     args = parser.parse_args(argv)
     if not args.crash.is_file():
         raise BagError(f"{args.crash}: no such file")
@@ -248,7 +250,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
     except env.RosUnavailableError as exc:
         raise BagError(str(exc)) from None
     output = args.output or args.crash.with_name(args.crash.name + ".bag")
-    topics = export_bag(args.crash, output)
+    topics = export_bag(args.crash, output, args.trust_sidecar)
     reporting.out(f"wrote {output}: {', '.join(topics)}")
     reporting.out(f"play it: rosbag play {output}")
     return 0

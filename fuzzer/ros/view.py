@@ -35,6 +35,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from fuzzer import reporting
+from fuzzer.cli_options import trust_option
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import given_path
 from fuzzer.ros import env, processes
@@ -193,7 +194,7 @@ def start_xvfb(log_dir: str) -> tuple[str, processes.Process]:
     raise ConfigError("view: no Xvfb display could be started (scripts/ros-ensure.sh --viz installs Xvfb)")
 
 
-def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
+def load(crash: Path, trust: bool = False) -> tuple[Any, dict[str, Any], Any, Any]:
     """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
     from fuzzer.artifacts.sidecar import read_sidecar, sidecar_model
     from fuzzer.input.testcase import decode
@@ -205,20 +206,21 @@ def load(crash: Path) -> tuple[Any, dict[str, Any], Any, Any]:
         raise ConfigError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}
     config = sidecar.get("config", {})
-    urdf, model = sidecar_model(config, crash)
+    urdf, model = sidecar_model(config, crash, trust)
     return case, sidecar, model, load_urdf(str(urdf), True)
 
 
-def run_view(crash: Path, screenshot: Path | None, seconds: float) -> int:
+def run_view(crash: Path, screenshot: Path | None, seconds: float, trust: bool = False) -> int:
     """Show ``crash`` in RViz until RViz closes. With ``screenshot``: under Xvfb, save the
     screen every second until both arms are drawn (``MIN_PIXELS`` of each colour) or
-    ``seconds`` have passed; 0 if they are, 1 if not."""
+    ``seconds`` have passed; 0 if they are, 1 if not. ``trust``: ``--trust-sidecar``, the
+    sidecar's robot read wherever it is."""
     env.require()
     if shutil.which("rviz") is None or (screenshot is not None and shutil.which("Xvfb") is None):
         raise ConfigError(
             "view: RViz (and Xvfb for --screenshot) are not installed: scripts/ros-ensure.sh --viz"
         )
-    case, sidecar, model, tree = load(crash)
+    case, sidecar, model, tree = load(crash, trust)
     states = states_of(case, sidecar, model)
     log_dir = processes.log_folder(prefix="rrosfuzz-view-")
     try:
@@ -325,9 +327,10 @@ def view_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "--seconds", type=float, default=60.0, help="with --screenshot: the longest wait for both arms (60)"
     )
+    trust_option(parser)
     args = parser.parse_args(argv)
     if not args.crash.is_file():
         raise ConfigError(f"{args.crash}: no such file")
     if not (math.isfinite(args.seconds) and 0 < args.seconds <= 600):
         raise ConfigError("--seconds must be in (0, 600]")
-    return run_view(args.crash, args.screenshot, args.seconds)
+    return run_view(args.crash, args.screenshot, args.seconds, args.trust_sidecar)
