@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import bz2
 import json
 import math
 import os
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -232,3 +234,56 @@ def test_a_bag_s_chunks_and_messages_are_read_within_bounds(
     monkeypatch.setattr(bags, "MAX_CHUNK_BYTES", 1024)
     with pytest.raises(bags.BagError, match=r"a chunk of \d+ bytes uncompressed \(at most 1024"):
         bags.read_seeds(path, "sensor_msgs/JointState", lambda m: None)
+
+
+def _lie_about_chunk_sizes(path: Path, declared: int) -> None:
+    """Every chunk header's uncompressed ``size`` field rewritten to ``declared``."""
+    data = bytearray(path.read_bytes())
+    at = data.find(b"size=")
+    assert at > 0
+    while at > 0:
+        data[at + 5 : at + 9] = struct.pack("<I", declared)
+        at = data.find(b"size=", at + 9)
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("compression", ["bz2", "lz4"])
+def test_a_chunk_that_lies_about_its_size_stops_at_the_bound(
+    ros: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, compression: str
+) -> None:
+    # the bound on the declared size alone let a chunk declaring 100 bytes decompress whole
+    from fuzzer.ros import bags
+
+    rosbag, sensor_msgs, _std_msgs = ros
+    path = tmp_path / "liar.bag"
+    with rosbag.Bag(str(path), "w", compression=compression) as bag:
+        for stamp in range(40):
+            bag.write("/joint_states", _state(sensor_msgs, [0.001 * stamp] * 6, stamp + 1))
+    before = bags.read_seeds(path, "sensor_msgs/JointState", lambda m: None)
+    assert len(before) == 40
+    _lie_about_chunk_sizes(path, 100)
+    monkeypatch.setattr(bags, "MAX_CHUNK_BYTES", 1024)  # the chunk holds about 6 KB
+    with pytest.raises(bags.BagError, match=r"a chunk decompresses past 1024 bytes"):
+        bags.read_seeds(path, "sensor_msgs/JointState", lambda m: None)
+    assert rosbag.bag.bz2 is bz2  # rosbag's own modules are back once the bag is read
+
+
+def test_the_bounded_decompressors_give_what_the_whole_ones_give(ros: Any) -> None:
+    import roslz4
+
+    from fuzzer.ros.bags import ChunkTooLargeError, bounded_bz2, bounded_lz4
+
+    data = bytes(range(256)) * 300
+    two_streams = bz2.compress(data) + bz2.compress(data[:1000])
+    assert bounded_bz2(two_streams, 10**6) == bz2.decompress(two_streams)
+    assert bounded_bz2(b"", 10) == bz2.decompress(b"")
+    with pytest.raises(ChunkTooLargeError):
+        bounded_bz2(two_streams, len(data))
+    with pytest.raises(ValueError, match="end-of-stream"):
+        bounded_bz2(bz2.compress(data)[:-20], 10**6)
+    with pytest.raises(OSError):
+        bounded_bz2(b"not bz2 at all", 10**6)
+    packed = roslz4.compress(data * 20)
+    assert bounded_lz4(roslz4, packed, 10**7) == roslz4.decompress(packed) == data * 20
+    with pytest.raises(ChunkTooLargeError):
+        bounded_lz4(roslz4, packed, 10**5)

@@ -11,9 +11,12 @@ plain data (:func:`to_data`) and pass the campaign's own validation.
 from __future__ import annotations
 
 import argparse
+import bz2
+import contextlib
 import os
 import tempfile
-from collections.abc import Sequence
+import types
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,8 +39,71 @@ MAX_SEEDS = 1000
 """At most this many messages of a bag become seeds (the first ones)."""
 
 MAX_CHUNK_BYTES = 64 << 20
-"""The largest chunk a bag may declare, uncompressed (rosbag writes 768 KiB chunks): rosbag
+"""The largest chunk a bag may declare or decompress to (rosbag writes 768 KiB chunks): rosbag
 decompresses a chunk whole, and an 8 KB bz2 bag declaring 600 MB took 1.3 GB to read."""
+
+LZ4_PIECE = 4096
+"""Compressed bytes fed to the LZ4 decompressor at a time (each gives at most one block, 1 MiB)."""
+
+
+class ChunkTooLargeError(Exception):
+    """A chunk that decompresses past :data:`MAX_CHUNK_BYTES`, whatever its header declared."""
+
+
+def bounded_bz2(data: bytes, limit: int) -> bytes:
+    """``bz2.decompress(data)`` (every stream of it), stopping once past ``limit`` bytes.
+
+    Raises
+    ------
+    ChunkTooLargeError
+        More than ``limit`` bytes would come out.
+    ValueError, OSError
+        As ``bz2.decompress``: data cut short, or not bz2.
+    """
+    out = bytearray()
+    while data:
+        stream = bz2.BZ2Decompressor()
+        out += stream.decompress(data, max_length=limit + 1 - len(out))
+        if len(out) > limit:
+            raise ChunkTooLargeError(limit)
+        if not stream.eof:
+            raise ValueError("compressed data ended before the end-of-stream marker was reached")
+        data = stream.unused_data
+    return bytes(out)
+
+
+def bounded_lz4(roslz4: Any, data: bytes, limit: int) -> bytes:
+    """``roslz4.decompress(data)``, fed :data:`LZ4_PIECE` bytes at a time, stopping once past
+    ``limit`` bytes (:class:`ChunkTooLargeError`)."""
+    stream = roslz4.LZ4Decompressor()
+    out = bytearray()
+    for start in range(0, len(data), LZ4_PIECE):
+        out += stream.decompress(data[start : start + LZ4_PIECE])
+        if len(out) > limit:
+            raise ChunkTooLargeError(limit)
+    return bytes(out)
+
+
+@contextlib.contextmanager
+def bounded_chunks(rosbag: Any) -> Iterator[None]:
+    """While reading: rosbag's ``bz2.decompress`` and ``roslz4.decompress`` (module globals of
+    ``rosbag.bag``, looked up at each chunk) replaced by bounded ones, so a chunk that lies
+    about its size stops at :data:`MAX_CHUNK_BYTES` instead of filling the memory."""
+    module = rosbag.bag
+    saved = {name: getattr(module, name) for name in ("bz2", "roslz4") if hasattr(module, name)}
+    module.bz2 = types.SimpleNamespace(decompress=lambda data: bounded_bz2(data, MAX_CHUNK_BYTES))
+    if "roslz4" in saved:
+        lz4 = saved["roslz4"]
+        module.roslz4 = types.SimpleNamespace(
+            decompress=lambda data: bounded_lz4(lz4, data, MAX_CHUNK_BYTES),
+            LZ4Compressor=lz4.LZ4Compressor,
+            LZ4Decompressor=lz4.LZ4Decompressor,
+        )
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            setattr(module, name, value)
 
 
 class BagError(ConfigError):
@@ -103,12 +169,12 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
         return bool(datatype == msg_type and md5sum == cls._md5sum)
 
     out: list[dict[str, Any]] = []
-    types: set[str] = set()
+    held: set[str] = set()
     try:
-        with rosbag.Bag(str(path), "r") as bag:
-            types = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
+        with bounded_chunks(rosbag), rosbag.Bag(str(path), "r") as bag:
+            held = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
             largest = max((h.uncompressed_size for h in bag._chunk_headers.values()), default=0)
-            if largest > MAX_CHUNK_BYTES:  # as declared: a chunk that lies is decompressed whole still
+            if largest > MAX_CHUNK_BYTES:  # as declared (one that lies stops in bounded_chunks)
                 raise BagError(
                     f"--seeds-from-bag {path}: a chunk of {largest} bytes uncompressed "
                     f"(at most {MAX_CHUNK_BYTES} are read)"
@@ -128,11 +194,16 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
                     break
     except BagError:
         raise
+    except ChunkTooLargeError:
+        raise BagError(
+            f"--seeds-from-bag {path}: a chunk decompresses past {MAX_CHUNK_BYTES} bytes "
+            "(more than its header declares: at most that many are read)"
+        ) from None
     except Exception as exc:  # noqa: BLE001 - rosbag, genpy, struct, bz2/lz4: all mean "not readable"
         raise BagError(f"--seeds-from-bag {path}: not a readable bag: {type(exc).__name__}: {exc}") from None
     if not out:
-        held = ", ".join(sorted(types)) or "no messages"
-        raise BagError(f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {held})")
+        holds = ", ".join(sorted(held)) or "no messages"
+        raise BagError(f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {holds})")
     return out
 
 
