@@ -23,13 +23,6 @@ Panda's numbers:
 ``pick_and_place``
     the remember / named-target round trip of pick-and-place scripts: both scaling factors
     0.2, a move, ``remember_joint_values``, another move, back to the remembered state.
-``stale_plan``
-    moveit_tutorials ``move_group_python_interface_tutorial.py``, ``execute_plan``'s note:
-    "The robot's current joint state must be within some tolerance of the first waypoint in
-    the RobotTrajectory or execute() will fail". A plan to a joint target, a move elsewhere
-    (``go``), then executing the plan made before the move, which must fail (MoveIt checks a
-    trajectory's start against the current state before executing it, moveit/moveit#63,
-    ``allowed_start_tolerance``). Last, so the four scripts above keep their places.
 
 Configurations come from a seeded uniform stream inside the joint limits (a continuous
 joint's: -pi, pi); pose goals and waypoints are the tip at configurations a tenth of the way
@@ -69,7 +62,7 @@ JUMP_THRESHOLD: Final = 0.0
 """The tutorials' jump threshold (disabled)."""
 WAYPOINTS: Final = 3
 """Waypoints of a tutorial Cartesian path (down, right, up and left in the C++ tutorial)."""
-NAMES: Final = ("joint_goal", "pose_goal", "cartesian_slow", "pick_and_place", "stale_plan")
+NAMES: Final = ("joint_goal", "pose_goal", "cartesian_slow", "pick_and_place")
 """The scripts, in the order :func:`tutorial_scenarios` returns them."""
 _HEADER: Final[dict[str, Any]] = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
 
@@ -190,16 +183,6 @@ def tutorial_scenarios(
                 _call("/go"),
                 {"topic": "/named_target", "msg": {"data": "pick"}},
                 _call("/go"),
-            ],
-        ),
-        (
-            "stale_plan",
-            [
-                joint_target_step(q[4], names),
-                _call("/plan"),
-                joint_target_step(q[5], names),
-                _call("/go"),
-                _call("/execute"),
             ],
         ),
     ]
