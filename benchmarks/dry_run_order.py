@@ -175,7 +175,7 @@ def main(argv: Sequence[str] | None = None) -> list[SeedResult]:
         help="uniform sampling's inputs per seed at most (default 400)",
     )
     parser.add_argument(
-        "--out", type=Path, default=None, help="also write each seed's result here (JSON Lines)"
+        "--out", type=Path, default=None, help="also write each seed's result to this new file (JSON Lines)"
     )
     args = parser.parse_args(argv)
     unknown = [name for name in args.bugs if name not in BUGS]
@@ -190,6 +190,8 @@ def main(argv: Sequence[str] | None = None) -> list[SeedResult]:
         parser.error("--seeds and --uniform-inputs must be at least 1")
     if args.out is not None:
         cli.check_out_file(parser, args.out)  # before the first bug's seeds, not after
+        if args.out.exists():  # appended to, as each bug ends: a re-run doubled its records
+            parser.error(f"{args.out} exists: name another --out, or remove it")
     everything: list[SeedResult] = []
     for name in args.bugs:
         bug = BUGS[name]

@@ -9,21 +9,20 @@ copies to the child processes of ``-fork``/``-jobs``/``-merge``.
 
 from __future__ import annotations
 
-import datetime
-import hashlib
 import os
 import random
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from fuzzer import dry_harness, dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
+from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution import guard
-from fuzzer.execution.session import RunConfig, Session, outcome_json, versions
+from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.generation.corpus import (
     bag_seeds,
     make_seeds,
@@ -141,7 +140,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         if options.seeds is not None
         else (0 if usable or len(folders) < len(options.corpus) else 32)
     )
-    filling: list[TestCase] = []
     seeds_of_campaign = (libfuzzer_seed(options.libfuzzer_flags), options.seed)  # in stats.jsonl
     if wanted and not child and folders and dry_ok:
         # fuzzer.dry_run: children evaluate probes, uniform inputs, seeds while libFuzzer starts
@@ -160,32 +158,16 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             timeout_code=timeout_code,
         )
         dry.first()  # before the seeds exist
-    if not child:  # the configuration opened: record it in the corpus manifest (fuzzer/artifacts/manifest.py)
-        from fuzzer.artifacts.travel import record_corpus
+    try:
+        seeds, filling = _initial_seeds(session, options, wanted if not child else 0, folders, seeds, dry)
+        if not child:  # the seeds made: record the configuration in the corpus manifest
+            from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
 
-        record_corpus(options.corpus, config)  # after the dry run's fork: its fsync took 1-4 ms
-    if wanted and not child and folders:
-        generated = make_seeds(session, wanted, options.seed)
-        orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
-        if dry is not None:
-            dry.second(generated)
-        # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
-        count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
-        filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
-        filling += orientation if count else []  # a pose target's quaternion at lengths other than one
-        tutorials = (
-            tutorial_seeds(session, options.seed, len(generated)) if options.mutator == "rrosfuzz" else []
-        )
-        write_seeds(folders[0], generated + filling + tutorials)
-        seeds = generated + seeds
-        reporting.info(
-            f"wrote {len(generated)} seeds from Hypothesis ({config.message_type})"
-            + (f" and {len(filling)} space-filling configurations" if filling else "")
-            + (f" and {len(tutorials)} script(s) of MoveIt's tutorials" if tutorials else "")
-            + f" to {folders[0]}"
-        )
-    if not seeds:
-        seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
+            record_corpus(options.corpus, config)  # after the dry run's fork: its fsync took 1-4 ms
+    except BaseException:
+        if dry is not None:  # a usage error after the fork (seeds Hypothesis cannot draw): without
+            dry.stop()  # this its children ran on, up to -timeout, after the error was shown
+        raise
     if dry is not None:
         pids = ", ".join(map(str, dry.pids))
         what = (
@@ -334,6 +316,50 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     return once(0) or 0
 
 
+def _initial_seeds(
+    session: Session,
+    options: CampaignOptions,
+    wanted: int,
+    folders: tuple[Path, ...],
+    seeds: list[TestCase],
+    dry: dry_run.Stages | None,
+) -> tuple[list[TestCase], list[TestCase]]:
+    """The campaign's seeds and its space-filling ones: ``wanted`` seeds made and written to the
+    first corpus folder (with the full engine's space-filling points and tutorial scripts) before
+    the corpus's own ``seeds``; 8 in memory if there are none (to restart from damaged inputs).
+
+    Raises
+    ------
+    ConfigError
+        Hypothesis draws no seed for this robot (a chain of 1,300 joints).
+    """
+    config = session.config
+    filling: list[TestCase] = []
+    if wanted and folders:
+        generated = make_seeds(session, wanted, options.seed)
+        orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
+        if dry is not None:
+            dry.second(generated)
+        # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
+        count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
+        filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
+        filling += orientation if count else []  # a pose target's quaternion at lengths other than one
+        tutorials = (
+            tutorial_seeds(session, options.seed, len(generated)) if options.mutator == "rrosfuzz" else []
+        )
+        write_seeds(folders[0], generated + filling + tutorials)
+        seeds = generated + seeds
+        reporting.info(
+            f"wrote {len(generated)} seeds from Hypothesis ({config.message_type})"
+            + (f" and {len(filling)} space-filling configurations" if filling else "")
+            + (f" and {len(tutorials)} script(s) of MoveIt's tutorials" if tutorials else "")
+            + f" to {folders[0]}"
+        )
+    if not seeds:
+        seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
+    return seeds, filling
+
+
 def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     """argv for Atheris: our script (absolute, for re-execution), libFuzzer flags with our
     defaults, our options as --name=value tokens, the corpus folders.
@@ -377,35 +403,6 @@ def check_seconds(timeout: int) -> float | None:
     libFuzzer's ``-timeout`` (s), so that checking a divergence never makes it a timeout; None
     (no budget) for ``-timeout=0``, which has none either."""
     return timeout / 2.0 if timeout > 0 else None
-
-
-def build_sidecar(
-    session: Session, case: TestCase, data: bytes, ev: Any, recorded: dict[str, str], digest: str
-) -> dict[str, Any]:
-    """Everything needed to understand and replay one divergence."""
-    comparison = {
-        **asdict(ev.comparison),
-        "kind": str(ev.comparison.kind),
-        "joints": list(ev.comparison.joints),
-    }
-    return {
-        "rrosfuzz_sidecar": 1,
-        "sha1": hashlib.sha1(data).hexdigest(),
-        "signature": ev.signature.to_json(),
-        "comparison": comparison,
-        "difference": ev.difference,
-        "config": session.config.to_json(),
-        "robot_path": str(session.urdf),
-        "robot_sha256": digest,
-        "joint_names": list(session.reference.joint_names),
-        "testcase": case.to_json(),
-        "strategy": case.strategy,
-        "lineage": list(case.lineage),
-        "call": {"kind": type(ev.call).__name__, **asdict(ev.call)},
-        "outcomes": [outcome_json(r, o) for r, o in zip(session.runners, ev.outcomes, strict=True)],
-        "versions": dict(recorded),
-        "written": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-    }
 
 
 def _scenario_mutators(session: Session) -> dict[str, Any]:

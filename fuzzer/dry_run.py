@@ -379,3 +379,8 @@ class Stages:
         """Reap every child (``DryRun.wait``)."""
         for child in self.children:
             child.wait()
+
+    def stop(self) -> None:
+        """End and reap every child now (``DryRun.stop``): the campaign did not start."""
+        for child in self.children:
+            child.stop()

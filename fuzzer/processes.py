@@ -258,6 +258,18 @@ class DryRun:
         finally:
             os._exit(code)
 
+    def stop(self) -> None:
+        """End the child now (``SIGKILL``) and reap it: the campaign stopped before libFuzzer
+        started (a usage error after the fork), and the child's inputs are nobody's any more."""
+        if self.status is not None:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self.pid, signal.SIGKILL)
+        try:
+            _, self.status = os.waitpid(self.pid, 0)
+        except ChildProcessError:  # reaped elsewhere (a SIGCHLD handler)
+            self.status = 0
+
     def wait(self) -> int | None:
         """Reap the child: wait until it ends or its budget and ``KILL_GRACE`` are spent (then
         kill it). Returns its exit code (negative: the signal that ended it), None if it was

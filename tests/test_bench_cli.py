@@ -66,6 +66,7 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_scenario.main, ["--no-campaign", "--out", "."], ". is a folder: name the results file"),
     (profile.main, ["--out", "a-file/p.txt"], "a-file: cannot hold the results"),
     (dry_run_order.main, ["--bugs", "wrap_past_pi", "--out", "."], ". is a folder: name the results file"),
+    (dry_run_order.main, ["--bugs", "wrap_past_pi", "--out", "a-file"], "a-file exists: name another --out"),
     # configurations outside the table's (which wrote an empty table over native-cov.json)
     (bench_native_cov.main, ["--configs", ","], "unknown configuration(s) (none given)"),
     (bench_native_cov.main, ["--configs", "mimic_ignored"], "unknown configuration(s) mimic_ignored"),

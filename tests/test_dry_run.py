@@ -206,6 +206,17 @@ def test_a_child_that_ignores_its_alarm_is_killed_when_its_budget_is_spent() -> 
     assert _gone(dry.pid)
 
 
+def test_stop_ends_a_working_child_at_once_and_reaps_it() -> None:
+    # a usage error after the fork (seeds Hypothesis cannot draw): the children stop with it
+    dry = dry_run.DryRun.start(lambda: time.sleep(60), budget=60)
+    assert dry is not None
+    dry.stop()
+    assert os.waitstatus_to_exitcode(dry.status or 0) == -signal.SIGKILL
+    assert _gone(dry.pid)
+    dry.stop()  # once ended, again is nothing
+    assert dry.wait() is None, "reaped once"
+
+
 def test_a_child_that_raises_exits_1_quietly_without_the_parents_exit_hooks(tmp_path: Path) -> None:
     # in a fresh interpreter, so that the exit hooks are the test's own
     marker = tmp_path / "hooks"

@@ -407,3 +407,45 @@ def test_fork_mode_reexecutes_the_script(tmp_path: Path) -> None:
     assert run.returncode == (1 if sidecars(artifacts) else 0), run.stderr[-3000:]
     assert "-fork=2: fuzzing in separate process" in run.stderr
     assert "job: " in run.stderr  # workers ran
+
+
+def _chain_urdf(joints: int) -> str:
+    parts = ['<robot name="long">', '<link name="l0"/>']
+    for i in range(joints):
+        parts += [
+            f'<link name="l{i + 1}"/>',
+            f'<joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+            '<origin xyz="0 0 0.01"/><axis xyz="0 0 1"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>',
+        ]
+    return "\n".join([*parts, "</robot>"])
+
+
+def test_a_chain_hypothesis_cannot_draw_for_stops_everything_it_started(tmp_path: Path) -> None:
+    # 1,300 joints: no seed message fits in a Hypothesis test case. It spent 42 s before its usage
+    # error, the dry run's children ran on after it (about 15 s, evaluating inputs and writing to
+    # the artifacts), and the corpus kept a manifest of a configuration that never ran
+    robot = tmp_path / "chain.urdf"
+    robot.write_text(_chain_urdf(1300))
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    with (tmp_path / "out").open("w") as out, (tmp_path / "err").open("w") as err:
+        # to files, not pipes: the run returns when the campaign's process ends, not its children
+        done = subprocess.run(
+            [sys.executable, SCRIPT, str(corpus), "--robot", str(robot), "-runs=50", "-seed=1",
+             f"--artifacts={artifacts}", "-timeout=60", "--no-progress"],
+            cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), stdout=out, stderr=err,
+            timeout=120, check=False,
+        )  # fmt: skip
+    left = []
+    for proc in Path("/proc").iterdir():
+        try:
+            if proc.name.isdigit() and str(corpus).encode() in (proc / "cmdline").read_bytes():
+                left.append(proc.name)
+        except OSError:
+            continue
+    stderr = (tmp_path / "err").read_text()
+    assert done.returncode == 2, stderr[-2000:]
+    assert "Hypothesis draws no seed message for a chain of 1300 joints" in stderr
+    assert "Traceback" not in stderr
+    assert not left, f"processes of the campaign left running: {left}"
+    assert not (corpus / ".rrosfuzz").exists(), "a configuration that never ran was recorded"

@@ -25,7 +25,7 @@ import hypothesis
 from hypothesis import HealthCheck, Phase, Verbosity, given, settings
 from hypothesis.strategies import SearchStrategy
 
-__all__ = ["MAX_ATTEMPTS", "canonical_json", "generate_seeds"]
+__all__ = ["MAX_ATTEMPTS", "canonical_json", "generate_seeds", "smallest_fits"]
 
 #: Hypothesis runs (with seeds ``seed``, ``seed + 1``, ...) tried before giving up on ``n``.
 MAX_ATTEMPTS = 10
@@ -70,6 +70,38 @@ def _without_local_constants() -> Iterator[None]:
         finally:
             setattr(providers, "_get_local_constants", get_local)  # noqa: B010
             clear_cache()
+
+
+def smallest_fits(strategy: SearchStrategy[Any]) -> bool:
+    """Whether the simplest value of ``strategy`` fits in one Hypothesis test case.
+
+    Hypothesis checks the same first (its ``large_base_example`` health check, suppressed here),
+    but with the check suppressed it goes on drawing until hundreds of test cases have overrun:
+    for a chain of 1,300 joints, 42 s before :class:`~hypothesis.errors.Unsatisfiable`. The
+    simplest value is drawn here alone, from Hypothesis' "simplest" choice template, as its
+    engine draws it; that takes no random choice, so the seeds drawn after are the same.
+
+    This touches private Hypothesis internals; when they are missing or changed (other
+    versions) it answers True and the slow path still ends in ``Unsatisfiable``.
+    """
+    try:
+        from hypothesis.control import BuildContext
+        from hypothesis.errors import StopTest
+        from hypothesis.internal.conjecture.choice import ChoiceTemplate
+        from hypothesis.internal.conjecture.data import ConjectureData, Status
+
+        data = ConjectureData.for_choices((ChoiceTemplate("simplest", count=None),))
+        context = BuildContext(data, is_final=False, wrapped_test=lambda: None)
+    except (ImportError, AttributeError, TypeError):
+        return True
+    try:
+        with context:
+            data.draw(strategy)
+    except StopTest:
+        return data.status != Status.OVERRUN
+    except Exception:  # noqa: BLE001 - not this check's to report: the real run raises it
+        return True
+    return True
 
 
 def _draw(strategy: SearchStrategy[Any], max_examples: int, seed: int) -> list[Any]:
@@ -122,6 +154,9 @@ def generate_seeds(strategy: SearchStrategy[dict[str, Any]], n: int, seed: int) 
         If ``n`` is negative.
     TypeError
         If ``strategy`` is not a Hypothesis strategy.
+    hypothesis.errors.Unsatisfiable
+        If even the simplest value is larger than a Hypothesis test case (a chain of 1,300
+        joints), or no value can be drawn.
     hypothesis.errors.FailedHealthCheck
         If called inside another ``@given`` test whose settings do not suppress
         ``HealthCheck.nested_given`` (Hypothesis checks the outer test's settings).
@@ -130,6 +165,10 @@ def generate_seeds(strategy: SearchStrategy[dict[str, Any]], n: int, seed: int) 
         raise ValueError(f"n must be >= 0, got {n}")
     if not isinstance(strategy, SearchStrategy):
         raise TypeError(f"strategy must be a hypothesis strategy, got {type(strategy).__name__}")
+    if n and not smallest_fits(strategy):
+        from hypothesis.errors import Unsatisfiable
+
+        raise Unsatisfiable("even the simplest value is larger than one Hypothesis test case may be")
     seen: set[str] = set()
     seeds: list[dict[str, Any]] = []
     for attempt in range(MAX_ATTEMPTS):

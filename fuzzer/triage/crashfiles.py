@@ -84,7 +84,7 @@ def minimized_sidecar(loaded: Loaded, shrunk: Shrunk) -> tuple[bytes, dict[str, 
     the minimized test case, where it came from, the joints that matter and the shrink's
     counts; and the call, outcomes and comparison of the minimized input, not the original's
     (a scenario's step list shrinks, and the sidecar's schema checks they match)."""
-    from fuzzer.campaign import build_sidecar
+    from fuzzer.artifacts.sidecar_record import build_sidecar
 
     session = loaded.session
     data = shrunk.case.encode()
