@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import random
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -42,7 +43,8 @@ from typing import Any
 from benchmarks import cli
 from fuzzer import campaign, reporting
 from fuzzer.artifacts.divlog import CampaignLog
-from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.artifacts.sidecar_record import build_sidecar
+from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
 from fuzzer.execution.session import ConfigError, RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus, scripts
@@ -76,7 +78,7 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
         store=ArtifactStore(artifacts),
         features=Features(enabled=False),
         context=ctx,
-        sidecar=lambda c, d, e: campaign.build_sidecar(session, c, d, e, versions(), digest),
+        sidecar=lambda c, d, e: build_sidecar(session, c, d, e, versions(), digest),
         seeds=seeds,
         log=CampaignLog(artifacts),
         joint_names=tuple(session.reference.joint_names),
@@ -200,7 +202,10 @@ def main() -> None:
     except ConfigError as exc:  # a robot, tip link or target the session cannot load
         parser.error(str(exc))
     cli.check_folder(parser, args.artifacts)
-    harness = run(args.engine, session, args.artifacts, args.seconds, args.seed)
+    try:
+        harness = run(args.engine, session, args.artifacts, args.seconds, args.seed)
+    except ArtifactsUnwritable:  # said by the harness, with any input it could not save
+        sys.exit(WRITE_FAILED_EXIT)
     reporting.summary(harness.stats, 0, str(args.artifacts), [], [])
 
 

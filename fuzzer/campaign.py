@@ -9,8 +9,10 @@ copies to the child processes of ``-fork``/``-jobs``/``-merge``.
 
 from __future__ import annotations
 
+import atexit
 import os
 import random
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -20,7 +22,7 @@ from typing import Any
 from fuzzer import dry_harness, dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
 from fuzzer.artifacts.sidecar_record import build_sidecar
-from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
 from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.generation.corpus import (
@@ -39,16 +41,22 @@ from fuzzer.mutation.session_values import field_types, interesting_values
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
+    SUPERVISOR_ENV,
+    TERM_EXIT,
     TIMEOUT_EXIT,
     absolute_flag,
     absolute_option,
+    end_with_supervisor,
     exit_status,
     flag_value,
     int_flag,
     is_number,
     libfuzzer_seed,
     new_artifacts,
+    on_sigterm,
+    one_campaign,
     supervises,
+    terminated,
 )
 from fuzzer.processes import deadline as child_deadline
 from fuzzer.selection import fastcov
@@ -96,6 +104,12 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     # the targets load before Atheris (for fuzzer.dry_run); ``instrument`` rewrites them in place
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
+    if child:
+        end_with_supervisor()  # a -jobs worker outlived a supervisor killed alone
+    else:
+        os.environ[SUPERVISOR_ENV] = str(os.getpid())  # for the processes libFuzzer starts
+    if one_campaign(options.libfuzzer_flags):  # SIGTERM ends it with its summary (-handle_term=0)
+        signal.signal(signal.SIGTERM, on_sigterm)
     supervisor = not child and supervises(options.libfuzzer_flags)
     options.artifacts.mkdir(parents=True, exist_ok=True)
     artifacts = options.artifacts.resolve()  # -jobs changes the working folder
@@ -158,16 +172,14 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             timeout_code=timeout_code,
         )
         dry.first()  # before the seeds exist
-    try:
-        seeds, filling = _initial_seeds(session, options, wanted if not child else 0, folders, seeds, dry)
-        if not child:  # the seeds made: record the configuration in the corpus manifest
-            from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
+        # until libFuzzer runs, an exit (a usage error such as seeds Hypothesis cannot draw, a full
+        # disk, Ctrl-C) ends the children too: they ran on for up to -timeout after the error
+        atexit.register(dry.stop)
+    seeds, filling = _initial_seeds(session, options, wanted if not child else 0, folders, seeds, dry)
+    if not child:  # the seeds made: record the configuration in the corpus manifest
+        from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
 
-            record_corpus(options.corpus, config)  # after the dry run's fork: its fsync took 1-4 ms
-    except BaseException:
-        if dry is not None:  # a usage error after the fork (seeds Hypothesis cannot draw): without
-            dry.stop()  # this its children ran on, up to -timeout, after the error was shown
-        raise
+        record_corpus(options.corpus, config)  # after the dry run's fork: its fsync took 1-4 ms
     if dry is not None:
         pids = ", ".join(map(str, dry.pids))
         what = (
@@ -243,8 +255,15 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     def finish(status: int | None) -> int | None:
         progress.close()
-        if harness.stats.execs:
-            harness.maybe_snapshot(force=True)
+        if harness.stats.execs and not unwritable:
+            try:
+                harness.maybe_snapshot(force=True)
+            except ArtifactsUnwritable:  # said; the crash files written before are this run's
+                unwritable.append(True)
+        if unwritable and not status:
+            status = WRITE_FAILED_EXIT
+        if terminated():
+            status = TERM_EXIT  # Atheris ends it as after Ctrl-C (130)
         if dry is not None:  # its crash files are this run's, even one it died writing
             dry.wait()
             store.recovered = [*store.recovered, *store.recover()]
@@ -274,7 +293,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         return code
 
     once = on_exit(finish)
+    if dry is not None:
+        atexit.unregister(dry.stop)  # from here the campaign's end waits for them (finish)
     in_callback = [False]
+    unwritable: list[bool] = []  # the artifacts folder could not be written (said once)
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
 
     def test_one_input(data: bytes) -> None:
@@ -289,7 +311,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             flush_all()
             os._exit(0)
         in_callback[0] = True
-        harness.test_one_input(data)
+        try:
+            harness.test_one_input(data)
+        except ArtifactsUnwritable:  # said, with the input it could not save: not a crash of a target
+            unwritable.append(True)
+            once(WRITE_FAILED_EXIT)
+            flush_all()
+            os._exit(WRITE_FAILED_EXIT)
         in_callback[0] = False
 
     reporting.info(
@@ -387,6 +415,8 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     alone = not jobs and fork <= 0 and os.environ.get(CHILD_ENV) != "1"  # not a -jobs/-fork worker either
     if alone and flag_value(options.libfuzzer_flags, "-reload") is None:
         flags.append("-reload=0")
+    if one_campaign(options.libfuzzer_flags) and flag_value(options.libfuzzer_flags, "-handle_term") is None:
+        flags.append("-handle_term=0")  # processes.on_sigterm: the summary, not libFuzzer's _Exit(72)
     forwarded = list(options.forwarded)
     corpus = [str(c) for c in options.corpus]
     if jobs > 0:

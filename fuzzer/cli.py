@@ -22,6 +22,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactsUnwritable
 from fuzzer.cli_options import (
     SUBCOMMANDS,
     UsageError,
@@ -32,6 +33,7 @@ from fuzzer.cli_options import (
 )
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE
+from fuzzer.processes import TERM_EXIT, terminated
 
 MAX_SEEDS = 100_000
 """The most Hypothesis seeds one campaign writes (about 800 MB of corpus; 3,000 took 62 s at
@@ -161,6 +163,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()
         return 141
+    except ArtifactsUnwritable:  # said (the dry run's first input, in this process before libFuzzer)
+        return WRITE_FAILED_EXIT
+    except OSError as exc:  # a full disk or a read-only folder (a campaign's seeds, a tool's output)
+        where = f"{exc.filename}: " if exc.filename else ""
+        sys.stderr.write(f"fuzz_diff.py: error: {where}{exc.strerror or exc}\n")
+        _silence_stdout()
+        return WRITE_FAILED_EXIT
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM before libFuzzer runs (then Atheris ends it)
+        term = terminated()
+        sys.stderr.write(f"fuzz_diff.py: {'terminated' if term else 'interrupted'}\n")
+        return TERM_EXIT if term else 130
 
 
 def _show_main(argv: Sequence[str]) -> int:

@@ -35,8 +35,12 @@ exit status of a campaign:
   0   no new divergence          1   new divergences (crash files written by this run)
   2   usage error                70  a timeout (libFuzzer's -timeout_exitcode; also when
                                      a -fork/-jobs worker timed out)
+  74  a folder could not be written (a full disk, a read-only mount), with a message
+      naming it and any divergent input it could not save
   77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
-      (libFuzzer's -error_exitcode); any other status is libFuzzer's own
+      (libFuzzer's -error_exitcode)
+  130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary
+  any other status is libFuzzer's own
 """
 
 

@@ -31,8 +31,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from fuzzer import reporting
 from fuzzer.artifacts.divlog import CampaignLog, divergence_record, near_zero_count
-from fuzzer.artifacts.store import ArtifactStore
+from fuzzer.artifacts.store import ArtifactStore, ArtifactsUnwritable
 from fuzzer.execution.evaluate import Evaluation, Evaluator, Verdict
 from fuzzer.generation.spacefill import configuration_message
 from fuzzer.generation.sweep import CENTRES, Sweep
@@ -229,7 +230,10 @@ class Harness:
             if twin is not None:
                 memo = twin.IK_MEMO
                 data["ik_memo"] = {"hits": memo.hits, "misses": memo.misses, "kept": memo.kept}
-            self.log.snapshot(data)
+            try:
+                self.log.snapshot(data)
+            except OSError as exc:
+                raise self._unwritable(exc) from None
 
     def _decode(self, data: bytes) -> tuple[TestCase | None, bool]:
         """(test case or None, whether it is known valid). Parents repeat: recent ones are cached."""
@@ -277,22 +281,40 @@ class Harness:
         stats.divergent[str(cmp.kind)] += 1
         stats.by_strategy[case.strategy] += 1
         key = ev.signature.key
-        if self.log is not None:
-            command = None  # the paper's Table IV: a move naming every joint, in order
-            if isinstance(ev.call, MoveCall) and (ev.call.names is None or ev.call.names == self.joint_names):
-                command = ev.call.positions
-            record = divergence_record(ev, case.strategy, data, values, self.joint_names, command)
-            self.log.divergence(record)
-        if key not in stats.signatures:
-            # claim and write together (the store's record); None: another process has it.
-            # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.
-            written = self.store.record(
-                key, data, self._sidecar(case, data, ev), with_input=not self.stop_on_divergence
-            )
-            stats.signatures[key] = str(written or "")
+        try:
+            if self.log is not None:
+                command = None  # the paper's Table IV: a move naming every joint, in order
+                names = ev.call.names if isinstance(ev.call, MoveCall) else ()
+                if isinstance(ev.call, MoveCall) and (names is None or names == self.joint_names):
+                    command = ev.call.positions
+                record = divergence_record(ev, case.strategy, data, values, self.joint_names, command)
+                self.log.divergence(record)
+            if key not in stats.signatures:
+                # claim and write together (the store's record); None: another process has it.
+                # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.
+                written = self.store.record(
+                    key, data, self._sidecar(case, data, ev), with_input=not self.stop_on_divergence
+                )
+                stats.signatures[key] = str(written or "")
+        except OSError as exc:
+            raise self._unwritable(exc, data if key not in stats.signatures else None, key) from None
         if self.stop_on_divergence:
             # every divergence is a crash here (libFuzzer's -minimize_crash relies on it)
             raise DivergenceFound(f"{cmp.headline(self.joint_names)}: signature {key}")
+
+    def _unwritable(self, exc: OSError, lost: bytes | None = None, key: str = "") -> ArtifactsUnwritable:
+        """Say that the artifacts folder cannot be written (with the divergent input ``lost``, of
+        signature ``key``, that could not be saved: printed whole, so it is not lost), and return
+        the exception that ends the campaign (``fuzzer.campaign``) or the dry run's child."""
+        where = exc.filename or self.store.directory
+        text = f"cannot write to the artifacts folder ({where}: {exc.strerror or exc}); the campaign stops"
+        if lost is not None:
+            text += (
+                f". The first input of the new divergence signature {key} could not be saved; "
+                f"its test case, to save as a file and replay:\n{lost.decode('utf-8', 'backslashreplace')}"
+            )
+        reporting.error(text)
+        return ArtifactsUnwritable(text)
 
     def _step_features(self, ev: Evaluation) -> None:
         """Scenarios: bigrams of (step kind, step status label) of consecutive steps, per target

@@ -28,15 +28,26 @@ def warn(text: str) -> None:
     sys.stderr.flush()
 
 
+def error(text: str) -> None:
+    """An error that ends the run (the caller sets the status)."""
+    sys.stderr.write(f"{PREFIX} error: {text}\n")
+    sys.stderr.flush()
+
+
 def out(text: str = "") -> None:
     """Primary output (verdicts, tables): stdout. A character UTF-8 cannot hold (a lone surrogate:
     a file name's undecodable byte) is written as its escape, as stderr does, not raised."""
     try:
-        sys.stdout.write(text + "\n")
-    except UnicodeEncodeError:
-        encoding = sys.stdout.encoding or "utf-8"
-        sys.stdout.write(text.encode(encoding, "backslashreplace").decode(encoding) + "\n")
-    sys.stdout.flush()
+        try:
+            sys.stdout.write(text + "\n")
+        except UnicodeEncodeError:
+            encoding = sys.stdout.encoding or "utf-8"
+            sys.stdout.write(text.encode(encoding, "backslashreplace").decode(encoding) + "\n")
+        sys.stdout.flush()
+    except OSError as exc:  # /dev/full, a full disk: the CLI names it (BrokenPipeError included)
+        if exc.filename is None:
+            exc.filename = "<stdout>"
+        raise
 
 
 def status_line(stats: Stats, features: int) -> str:
@@ -160,9 +171,13 @@ def summary(
     lines.append(f"  corpus: {', '.join(corpus)}")
     lines.append("  replay one with: python fuzz_diff.py <crash file>")
     if exit_code is not None:
-        meaning = {0: "no new divergence", 1: "new divergences found", 70: "timeouts"}.get(
-            exit_code, "libFuzzer's status"
-        )
+        meaning = {
+            0: "no new divergence",
+            1: "new divergences found",
+            70: "timeouts",
+            74: "the artifacts folder could not be written",
+            143: "terminated (SIGTERM)",
+        }.get(exit_code, "libFuzzer's status")
         lines.append(f"  exit status {exit_code} ({meaning})")
     for line in lines:
         info(line)

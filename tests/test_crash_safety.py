@@ -94,6 +94,51 @@ def test_a_kill_inside_the_write_window_loses_nothing(tmp_path: Path, point: str
     assert_every_claim_complete(tmp_path)
 
 
+@pytest.mark.parametrize("failing", ["sidecar", "input", "claim"])
+def test_a_full_disk_leaves_no_temporary_and_claims_nothing(
+    tmp_path: Path, failing: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # each write's temporary was left behind, empty or short (and the claim's, as a marker)
+    store = ArtifactStore(tmp_path)
+    real_fsync, fsyncs = os.fsync, []
+    fail_at = {"sidecar": 1, "input": 2, "claim": 3}[failing]  # the marker's temporary is the third
+
+    def fsync(fd: int) -> None:
+        fsyncs.append(fd)
+        if len(fsyncs) == fail_at:
+            raise OSError(28, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    with pytest.raises(OSError, match="No space left") as raised:
+        store.record("full", b"data", _sidecar("full"))
+    assert raised.value.filename is not None and str(tmp_path) in raised.value.filename  # named
+    assert not list(tmp_path.glob(".tmp-*")) and not list((tmp_path / ".signatures").glob("*"))
+    monkeypatch.setattr(os, "fsync", real_fsync)
+    assert store.record("full", b"data", _sidecar("full")) is not None  # space again: still open
+    assert assert_every_claim_complete(tmp_path) == 1
+
+
+def test_a_torn_log_line_is_ended_before_the_next_campaign_appends(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a full disk wrote part of a line; the next campaign's first record was glued to it and lost
+    from fuzzer.artifacts import divlog
+
+    log = divlog.CampaignLog(tmp_path)
+    log.snapshot({"execs": 1})
+    write = os.write
+    monkeypatch.setattr(os, "write", lambda fd, data: write(fd, data[:10]))
+    with pytest.raises(OSError, match="only part of a line") as raised:
+        log.snapshot({"execs": 2})
+    assert raised.value.filename == str(tmp_path / divlog.STATS)
+    monkeypatch.undo()
+    divlog.CampaignLog(tmp_path).snapshot({"execs": 3})  # the next campaign
+    assert [r["execs"] for r in divlog.read_lines(tmp_path / divlog.STATS)] == [1, 3]
+    divlog.CampaignLog(tmp_path)  # a whole last line is left as it is
+    assert (tmp_path / divlog.STATS).read_bytes().count(b"\n") == 3
+
+
 def test_a_claim_without_file_or_temporaries_is_released(tmp_path: Path) -> None:
     store = ArtifactStore(tmp_path)
     assert store.record("lost", b"data", _sidecar("lost")) is not None

@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -449,3 +450,117 @@ def test_a_chain_hypothesis_cannot_draw_for_stops_everything_it_started(tmp_path
     assert "Traceback" not in stderr
     assert not left, f"processes of the campaign left running: {left}"
     assert not (corpus / ".rrosfuzz").exists(), "a configuration that never ran was recorded"
+
+
+def test_a_full_artifacts_folder_stops_the_campaign_and_loses_no_divergence(tmp_path: Path) -> None:
+    # A full disk, made by a file size limit (RLIMIT_FSIZE: writes past 3 KB fail with EFBIG, as
+    # ENOSPC would; a sidecar is larger). Before: Atheris' "Uncaught Python exception", exit 77
+    # ("a target died"), an empty crash file from libFuzzer, and the divergence's input nowhere
+    import resource
+
+    from tests.support import fuzz as fuzz_with
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (3072, 3072))
+
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    # -handle_xfsz=0: libFuzzer's SIGXFSZ handler would make the limit a crash of its own
+    run = fuzz_with(
+        str(corpus),
+        "-runs=5000",
+        "-seed=1",
+        f"--artifacts={artifacts}",
+        f"--targets=native,{TIGHT}",
+        "--no-progress",
+        "-handle_xfsz=0",
+        preexec_fn=small_files,
+    )
+    assert run.returncode == 74, run.stderr[-3000:]
+    assert "Traceback" not in run.stderr and "Uncaught Python exception" not in run.stderr
+    assert "cannot write to the artifacts folder" in run.stderr
+    assert "exit status 74 (the artifacts folder could not be written)" in run.stderr
+    lines = run.stderr.splitlines()
+    lost = [(line.split("signature ")[1].split()[0], lines[i + 1]) for i, line in enumerate(lines[:-1])
+            if "could not be saved" in line]  # fmt: skip
+    assert lost, run.stderr[-3000:]
+    left = [p.name for p in artifacts.iterdir() if p.name.startswith(".tmp-")]
+    assert not left and not [p for p in artifacts.glob("crash-*") if p.stat().st_size == 0]
+    key, printed = lost[0]
+    saved = tmp_path / "saved"
+    saved.write_text(printed)  # the input printed is the divergence, whole
+    again = fuzz(str(saved), f"--targets=native,{TIGHT}")
+    assert again.returncode == 1, again.stdout + again.stderr
+    assert f"diverges (no sidecar to compare with) (signature {key}:" in again.stdout
+
+
+def _started(
+    tmp_path: Path, *args: str, ready: Callable[[], bool]
+) -> tuple[subprocess.Popen[bytes], Path, Callable[[], list[int]]]:
+    """A campaign in a session of its own, once ``ready``; its stderr's file, and its processes
+    (the ones whose command line names the corpus folder)."""
+    corpus, err = tmp_path / "corpus", tmp_path / "err"
+    with err.open("wb") as stream:
+        process = subprocess.Popen(
+            [sys.executable, SCRIPT, str(corpus), *args, "--no-progress"],
+            cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), stdout=stream, stderr=stream,
+            start_new_session=True,
+        )  # fmt: skip
+
+    def processes() -> list[int]:
+        found = []
+        for proc in Path("/proc").iterdir():
+            try:
+                if proc.name.isdigit() and str(corpus).encode() in (proc / "cmdline").read_bytes():
+                    found.append(int(proc.name))
+            except OSError:
+                continue
+        return found
+
+    for _ in range(1200):  # at most 2 minutes
+        if ready() or process.poll() is not None:
+            break
+        time.sleep(0.1)
+    return process, err, processes
+
+
+def test_sigterm_ends_a_campaign_with_its_summary(tmp_path: Path) -> None:
+    # libFuzzer's own SIGTERM handler ended it with _Exit(72): no summary, no last snapshot
+    def fuzzing() -> bool:
+        err = tmp_path / "err"
+        return err.exists() and b"INFO: seed corpus" in err.read_bytes()
+
+    process, err, _ = _started(
+        tmp_path, "-seed=1", "-max_total_time=60", f"--artifacts={tmp_path / 'a'}", ready=fuzzing
+    )
+    time.sleep(0.5)
+    process.send_signal(signal.SIGTERM)
+    assert process.wait(timeout=60) == 143
+    said = err.read_text()
+    assert "campaign summary" in said and "exit status 143 (terminated (SIGTERM))" in said
+    assert "Traceback" not in said and "Uncaught Python exception" not in said
+
+
+def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path) -> None:
+    # `kill PID` of a -jobs campaign (CI's timeout): its workers, each under a shell of its own,
+    # fuzzed on with no end
+    artifacts = tmp_path / "a"
+
+    def workers_fuzzing() -> bool:
+        logs = [artifacts / f"fuzz-{i}.log" for i in (0, 1)]
+        return all(log.exists() and b"INFO: seed corpus" in log.read_bytes() for log in logs)
+
+    process, _, processes = _started(
+        tmp_path, "-seed=1", "-jobs=2", f"--artifacts={artifacts}", ready=workers_fuzzing
+    )
+    try:
+        assert len(processes()) > 1, "the workers never started"
+        process.send_signal(signal.SIGTERM)
+        process.wait(timeout=60)
+        for _ in range(600):  # they end within a moment; at most a minute
+            if not processes():
+                break
+            time.sleep(0.1)
+        assert not processes(), "workers outlived their supervisor"
+    finally:
+        for pid in processes():
+            os.kill(pid, signal.SIGKILL)

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from fuzzer import campaign
 from fuzzer.artifacts.divlog import CampaignLog, read_lines
-from fuzzer.artifacts.store import ArtifactStore, load_sidecar
+from fuzzer.artifacts.sidecar_record import build_sidecar
+from fuzzer.artifacts.store import ArtifactStore, ArtifactsUnwritable, load_sidecar
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.targets import module_of
 from fuzzer.generation import corpus
@@ -39,7 +39,7 @@ def make_harness(tmp_path: Path, targets: tuple[str, str] = ("native", "python")
         store=ArtifactStore(tmp_path / "artifacts"),
         features=Features(enabled=False),
         context=ctx,
-        sidecar=lambda case, data, ev: campaign.build_sidecar(session, case, data, ev, versions, "digest"),
+        sidecar=lambda case, data, ev: build_sidecar(session, case, data, ev, versions, "digest"),
         seeds=seeds,
     )
 
@@ -114,6 +114,48 @@ def test_a_divergence_writes_one_crash_file_per_signature(tmp_path: Path) -> Non
     assert decode(files[0].read_bytes()).message["position"][0] == 3.1416 + 5e-5
     assert [o["target"] for o in sidecar["outcomes"]] == ["native", "tests.plugins.faults:tight_tolerance"]
     json.dumps(sidecar)  # JSON all the way down
+
+
+@pytest.mark.parametrize("failing", ["crash file", "log"])
+def test_an_unwritable_artifacts_folder_stops_with_the_input_it_could_not_save(
+    tmp_path: Path, failing: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # a full disk: Atheris reported the OSError as a crash of the target, libFuzzer wrote an empty
+    # crash file, and the divergence's input was nowhere
+    h = make_harness(tmp_path, targets=("native", "tests.plugins.faults:tight_tolerance"))
+    h.log = CampaignLog(tmp_path)
+
+    def full(*_: object, **__: object) -> None:
+        raise OSError(28, "No space left on device", str(tmp_path / "artifacts" / "x"))
+
+    if failing == "crash file":
+        monkeypatch.setattr(h.store, "record", full)
+    else:
+        monkeypatch.setattr(h.log, "divergence", full)
+    message = dict(h.seeds[0].message, name=[], position=[3.1416 + 5e-5, 0.0, 0.0, 0.0, 0.0, 0.0])
+    data = TestCase("sensor_msgs/JointState", message).encode()
+    with pytest.raises(ArtifactsUnwritable):
+        h.test_one_input(data)
+    said = capsys.readouterr().err
+    assert "cannot write to the artifacts folder" in said and "No space left on device" in said
+    assert "could not be saved" in said and data.decode() in said.splitlines()
+    assert not h.store.crash_files() and not h.stats.signatures
+
+
+def test_an_unwritable_stats_log_stops_without_an_input_to_save(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    h = make_harness(tmp_path)
+    h.log = CampaignLog(tmp_path)
+
+    def read_only(*_: object) -> None:
+        raise OSError(30, "Read-only file system", str(tmp_path / "stats.jsonl"))
+
+    monkeypatch.setattr(h.log, "snapshot", read_only)
+    with pytest.raises(ArtifactsUnwritable):
+        h.test_one_input(h.seeds[0].encode())  # the first input's snapshot is right away
+    said = capsys.readouterr().err
+    assert "stats.jsonl: Read-only file system" in said and "could not be saved" not in said
 
 
 def test_every_divergent_execution_is_a_line_of_the_campaign_log(tmp_path: Path) -> None:

@@ -176,6 +176,25 @@ def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyP
     assert argv() == []
 
 
+def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-handle_term=0`` where Python's handler runs (``processes.on_sigterm``: the summary); a
+    supervisor's main thread stays in libFuzzer, so it, its workers, merges and a crash's
+    minimization keep libFuzzer's handler (a Python one would never run: SIGTERM ignored)."""
+    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.processes import CHILD_ENV
+
+    def argv(*flags: str) -> list[str]:
+        return [f for f in libfuzzer_argv(_options(flags)) if f.startswith("-handle_term")]
+
+    monkeypatch.delenv(CHILD_ENV, raising=False)
+    assert argv() == ["-handle_term=0"] and argv("-runs=9") == ["-handle_term=0"]
+    assert argv("-handle_term=1") == ["-handle_term=1"]
+    for flags in ("-fork=2", "-jobs=2", "-merge=1", "-minimize_crash=1"):
+        assert argv(flags) == [], flags
+    monkeypatch.setenv(CHILD_ENV, "1")
+    assert argv() == []
+
+
 def test_a_dictionary_libfuzzer_would_refuse_is_named_before_start_up(tmp_path: Path) -> None:
     bad = tmp_path / "bad.dict"
     bad.write_text('# a comment\nkw="ok"\n"value"  # a comment after it\n')
@@ -193,3 +212,35 @@ def test_a_dictionary_the_check_accepts_libfuzzer_accepts(tmp_path: Path) -> Non
     assert run.returncode == 0, run.stderr[-2000:]
     assert "ParseDictionaryFile" not in run.stderr + run.stdout
     assert "Dictionary: 4 entries" in run.stderr + run.stdout
+
+
+def test_ctrl_c_before_libfuzzer_runs_is_a_message_not_a_traceback(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    from fuzzer import cli
+
+    def interrupted(*_: object) -> int:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "campaign_main", interrupted)
+    assert cli.main([str(tmp_path / "corpus")]) == 130
+    assert capsys.readouterr().err == "fuzz_diff.py: interrupted\n"
+
+
+def test_output_to_a_full_device_is_named_with_its_own_status() -> None:
+    # /dev/full: a traceback and exit 1, which for show and replay means "still diverges"
+    import subprocess
+    import sys
+
+    from tests.support import ROOT, SCRIPT
+
+    agree = ROOT / "tests" / "regressions" / "crash-364397c4d569c4ab0b32ab7ec9ef57821af1a621"
+    for args in (["show", str(agree)], [str(agree)], ["triage", str(agree.parent)]):
+        with open("/dev/full", "w") as full:
+            run = subprocess.run(
+                [sys.executable, SCRIPT, *args],
+                cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), stdout=full, stderr=subprocess.PIPE,
+                text=True, timeout=120, check=False,
+            )  # fmt: skip
+        assert run.returncode == 74, (args, run.stderr[-2000:])
+        assert run.stderr.strip().endswith("fuzz_diff.py: error: <stdout>: No space left on device"), args

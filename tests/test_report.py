@@ -522,3 +522,34 @@ def test_headless_chromium_renders_the_page(campaign: tuple[Path, Path]) -> None
     assert len(colors) > 50, f"only {len(colors)} colors: the figures did not render"
     blue = ((image[:, :, 2] > 0.6) & (image[:, :, 0] < 0.3)).mean()
     assert blue > 0.001, "no figure bars (the report's blue) in the rendering"
+
+
+def test_a_report_that_cannot_be_written_leaves_the_last_one_whole(
+    campaign: tuple[Path, Path], tmp_path: Path
+) -> None:
+    # a full disk: the page was written in place and cut short (no </html>), the old one gone
+    import resource
+
+    artifacts, page = campaign
+    out = tmp_path / "out"
+    shutil.copytree(page.parent, out)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    limit = len(before["report.html"]) // 2
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))  # EFBIG past it, as ENOSPC
+
+    run = subprocess.run(
+        [sys.executable, SCRIPT, "report", str(artifacts), "-o", str(out), "--trust-sidecar"],
+        cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), preexec_fn=small_files,
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert run.returncode == 74, run.stderr[-2000:]
+    assert "Traceback" not in run.stderr and f"fuzz_diff.py: error: {out}" in run.stderr
+    after = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert after["report.html"] == before["report.html"] and after["report.html"].rstrip().endswith(
+        b"</html>"
+    )
+    assert not [name for name in after if name.startswith(".tmp-")]
+    for name, data in after.items():  # a figure is the old one or a whole new one
+        assert data == before.get(name) or data.endswith(b"IEND\xaeB`\x82"), name

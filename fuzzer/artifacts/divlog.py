@@ -18,6 +18,8 @@ skips a line it cannot parse.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
 import json
 import math
@@ -37,12 +39,39 @@ NEAR_ZERO = 0.05
 
 
 def append_line(path: Path, record: dict[str, Any]) -> None:
+    """Append ``record`` as one line, in one ``O_APPEND`` write (concurrent writers never
+    interleave within a line).
+
+    Raises
+    ------
+    OSError
+        It could not be written whole: a full disk writes part of it (``ENOSPC``; the line is
+        torn, and :func:`end_torn_line` ends it before the next campaign appends).
+    """
     data = (json.dumps(record, separators=(",", ":")) + "\n").encode()
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
-        os.write(fd, data)
+        if os.write(fd, data) != len(data):
+            raise OSError(
+                errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} (only part of a line written)", str(path)
+            )
     finally:
         os.close(fd)
+
+
+def end_torn_line(path: Path) -> None:
+    """End a last line cut short (a write on a full disk) with a newline, so that the next record
+    starts a line of its own instead of joining it (readers skip the torn line alone)."""
+    with contextlib.suppress(OSError):
+        with open(path, "rb") as handle:
+            handle.seek(-1, os.SEEK_END)
+            if handle.read(1) == b"\n":
+                return
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+        try:
+            os.write(fd, b"\n")
+        finally:
+            os.close(fd)
 
 
 def read_lines(path: Path) -> Iterator[dict[str, Any]]:
@@ -138,6 +167,8 @@ class CampaignLog:
     def __init__(self, directory: Path) -> None:
         self.divergences = directory / DIVERGENCES
         self.stats = directory / STATS
+        for path in (self.divergences, self.stats):
+            end_torn_line(path)
 
     @property
     def pid(self) -> int:

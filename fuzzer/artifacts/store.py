@@ -40,6 +40,16 @@ KILL_HOOK = "RROSFUZZ_TEST_KILL_AT"
 or "sidecar") of its n-th :meth:`ArtifactStore.record`, inside the write window."""
 
 
+WRITE_FAILED_EXIT = 74
+"""A campaign's exit status when its artifacts folder cannot be written (sysexits' EX_IOERR)."""
+
+
+class ArtifactsUnwritable(Exception):
+    """A campaign's artifacts folder could not be written (a full disk, a read-only mount): the
+    campaign has said so, with any divergent input it could not save, and stops with
+    :data:`WRITE_FAILED_EXIT` rather than go on finding divergences it cannot keep."""
+
+
 def _temporary(path: Path) -> Path:
     return path.parent / f"{TMP_PREFIX}{path.name}.{os.getpid()}.{secrets.token_hex(4)}"
 
@@ -49,11 +59,17 @@ def _write_temporary(path: Path, data: bytes, durable: bool = True) -> Path:
     temporary."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = _temporary(path)
-    with open(tmp, "wb") as handle:
-        handle.write(data)
-        handle.flush()
-        if durable:
-            os.fsync(handle.fileno())
+    try:
+        with open(tmp, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            if durable:
+                os.fsync(handle.fileno())
+    except BaseException as exc:  # a full disk: no empty or short temporary left behind (or renamed)
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename is None:  # a write's error names no file
+            exc.filename = str(path)
+        raise
     return tmp
 
 
@@ -187,12 +203,18 @@ class ArtifactStore:
         path = self.directory / crash_name(data)
         side = sidecar_path(path)
         tmp_side = _write_temporary(side, encode_sidecar(sidecar))
-        tmp_data = _write_temporary(path, data) if with_input else None
-        _test_kill("temp", self.recorded)
-        if not self.claim(signature_key, path.name):
-            tmp_side.unlink(missing_ok=True)
-            if tmp_data is not None:
-                tmp_data.unlink(missing_ok=True)
+        tmp_data: Path | None = None
+        claimed = False
+        try:
+            tmp_data = _write_temporary(path, data) if with_input else None
+            _test_kill("temp", self.recorded)
+            claimed = self.claim(signature_key, path.name)
+        finally:  # not claimed (another process has it, or a full disk): no temporaries left
+            if not claimed:
+                tmp_side.unlink(missing_ok=True)
+                if tmp_data is not None:
+                    tmp_data.unlink(missing_ok=True)
+        if not claimed:
             return None
         _test_kill("claim", self.recorded)
         os.replace(tmp_side, side)  # the sidecar first: a crash file always has its sidecar

@@ -20,6 +20,7 @@ from typing import Any
 
 import matplotlib
 
+from fuzzer.artifacts.store import atomic_write
 from fuzzer.report import figures, scenario
 from fuzzer.report.arm import ArmView, Sessions, render
 from fuzzer.report.data import ReportData, gather
@@ -88,16 +89,17 @@ def write_report(directory: Path, out: Path | None = None, trust: bool = False) 
         scenarios = {
             key: (view, scenario.figures(key, view)) for key, view in views.items() if view is not None
         }
+    # each file whole or not at all (a full disk cut the page and the figures of the report before)
     for name, png in pictures.items():
-        (out / FILE_NAMES[name]).write_bytes(png)
+        atomic_write(out / FILE_NAMES[name], png, durable=False)
     for _, trajectories in scenarios.values():
         for name, png in trajectories.items():
-            (out / name).write_bytes(png)
+            atomic_write(out / name, png, durable=False)
     for key, view in arms.items():
         if view.png is not None:
-            (out / f"arm-{re.sub(r'[^A-Za-z0-9_-]', '_', key)}.png").write_bytes(view.png)
+            atomic_write(out / f"arm-{re.sub(r'[^A-Za-z0-9_-]', '_', key)}.png", view.png, durable=False)
     generated = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     page = out / "report.html"
     sections = {key: scenario.section(key, view, pngs) for key, (view, pngs) in scenarios.items()}
-    page.write_text(render_page(data, pictures, arms, generated, sections), encoding="utf-8")
+    atomic_write(page, render_page(data, pictures, arms, generated, sections).encode("utf-8"), durable=False)
     return page
