@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
+from fuzzer.artifacts.store import WRITE_FAILED_EXIT
 from fuzzer.cli_options import UsageError, config_from, config_options, replay_parser, trust_option
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import given_path
@@ -123,7 +124,7 @@ def minimize_main(argv: Sequence[str]) -> int:
 
         prepare_folder(args.output, "--output", writable=True)
     sessions: dict[Any, Any] = {}
-    errors = 0
+    errors = unwritten = 0
     for path in files:
         try:
             loaded = crashfiles.load(path, given, args.trust_sidecar, sessions)
@@ -136,13 +137,17 @@ def minimize_main(argv: Sequence[str]) -> int:
         except ValueError as exc:
             reporting.verdict(str(path), f"not minimized: {exc}")
             continue
+        if crashfiles.already_minimal(loaded, shrunk):
+            detail = f"{shrunk.evaluations} evaluations, no file written"
+            reporting.verdict(str(path), "already minimal", detail)
+            continue
         data, out = crashfiles.minimized_sidecar(loaded, shrunk)
         folder = args.output or path.parent
         try:
             minimized = crashfiles.write_minimized(folder, data, out)
-        except OSError as exc:
+        except OSError as exc:  # a full disk or a read-only folder: nothing of this file is left there
             sys.stderr.write(f"fuzz_diff.py: error: cannot write into {folder}: {exc.strerror or exc}\n")
-            errors += 1
+            unwritten += 1
             continue
         reporting.verdict(
             str(path),
@@ -151,7 +156,7 @@ def minimize_main(argv: Sequence[str]) -> int:
             f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
             + ("" if shrunk.complete else ", budget exhausted"),
         )
-    return 2 if errors else 0
+    return WRITE_FAILED_EXIT if unwritten else (2 if errors else 0)
 
 
 def report_main(argv: Sequence[str]) -> int:

@@ -244,3 +244,40 @@ def test_output_to_a_full_device_is_named_with_its_own_status() -> None:
             )  # fmt: skip
         assert run.returncode == 74, (args, run.stderr[-2000:])
         assert run.stderr.strip().endswith("fuzz_diff.py: error: <stdout>: No space left on device"), args
+
+
+def test_minimize_into_a_full_folder_exits_74_and_an_already_minimal_file_writes_nothing(
+    tmp_path: Path,
+) -> None:
+    # a full disk was exit 2, the status of an unreadable file; a minimized file minimized again
+    # was written again under a new name (the same message, its lineage one step longer)
+    import resource
+    import subprocess
+    import sys
+
+    from tests.support import ROOT, SCRIPT
+
+    minimized = ROOT / "tests" / "regressions" / "minimized-34e1a33bf5c25be1ca333b3736986c6e1f2cc248"
+    crash = ROOT / "tests" / "regressions" / "crash-364397c4d569c4ab0b32ab7ec9ef57821af1a621"
+
+    def run(path: Path, out: Path, limit: int | None = None) -> subprocess.CompletedProcess[str]:
+        def small_files() -> None:
+            if limit is not None:
+                resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))  # EFBIG past it, as ENOSPC
+
+        return subprocess.run(
+            [sys.executable, SCRIPT, "minimize", str(path), "--trust-sidecar", "-o", str(out)],
+            cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), preexec_fn=small_files,
+            capture_output=True, text=True, timeout=180, check=False,
+        )  # fmt: skip
+
+    again = run(minimized, tmp_path / "again")
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert "already minimal" in again.stdout and not list((tmp_path / "again").glob("minimized-*"))
+    full = run(crash, tmp_path / "full", limit=1024)  # the crash file fits, its sidecar does not
+    assert full.returncode == 74, full.stderr[-2000:]
+    assert "Traceback" not in full.stderr
+    assert f"fuzz_diff.py: error: cannot write into {tmp_path / 'full'}: File too large" in full.stderr
+    assert [p.name for p in (tmp_path / "full").iterdir()] == [".signatures"]  # no half of a pair
+    fits = run(crash, tmp_path / "fits")
+    assert fits.returncode == 0 and "minimized to" in fits.stdout, fits.stderr[-2000:]

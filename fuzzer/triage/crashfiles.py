@@ -79,6 +79,13 @@ def shrink(loaded: Loaded, budget: int) -> Shrunk:
     return minimizer.minimize(loaded.case, loaded.sidecar["signature"]["key"])
 
 
+def already_minimal(loaded: Loaded, shrunk: Shrunk) -> bool:
+    """True for a ``minimized-`` file that shrinking left as it was (a second ``minimize`` of
+    it would write the same message again under a new name, its lineage one step longer)."""
+    same = shrunk.case.msg_type == loaded.case.msg_type and shrunk.case.message == loaded.case.message
+    return same and loaded.path.name.startswith("minimized-")
+
+
 def minimized_sidecar(loaded: Loaded, shrunk: Shrunk) -> tuple[bytes, dict[str, Any]]:
     """(the minimized input's bytes, its sidecar): the original sidecar with the configuration,
     the minimized test case, where it came from, the joints that matter and the shrink's
