@@ -12,6 +12,7 @@ from __future__ import annotations
 import atexit
 import os
 import random
+import shlex
 import signal
 import sys
 import time
@@ -42,26 +43,32 @@ from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
     SUPERVISOR_ENV,
-    TERM_EXIT,
     TIMEOUT_EXIT,
     absolute_flag,
     absolute_option,
-    end_with_supervisor,
     exit_status,
     flag_value,
     int_flag,
     is_number,
     libfuzzer_seed,
     new_artifacts,
-    on_sigterm,
     one_campaign,
     supervises,
-    terminated,
 )
 from fuzzer.processes import deadline as child_deadline
 from fuzzer.selection import fastcov
 from fuzzer.selection.instrument import instrument
 from fuzzer.selection.search import search_parts
+from fuzzer.signals import (
+    INT_EXIT,
+    INTERRUPTED_EXIT,
+    TERM_EXIT,
+    defer_to_next_input,
+    end_with_supervisor,
+    on_signal,
+    stop_requested,
+    terminated,
+)
 
 DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
 
@@ -105,11 +112,12 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     session = Session.open(config)
     child = os.environ.get(CHILD_ENV) == "1"
     if child:
+        defer_to_next_input()  # a worker's SIGINT, in its start-up too, ends it at an input's start
         end_with_supervisor()  # a -jobs worker outlived a supervisor killed alone
     else:
         os.environ[SUPERVISOR_ENV] = str(os.getpid())  # for the processes libFuzzer starts
     if one_campaign(options.libfuzzer_flags):  # SIGTERM ends it with its summary (-handle_term=0)
-        signal.signal(signal.SIGTERM, on_sigterm)
+        signal.signal(signal.SIGTERM, on_signal)
     supervisor = not child and supervises(options.libfuzzer_flags)
     options.artifacts.mkdir(parents=True, exist_ok=True)
     artifacts = options.artifacts.resolve()  # -jobs changes the working folder
@@ -253,6 +261,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     def shown(path: Path) -> str:
         return str(options.artifacts / path.name)  # as the user named the folder
 
+    interrupted = int_flag(options.libfuzzer_flags, "-interrupted_exitcode", INTERRUPTED_EXIT)
+
     def finish(status: int | None) -> int | None:
         progress.close()
         if harness.stats.execs and not unwritable:
@@ -264,6 +274,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             status = WRITE_FAILED_EXIT
         if terminated():
             status = TERM_EXIT  # Atheris ends it as after Ctrl-C (130)
+        elif stop_requested():
+            status = INT_EXIT  # a Ctrl-C kept for an input's start: Atheris ends it, status unknown here
         if dry is not None:  # its crash files are this run's, even one it died writing
             dry.wait()
             store.recovered = [*store.recovered, *store.recover()]
@@ -271,6 +283,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         if store.recovered:  # completed for a killed run that never reported them: new to the user
             found = found.with_recovered([artifacts / name for name in store.recovered])
         totals = worker_totals(artifacts, started, os.getpid()) if supervisor else None
+        if supervisor and not terminated() and (status == interrupted or (totals or {}).get("interrupted")):
+            status = INT_EXIT  # libFuzzer's is 1 for -jobs (a job's status), 72 for -fork
         code: int | None = exit_status(status, found, supervisor, timeout_code)
         if status is None and (in_callback[0] or found.crashes or found.timeouts):
             # Atheris ending the process: an exception in the target (libFuzzer reports it as a
@@ -300,6 +314,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
 
     def test_one_input(data: bytes) -> None:
+        if stop_requested():  # a SIGINT or SIGTERM since the last input (fuzzer.signals)
+            if not child:
+                raise KeyboardInterrupt  # Atheris ends it with its summary, as after Ctrl-C
+            harness.interrupted = True  # in its last snapshot, for the supervisor's status
+            once(interrupted)  # a worker: libFuzzer's status for an interrupted job
+            flush_all()
+            os._exit(interrupted)
         if not edge_callback:  # atheris.Fuzz() has put its core module's _trace_branch in place
             edge_callback.append(fastcov.install(atheris))
             if edge_callback[0] is not None:
@@ -327,6 +348,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         f"{config.tolerance.metres:g} m / {config.tolerance.radians:g} rad, artifacts in {options.artifacts}"
     )
     argv = libfuzzer_argv(options)
+    if one_campaign(options.libfuzzer_flags):  # from here a signal ends it at an input's start
+        defer_to_next_input()
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
     if not child and total and is_number(total) and int_flag(options.libfuzzer_flags, "-fork", 0) > 0:
@@ -416,7 +439,7 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     if alone and flag_value(options.libfuzzer_flags, "-reload") is None:
         flags.append("-reload=0")
     if one_campaign(options.libfuzzer_flags) and flag_value(options.libfuzzer_flags, "-handle_term") is None:
-        flags.append("-handle_term=0")  # processes.on_sigterm: the summary, not libFuzzer's _Exit(72)
+        flags.append("-handle_term=0")  # signals.on_signal: the summary, not libFuzzer's _Exit(72)
     forwarded = list(options.forwarded)
     corpus = [str(c) for c in options.corpus]
     if jobs > 0:
@@ -425,6 +448,11 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
         flags = [absolute_flag(f) for f in flags]
         forwarded = [absolute_option(o) for o in forwarded]
         corpus = [str(Path(c).resolve()) for c in corpus]
+    if not one_campaign(options.libfuzzer_flags) and os.environ.get(CHILD_ENV) != "1":
+        # libFuzzer runs each job as `sh -c "<argv> > log"`; a Ctrl-C killed that shell, and a
+        # job killed by SIGINT made a -jobs supervisor read a null Fuzzer (a segfault): exec'd,
+        # the job is the shell's process and exits with its own status
+        script = "exec " + shlex.quote(script)
     return [script, *flags, *forwarded, *corpus]
 
 

@@ -18,6 +18,7 @@ Arguments starting with a single dash go to libFuzzer unchanged
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -33,7 +34,8 @@ from fuzzer.cli_options import (
 )
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE
-from fuzzer.processes import TERM_EXIT, terminated
+from fuzzer.processes import CHILD_ENV
+from fuzzer.signals import INT_EXIT, INTERRUPTED_EXIT, TERM_EXIT, terminated
 
 MAX_SEEDS = 100_000
 """The most Hypothesis seeds one campaign writes (about 800 MB of corpus; 3,000 took 62 s at
@@ -121,6 +123,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    job = os.environ.get(CHILD_ENV) == "1"  # a -jobs/-fork job (the campaign sets it for them later)
     try:
         if argv and argv[0] in SUBCOMMANDS:
             from fuzzer.cli_tools import (
@@ -173,7 +176,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM before libFuzzer runs (then Atheris ends it)
         term = terminated()
         sys.stderr.write(f"fuzz_diff.py: {'terminated' if term else 'interrupted'}\n")
-        return TERM_EXIT if term else 130
+        if job:  # in its start-up: the status of libFuzzer's interrupted job (a -fork parent stops)
+            return INTERRUPTED_EXIT
+        return TERM_EXIT if term else INT_EXIT
 
 
 def _show_main(argv: Sequence[str]) -> int:

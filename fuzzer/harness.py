@@ -106,6 +106,8 @@ class Harness:
     sweep: Sweep | None = None
     """Batched FK sweeps for ``--op fk`` (``fuzzer.generation.sweep``)."""
     stats: Stats = field(default_factory=Stats)
+    interrupted: bool = False
+    """Ended by a signal (a ``-jobs``/``-fork`` worker): said in its last snapshot."""
     pool: Pool = field(default_factory=Pool)
     _last: tuple[bytes, TestCase] | None = None
     _decoded: OrderedDict[bytes, TestCase] = field(default_factory=OrderedDict)
@@ -221,6 +223,8 @@ class Harness:
                 data["bandit"] = self.sources.to_json()
             if self.sweep is not None:
                 data["sweep"] = self.sweep.to_json()
+            if self.interrupted:
+                data["interrupted"] = True
             if self.float_tracer is not None:
                 data["float_compares"] = {
                     "traced": self.float_tracer.traced,

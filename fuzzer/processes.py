@@ -18,7 +18,6 @@ import os
 import select
 import signal
 import sys
-import threading
 import time
 from collections import Counter
 from collections.abc import Callable
@@ -56,54 +55,6 @@ def deadline() -> float | None:
     except ValueError:
         return None
     return value if math.isfinite(value) else None
-
-
-def end_with_supervisor() -> None:
-    """In a process libFuzzer started (a ``-jobs``/``-fork`` worker, a merge's inner run:
-    ``CHILD_ENV``), end (``SIGTERM`` to itself) when the campaign's first process
-    (``SUPERVISOR_ENV``) is gone. libFuzzer's supervisor ends on ``SIGTERM`` without ending its
-    workers (started through ``system()``, each under a shell of its own): a ``kill PID`` or CI's
-    ``timeout`` left them fuzzing with no end. A thread waits on a pidfd of the supervisor (the
-    process itself, not a reused pid); without pidfds (not Linux) nothing is watched."""
-    try:
-        pid = int(os.environ.get(SUPERVISOR_ENV, ""))
-    except ValueError:
-        return
-    try:
-        fd = os.pidfd_open(pid)
-    except ProcessLookupError:  # gone before this process got here
-        os.kill(os.getpid(), signal.SIGTERM)
-        return
-    except (AttributeError, OSError):
-        return
-
-    def watch() -> None:
-        select.select([fd], [], [])
-        os.kill(os.getpid(), signal.SIGTERM)
-
-    threading.Thread(target=watch, name="rrosfuzz-supervisor", daemon=True).start()
-
-
-TERM_EXIT = 128 + signal.SIGTERM
-"""A campaign ended by SIGTERM: the shell's status for it, with the summary printed."""
-
-
-_TERMINATED: list[bool] = []
-
-
-def on_sigterm(_signum: int, _frame: object) -> None:
-    """The SIGTERM handler of a campaign of one process (``one_campaign``): a KeyboardInterrupt
-    where Python runs next, so that Atheris ends the campaign as after Ctrl-C (its summary
-    printed; Atheris takes an exception of any other class, a subclass too, for a crash of the
-    target), and the status is ``TERM_EXIT`` (``terminated``). libFuzzer's own handler
-    (``-handle_term``) ended it with ``_Exit(72)``: no summary, no last snapshot."""
-    _TERMINATED.append(True)
-    raise KeyboardInterrupt
-
-
-def terminated() -> bool:
-    """Whether this process has had a SIGTERM (``on_sigterm``)."""
-    return bool(_TERMINATED)
 
 
 def one_campaign(flags: tuple[str, ...]) -> bool:

@@ -176,6 +176,7 @@ def summary(
             1: "new divergences found",
             70: "timeouts",
             74: "the artifacts folder could not be written",
+            130: "interrupted (Ctrl-C)",
             143: "terminated (SIGTERM)",
         }.get(exit_code, "libFuzzer's status")
         lines.append(f"  exit status {exit_code} ({meaning})")

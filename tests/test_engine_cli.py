@@ -493,6 +493,10 @@ def test_a_full_artifacts_folder_stops_the_campaign_and_loses_no_divergence(tmp_
     assert f"diverges (no sidecar to compare with) (signature {key}:" in again.stdout
 
 
+def _sigint_as_in_a_terminal() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # a CI step's background job may ignore it
+
+
 def _started(
     tmp_path: Path, *args: str, ready: Callable[[], bool]
 ) -> tuple[subprocess.Popen[bytes], Path, Callable[[], list[int]]]:
@@ -503,7 +507,7 @@ def _started(
         process = subprocess.Popen(
             [sys.executable, SCRIPT, str(corpus), *args, "--no-progress"],
             cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)), stdout=stream, stderr=stream,
-            start_new_session=True,
+            start_new_session=True, preexec_fn=_sigint_as_in_a_terminal,
         )  # fmt: skip
 
     def processes() -> list[int]:
@@ -561,6 +565,62 @@ def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path) -> None:
                 break
             time.sleep(0.1)
         assert not processes(), "workers outlived their supervisor"
+    finally:
+        for pid in processes():
+            os.kill(pid, signal.SIGKILL)
+
+
+def test_ctrl_c_ends_a_campaign_with_its_summary_and_130(tmp_path: Path) -> None:
+    # the summary said "exit status 0" (or nothing) under a status of 130; a Ctrl-C landing in
+    # Hypothesis' gc callback was lost
+    def fuzzing() -> bool:
+        err = tmp_path / "err"
+        return err.exists() and b"INFO: seed corpus" in err.read_bytes()
+
+    process, err, _ = _started(
+        tmp_path, "-seed=1", "-max_total_time=60", f"--artifacts={tmp_path / 'a'}", ready=fuzzing
+    )
+    time.sleep(0.5)
+    os.killpg(process.pid, signal.SIGINT)  # a terminal's Ctrl-C: the whole process group
+    assert process.wait(timeout=60) == 130
+    said = err.read_text()
+    assert "campaign summary" in said and "exit status 130 (interrupted (Ctrl-C))" in said
+    assert "Traceback" not in said and "Uncaught Python exception" not in said
+
+
+@pytest.mark.parametrize("flag", ["-jobs=2", "-fork=2"])
+def test_ctrl_c_ends_jobs_and_their_supervisor_with_130(tmp_path: Path, flag: str) -> None:
+    # -jobs: each job's shell died of the SIGINT, and libFuzzer's supervisor, reading the
+    # interrupted status from a Fuzzer it never made, segfaulted (139); a job interrupted in its
+    # start-up died in libFuzzer's "deadly signal" handler (an empty crash file). -fork: 72
+    artifacts = tmp_path / "a"
+    stats = artifacts / "stats.jsonl"
+
+    def jobs_fuzzing() -> bool:  # each job snapshots its counters at its first input
+        pids = (
+            {json.loads(line).get("pid") for line in stats.read_text().splitlines()}
+            if stats.exists()
+            else set()
+        )
+        return len(pids) >= (2 if flag == "-jobs=2" else 1)
+
+    process, err, processes = _started(
+        tmp_path, "-seed=1", flag, "-max_total_time=120", f"--artifacts={artifacts}", ready=jobs_fuzzing
+    )
+    try:
+        assert jobs_fuzzing(), "the jobs never started"
+        time.sleep(0.5)
+        os.killpg(process.pid, signal.SIGINT)
+        assert process.wait(timeout=60) == 130, err.read_text()[-3000:]
+        said = err.read_text()
+        assert "exit status 130 (interrupted (Ctrl-C))" in said, said[-3000:]
+        assert "deadly signal" not in said and "Traceback" not in said
+        assert not list(artifacts.glob("crash-*")), "the interrupt left a crash file"
+        for _ in range(600):
+            if not processes():
+                break
+            time.sleep(0.1)
+        assert not processes(), "jobs outlived their supervisor"
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)

@@ -4,6 +4,7 @@ status, never a traceback. Also ``--help`` and the exit status of campaigns."""
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -177,7 +178,7 @@ def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyP
 
 
 def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch: pytest.MonkeyPatch) -> None:
-    """``-handle_term=0`` where Python's handler runs (``processes.on_sigterm``: the summary); a
+    """``-handle_term=0`` where Python's handler runs (``signals.on_signal``: the summary); a
     supervisor's main thread stays in libFuzzer, so it, its workers, merges and a crash's
     minimization keep libFuzzer's handler (a Python one would never run: SIGTERM ignored)."""
     from fuzzer.campaign import libfuzzer_argv
@@ -193,6 +194,63 @@ def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch
         assert argv(flags) == [], flags
     monkeypatch.setenv(CHILD_ENV, "1")
     assert argv() == []
+
+
+def test_jobs_are_execd_by_libfuzzers_shell(monkeypatch: pytest.MonkeyPatch) -> None:
+    """libFuzzer runs each job (``-jobs``, ``-fork``, a merge's, a crash minimization's) as
+    ``sh -c "<argv> > log"``: a Ctrl-C killed the shell, and a ``-jobs`` supervisor read that
+    status from a Fuzzer it never made (a segfault). ``exec`` makes the job the shell's process;
+    the script's path is quoted for the shell. One process runs no command: its argv is plain."""
+    import shlex
+
+    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.processes import CHILD_ENV
+
+    monkeypatch.delenv(CHILD_ENV, raising=False)
+    monkeypatch.setattr(sys, "argv", ["/a folder/fuzz_diff.py"])
+    for flags in (("-jobs=2",), ("-fork=2",), ("-merge=1",), ("-minimize_crash=1",)):
+        first = libfuzzer_argv(_options(flags))[0]
+        assert first == "exec '/a folder/fuzz_diff.py'", flags
+        assert shlex.split(first) == ["exec", "/a folder/fuzz_diff.py"]
+    assert libfuzzer_argv(_options(()))[0] == "/a folder/fuzz_diff.py"
+    monkeypatch.setenv(CHILD_ENV, "1")
+    assert libfuzzer_argv(_options(()))[0] == "/a folder/fuzz_diff.py"
+
+
+def test_a_signal_is_kept_for_the_next_input_once_libfuzzer_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Before libFuzzer, a KeyboardInterrupt where Python runs next; after, the signal waits for
+    the next input (a KeyboardInterrupt in Hypothesis' gc callback was lost), and a second
+    Ctrl-C acts at once (a target that never returns). A SIGTERM marks the run terminated."""
+    import signal as signals_
+
+    from fuzzer import signals
+
+    for name in ("_PENDING", "_DEFERRING", "_TERMINATED"):
+        monkeypatch.setattr(signals, name, [])
+    monkeypatch.setattr(signals_, "getsignal", lambda _: signals_.default_int_handler)
+    installed: list[object] = []
+    monkeypatch.setattr(signals_, "signal", lambda _num, handler: installed.append(handler))
+    with pytest.raises(KeyboardInterrupt):
+        signals.on_signal(signals_.SIGINT, None)
+    assert not signals.stop_requested()
+    signals.defer_to_next_input()
+    assert installed == [signals.on_signal]
+    signals.on_signal(signals_.SIGTERM, None)
+    assert signals.stop_requested() and signals.terminated()
+    signals.on_signal(signals_.SIGINT, None)  # the first Ctrl-C waits
+    with pytest.raises(KeyboardInterrupt):
+        signals.on_signal(signals_.SIGINT, None)  # the second does not
+
+
+def test_a_supervisor_counts_its_interrupted_jobs(tmp_path: Path) -> None:
+    from fuzzer.artifacts.divlog import STATS, append_line, worker_totals
+
+    append_line(tmp_path / STATS, {"t": 10.0, "pid": 1, "execs": 5})
+    append_line(tmp_path / STATS, {"t": 11.0, "pid": 1, "execs": 9, "interrupted": True})
+    append_line(tmp_path / STATS, {"t": 11.0, "pid": 2, "execs": 4, "interrupted": "yes"})  # not a bool
+    append_line(tmp_path / STATS, {"t": 1.0, "pid": 3, "execs": 4, "interrupted": True})  # an earlier run
+    totals = worker_totals(tmp_path, since=5.0)
+    assert totals["interrupted"] == 1 and totals["execs"] == 13 and totals["processes"] == 2
 
 
 def test_a_dictionary_libfuzzer_would_refuse_is_named_before_start_up(tmp_path: Path) -> None:

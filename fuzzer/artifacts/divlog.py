@@ -188,8 +188,9 @@ def worker_totals(directory: Path, since: float, exclude_pid: int | None = None)
     (``-fork``/``-jobs`` workers): the last ``stats.jsonl`` snapshot of each process, and
     the distinct signatures of ``divergences.jsonl``.
 
-    Returns ``processes``, ``execs``, ``filtered``, ``malformed``, ``divergent`` (kind ->
-    count), ``divergences``, ``signatures`` and ``max_difference``.
+    Returns ``processes``, ``execs``, ``filtered``, ``malformed``, ``interrupted`` (processes
+    ended by a signal), ``divergent`` (kind -> count), ``divergences``, ``signatures`` and
+    ``max_difference``.
     """
     last: dict[Any, dict[str, Any]] = {}
     for record in read_lines(directory / STATS):
@@ -198,6 +199,7 @@ def worker_totals(directory: Path, since: float, exclude_pid: int | None = None)
             continue
         last[pid] = record
     totals: dict[str, Any] = {"processes": len(last), "execs": 0, "filtered": 0, "malformed": 0}
+    totals["interrupted"] = sum(r.get("interrupted") is True for r in last.values())
     divergent: dict[str, int] = {}
     biggest = 0.0
     for record in last.values():

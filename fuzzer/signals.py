@@ -1,0 +1,97 @@
+"""How a campaign ends on a signal, in each of its processes.
+
+libFuzzer's main loop runs Python only in the test callback and the custom mutator, and
+Python raises ``KeyboardInterrupt`` wherever it runs next: in Hypothesis' garbage-collector
+callback (where Python ignores it: the Ctrl-C was lost), in the mutator, or in a ``-jobs``
+worker's start-up (where it escaped ``atheris.Fuzz``, and the worker died in libFuzzer's
+"deadly signal" handler, leaving an empty crash file). Once libFuzzer is about to run (in a
+worker, from its start), a SIGINT or SIGTERM is therefore kept for the start of the next input
+(``defer_to_next_input``, ``stop_requested``), where a campaign of one process ends as after
+Ctrl-C, and a worker with libFuzzer's ``-interrupted_exitcode`` (``INTERRUPTED_EXIT``), on which
+a ``-fork`` parent stops its other jobs; a second Ctrl-C acts at once.
+
+A ``-jobs``/``-fork`` supervisor runs its jobs through ``system()``, which ignores SIGINT in
+the caller while a job runs: only a Ctrl-C to the whole process group (a terminal's, or
+``timeout -s INT``'s) reaches the jobs. The supervisor learns of it from its workers' last
+snapshots (``interrupted``) and exits 130 (``INT_EXIT``).
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import threading
+
+from fuzzer.processes import SUPERVISOR_ENV
+
+INT_EXIT = 128 + signal.SIGINT
+"""A campaign ended by SIGINT (Ctrl-C): the shell's status for it, with the summary printed."""
+TERM_EXIT = 128 + signal.SIGTERM
+"""A campaign ended by SIGTERM: the shell's status for it, with the summary printed."""
+INTERRUPTED_EXIT = 72
+"""libFuzzer's ``-interrupted_exitcode`` default: a worker ended by a signal exits with it."""
+
+_TERMINATED: list[bool] = []
+_PENDING: list[int] = []  # signals kept for the start of the next input
+_DEFERRING: list[bool] = []
+
+
+def on_signal(signum: int, _frame: object) -> None:
+    """The handler of SIGTERM in a campaign of one process (``processes.one_campaign``), and of
+    SIGINT once libFuzzer is about to run. Before that, a ``KeyboardInterrupt`` where Python
+    runs next; after, kept for the next input (``stop_requested``), but a second SIGINT acts at
+    once (a target that does not return). A SIGTERM makes the status ``TERM_EXIT``
+    (``terminated``): libFuzzer's own handler (``-handle_term``) ended it with ``_Exit(72)``,
+    no summary, no last snapshot."""
+    if signum == signal.SIGTERM:
+        _TERMINATED.append(True)
+    if _DEFERRING and not (signum == signal.SIGINT and signal.SIGINT in _PENDING):
+        _PENDING.append(signum)
+        return
+    raise KeyboardInterrupt  # Atheris ends the campaign as after Ctrl-C (any other class: a crash)
+
+
+def defer_to_next_input() -> None:
+    """From here on, SIGINT and SIGTERM (where ``on_signal`` handles it) end the campaign at
+    the start of the next input. Python's own SIGINT handler is replaced; one set by the
+    caller, or SIGINT ignored (a background job), is left as it is."""
+    _DEFERRING.append(True)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, on_signal)
+
+
+def stop_requested() -> bool:
+    """Whether a signal kept by ``on_signal`` is waiting (checked at the start of each input)."""
+    return bool(_PENDING)
+
+
+def terminated() -> bool:
+    """Whether this process has had a SIGTERM (``on_signal``)."""
+    return bool(_TERMINATED)
+
+
+def end_with_supervisor() -> None:
+    """In a process libFuzzer started (a ``-jobs``/``-fork`` worker, a merge's inner run:
+    ``CHILD_ENV``), end (``SIGTERM`` to itself) when the campaign's first process
+    (``SUPERVISOR_ENV``) is gone. libFuzzer's supervisor ends on ``SIGTERM`` without ending its
+    workers (started through ``system()``, each under a shell of its own): a ``kill PID`` or CI's
+    ``timeout`` left them fuzzing with no end. A thread waits on a pidfd of the supervisor (the
+    process itself, not a reused pid); without pidfds (not Linux) nothing is watched."""
+    try:
+        pid = int(os.environ.get(SUPERVISOR_ENV, ""))
+    except ValueError:
+        return
+    try:
+        fd = os.pidfd_open(pid)
+    except ProcessLookupError:  # gone before this process got here
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
+    except (AttributeError, OSError):
+        return
+
+    def watch() -> None:
+        select.select([fd], [], [])
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="rrosfuzz-supervisor", daemon=True).start()
