@@ -493,6 +493,15 @@ def test_a_full_artifacts_folder_stops_the_campaign_and_loses_no_divergence(tmp_
     assert f"diverges (no sidecar to compare with) (signature {key}:" in again.stdout
 
 
+def _all_ended(processes: Callable[[], list[int]]) -> bool:
+    """Whether the processes end within a minute (they do within a moment)."""
+    for _ in range(600):
+        if not processes():
+            return True
+        time.sleep(0.1)
+    return False
+
+
 def _sigint_as_in_a_terminal() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)  # a CI step's background job may ignore it
 
@@ -527,8 +536,20 @@ def _started(
     return process, err, processes
 
 
-def test_sigterm_ends_a_campaign_with_its_summary(tmp_path: Path) -> None:
-    # libFuzzer's own SIGTERM handler ended it with _Exit(72): no summary, no last snapshot
+@pytest.mark.parametrize(
+    ("send", "status", "said"),
+    [
+        (lambda p: p.send_signal(signal.SIGTERM), 143, "exit status 143 (terminated (SIGTERM))"),
+        (lambda p: os.killpg(p.pid, signal.SIGINT), 130, "exit status 130 (interrupted (Ctrl-C))"),
+    ],
+    ids=["sigterm", "ctrl-c"],
+)
+def test_a_signal_ends_a_campaign_with_its_summary(
+    tmp_path: Path, send: Callable[[subprocess.Popen[bytes]], None], status: int, said: str
+) -> None:
+    # SIGTERM: libFuzzer's own handler ended it with _Exit(72), no summary, no last snapshot.
+    # Ctrl-C (SIGINT to the whole process group, as a terminal sends it): exit 77 "a target
+    # died" (a KeyboardInterrupt where Python ran next), or 130 under a summary saying 0
     def fuzzing() -> bool:
         err = tmp_path / "err"
         return err.exists() and b"INFO: seed corpus" in err.read_bytes()
@@ -537,11 +558,11 @@ def test_sigterm_ends_a_campaign_with_its_summary(tmp_path: Path) -> None:
         tmp_path, "-seed=1", "-max_total_time=60", f"--artifacts={tmp_path / 'a'}", ready=fuzzing
     )
     time.sleep(0.5)
-    process.send_signal(signal.SIGTERM)
-    assert process.wait(timeout=60) == 143
-    said = err.read_text()
-    assert "campaign summary" in said and "exit status 143 (terminated (SIGTERM))" in said
-    assert "Traceback" not in said and "Uncaught Python exception" not in said
+    send(process)
+    assert process.wait(timeout=60) == status
+    text = err.read_text()
+    assert "campaign summary" in text and said in text
+    assert "Traceback" not in text and "Uncaught Python exception" not in text
 
 
 def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path) -> None:
@@ -560,32 +581,10 @@ def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path) -> None:
         assert len(processes()) > 1, "the workers never started"
         process.send_signal(signal.SIGTERM)
         process.wait(timeout=60)
-        for _ in range(600):  # they end within a moment; at most a minute
-            if not processes():
-                break
-            time.sleep(0.1)
-        assert not processes(), "workers outlived their supervisor"
+        assert _all_ended(processes), "workers outlived their supervisor"
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)
-
-
-def test_ctrl_c_ends_a_campaign_with_its_summary_and_130(tmp_path: Path) -> None:
-    # the summary said "exit status 0" (or nothing) under a status of 130; a Ctrl-C landing in
-    # Hypothesis' gc callback was lost
-    def fuzzing() -> bool:
-        err = tmp_path / "err"
-        return err.exists() and b"INFO: seed corpus" in err.read_bytes()
-
-    process, err, _ = _started(
-        tmp_path, "-seed=1", "-max_total_time=60", f"--artifacts={tmp_path / 'a'}", ready=fuzzing
-    )
-    time.sleep(0.5)
-    os.killpg(process.pid, signal.SIGINT)  # a terminal's Ctrl-C: the whole process group
-    assert process.wait(timeout=60) == 130
-    said = err.read_text()
-    assert "campaign summary" in said and "exit status 130 (interrupted (Ctrl-C))" in said
-    assert "Traceback" not in said and "Uncaught Python exception" not in said
 
 
 @pytest.mark.parametrize("flag", ["-jobs=2", "-fork=2"])
@@ -616,11 +615,7 @@ def test_ctrl_c_ends_jobs_and_their_supervisor_with_130(tmp_path: Path, flag: st
         assert "exit status 130 (interrupted (Ctrl-C))" in said, said[-3000:]
         assert "deadly signal" not in said and "Traceback" not in said
         assert not list(artifacts.glob("crash-*")), "the interrupt left a crash file"
-        for _ in range(600):
-            if not processes():
-                break
-            time.sleep(0.1)
-        assert not processes(), "jobs outlived their supervisor"
+        assert _all_ended(processes), "jobs outlived their supervisor"
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)
