@@ -49,6 +49,7 @@ from fuzzer.execution.session import ConfigError, RunConfig, Session, versions
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus, scripts
 from fuzzer.harness import Harness
+from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators, session_values
 from fuzzer.mutation.mutators import MutationContext
@@ -72,7 +73,7 @@ def _harness(session: Session, artifacts: Path, seeds: list[TestCase], seed: int
     evaluator = session.evaluator()
     # the oracle's re-runs get the full engine's budget (half its default -timeout): without one,
     # checking a scenario divergence of a slow target took 90 s of a 10-s trial
-    evaluator.check_seconds = campaign.check_seconds(int(campaign.DEFAULT_FLAGS["-timeout"]))
+    evaluator.check_seconds = campaign.check_seconds(int(DEFAULT_FLAGS["-timeout"]))
     return Harness(
         evaluator=evaluator,
         store=ArtifactStore(artifacts),

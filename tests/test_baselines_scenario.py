@@ -14,6 +14,7 @@ from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
 from fuzzer.generation import corpus
 from fuzzer.generation import scripts as uniform
+from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS
 from fuzzer.input.mapping import REMEMBERED
 from fuzzer.mutation import mutators
 from fuzzer.scenario import steps as scenario_steps
@@ -103,7 +104,7 @@ def test_the_baselines_oracle_has_the_full_engines_re_run_budget(session: Sessio
     from fuzzer import campaign
 
     harness = baselines._harness(session, tmp_path, corpus.make_seeds(session, 2, 1), 1)
-    budget = campaign.check_seconds(int(campaign.DEFAULT_FLAGS["-timeout"]))
+    budget = campaign.check_seconds(int(DEFAULT_FLAGS["-timeout"]))
     assert budget is not None and harness.evaluator.check_seconds == budget
 
 

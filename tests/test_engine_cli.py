@@ -156,7 +156,7 @@ def test_agreeing_targets_run_clean(tmp_path: Path) -> None:
 
 def test_a_campaign_repeats_itself_for_a_seed(tmp_path: Path) -> None:
     """Two runs of one command keep the same corpus: every random choice has its seed, and a
-    single process no longer rereads its corpus folder (``-reload=0``, ``campaign.libfuzzer_argv``).
+    single process no longer rereads its corpus folder (``-reload=0``, ``libfuzzer_flags.libfuzzer_argv``).
     libFuzzer's reread, once a second, ran again the seeds that had added no coverage, at an
     execution the clock chose: of three 800-input runs, one kept other inputs than the two others."""
     kept = []

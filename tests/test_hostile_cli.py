@@ -147,7 +147,7 @@ def _options(flags: tuple[str, ...], forwarded: tuple[str, ...] = ()) -> Campaig
 
 
 def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
-    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.input.libfuzzer_flags import libfuzzer_argv
 
     options = _options(("-jobs=3", "-dict=my.dict"), ("--robot=ur5", f"--msg-path={tmp_path}"))
     argv = libfuzzer_argv(options)
@@ -163,7 +163,7 @@ def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
 def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyPatch) -> None:
     """``-reload=0`` for one process (its corpus has no other writer; the reread made runs of one
     command differ), the user's ``-reload`` kept, none with ``-fork`` or in a worker of one."""
-    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.input.libfuzzer_flags import libfuzzer_argv
     from fuzzer.processes import CHILD_ENV
 
     def argv(*flags: str) -> list[str]:
@@ -181,7 +181,7 @@ def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch
     """``-handle_term=0`` where Python's handler runs (``signals.on_signal``: the summary); a
     supervisor's main thread stays in libFuzzer, so it, its workers, merges and a crash's
     minimization keep libFuzzer's handler (a Python one would never run: SIGTERM ignored)."""
-    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.input.libfuzzer_flags import libfuzzer_argv
     from fuzzer.processes import CHILD_ENV
 
     def argv(*flags: str) -> list[str]:
@@ -203,7 +203,7 @@ def test_jobs_are_execd_by_libfuzzers_shell(monkeypatch: pytest.MonkeyPatch) -> 
     the script's path is quoted for the shell. One process runs no command: its argv is plain."""
     import shlex
 
-    from fuzzer.campaign import libfuzzer_argv
+    from fuzzer.input.libfuzzer_flags import libfuzzer_argv
     from fuzzer.processes import CHILD_ENV
 
     monkeypatch.delenv(CHILD_ENV, raising=False)

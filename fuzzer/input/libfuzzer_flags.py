@@ -1,11 +1,23 @@
 """libFuzzer's own options, checked before a campaign hands them over: what libFuzzer or Atheris
 would otherwise take in silently, crash on, or refuse only after start-up with an exit status the
-campaign's summary cannot tell from its own."""
+campaign's summary cannot tell from its own; and the argv it hands over (``libfuzzer_argv``)."""
 
 from __future__ import annotations
 
+import os
+import shlex
 import string
+import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from fuzzer.processes import CHILD_ENV, absolute_flag, absolute_option, flag_value, int_flag, one_campaign
+
+if TYPE_CHECKING:
+    from fuzzer.campaign import CampaignOptions
+
+DEFAULT_FLAGS = {"-max_len": "16384", "-timeout": "20"}
+"""libFuzzer flags a campaign sets unless given: inputs up to 16 KiB, a 20-s timeout."""
 
 INT_FLAGS: dict[str, tuple[int, int]] = {
     **dict.fromkeys(
@@ -108,3 +120,48 @@ def check_dictionary(path: Path) -> None:
                 f"-dict={path}: line {number} is not a libFuzzer dictionary entry "
                 f'(name="value" or "value", no comment after it): {shown!r}'
             )
+
+
+def libfuzzer_argv(options: CampaignOptions) -> list[str]:
+    """argv for Atheris: our script (absolute, for re-execution), libFuzzer flags with our
+    defaults, our options as --name=value tokens, the corpus folders.
+
+    Without ``--verbose``, ``-verbosity=0`` hides libFuzzer's per-input lines (NEW, REDUCE,
+    pulse); its crash, timeout and -fork reports still show. One process (no ``-jobs``, no
+    ``-fork``, not their worker: ``CHILD_ENV``) gets ``-reload=0`` unless given: libFuzzer's
+    reread of the folder, which nothing else writes, made runs of one command differ
+    (docs/engine.md, "Reproducing a campaign"). ``-jobs=N`` without ``-workers`` gets
+    ``-workers=N`` (libFuzzer's default, half the cores, runs the jobs one at a time on small
+    machines). With ``-jobs`` the campaign runs in its artifacts folder
+    (libFuzzer writes ``fuzz-<job>.log`` into the working folder), so paths are made absolute.
+    """
+    script = os.path.abspath(sys.argv[0])
+    flags = list(options.libfuzzer_flags)
+    for name, value in DEFAULT_FLAGS.items():
+        if flag_value(options.libfuzzer_flags, name) is None:
+            flags.append(f"{name}={value}")
+    if flag_value(options.libfuzzer_flags, "-artifact_prefix") is None:
+        flags.append(f"-artifact_prefix={options.artifacts.resolve()}/")
+    if not options.verbose and flag_value(options.libfuzzer_flags, "-verbosity") is None:
+        flags.append("-verbosity=0")
+    jobs = int_flag(options.libfuzzer_flags, "-jobs", 0)
+    fork = int_flag(options.libfuzzer_flags, "-fork", 0)
+    alone = not jobs and fork <= 0 and os.environ.get(CHILD_ENV) != "1"  # not a -jobs/-fork worker either
+    if alone and flag_value(options.libfuzzer_flags, "-reload") is None:
+        flags.append("-reload=0")
+    if one_campaign(options.libfuzzer_flags) and flag_value(options.libfuzzer_flags, "-handle_term") is None:
+        flags.append("-handle_term=0")  # signals.on_signal: the summary, not libFuzzer's _Exit(72)
+    forwarded = list(options.forwarded)
+    corpus = [str(c) for c in options.corpus]
+    if jobs > 0:
+        if flag_value(options.libfuzzer_flags, "-workers") is None:
+            flags.append(f"-workers={jobs}")
+        flags = [absolute_flag(f) for f in flags]
+        forwarded = [absolute_option(o) for o in forwarded]
+        corpus = [str(Path(c).resolve()) for c in corpus]
+    if not one_campaign(options.libfuzzer_flags) and os.environ.get(CHILD_ENV) != "1":
+        # libFuzzer runs each job as `sh -c "<argv> > log"`; a Ctrl-C killed that shell, and a
+        # job killed by SIGINT made a -jobs supervisor read a null Fuzzer (a segfault): exec'd,
+        # the job is the shell's process and exits with its own status
+        script = "exec " + shlex.quote(script)
+    return [script, *flags, *forwarded, *corpus]
