@@ -73,7 +73,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)
         travel.check_manifests(folders, config)
-    from fuzzer.input.libfuzzer_flags import check_dictionary, check_int_flags
+    from fuzzer.input.libfuzzer_flags import check_dictionary, check_int_flags, libfuzzer_argv
     from fuzzer.processes import drawn_seed, flag_value
 
     try:
@@ -118,6 +118,10 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         verbose=args.verbose,
         seeds_from_bag=args.seeds_from_bag,
     )
+    try:
+        libfuzzer_argv(options)  # a word a -fork parent's shell would split: refused before start-up
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     return run(config, options)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -71,6 +72,8 @@ HOSTILE = [
     # an empty path is the current folder: an unset shell variable wrote seeds there
     (["--artifacts="], "argument --artifacts: an empty path (an unset shell variable?)"),
     (["--no-such-option"], "unrecognized arguments: --no-such-option"),
+    # libFuzzer passes a -fork parent's words to its jobs through a shell, unquoted
+    (["-fork=2", "-exact_artifact_path=/tmp/a b"], "'-exact_artifact_path=/tmp/a b': libFuzzer hands this"),
 ]
 
 
@@ -213,6 +216,14 @@ def test_jobs_are_execd_by_libfuzzers_shell(monkeypatch: pytest.MonkeyPatch) -> 
         assert first == "exec '/a folder/fuzz_diff.py'", flags
         assert shlex.split(first) == ["exec", "/a folder/fuzz_diff.py"]
     assert libfuzzer_argv(_options(()))[0] == "/a folder/fuzz_diff.py"
+    spaced = replace(_options(("-jobs=2",)), corpus=(Path("/x y/corpus"),), artifacts=Path("/x y/$HOME"))
+    words = libfuzzer_argv(spaced)  # a -jobs supervisor reads flags only: every word quoted
+    parsed = shlex.split(" ".join(words))  # what the job's shell makes of libFuzzer's command
+    assert parsed[:2] == ["exec", "/a folder/fuzz_diff.py"] and "-jobs=2" in words
+    assert "/x y/corpus" in parsed and "-artifact_prefix=/x y/$HOME/" in parsed
+    for flags in (("-fork=2",), ("-merge=1",)):  # their parent reads the words its jobs get
+        with pytest.raises(ValueError, match="libFuzzer hands this to its jobs through a shell"):
+            libfuzzer_argv(replace(spaced, libfuzzer_flags=flags))
     monkeypatch.setenv(CHILD_ENV, "1")
     assert libfuzzer_argv(_options(()))[0] == "/a folder/fuzz_diff.py"
 

@@ -134,6 +134,12 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     ``-workers=N`` (libFuzzer's default, half the cores, runs the jobs one at a time on small
     machines). With ``-jobs`` the campaign runs in its artifacts folder
     (libFuzzer writes ``fuzz-<job>.log`` into the working folder), so paths are made absolute.
+
+    Raises
+    ------
+    ValueError
+        A word that a ``-fork`` (merge, crash minimization) parent would pass to its jobs
+        through a shell unquoted: a path with a space or a shell character.
     """
     script = os.path.abspath(sys.argv[0])
     flags = list(options.libfuzzer_flags)
@@ -159,9 +165,20 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
         flags = [absolute_flag(f) for f in flags]
         forwarded = [absolute_option(o) for o in forwarded]
         corpus = [str(Path(c).resolve()) for c in corpus]
+    rest = [*flags, *forwarded, *corpus]
     if not one_campaign(options.libfuzzer_flags) and os.environ.get(CHILD_ENV) != "1":
-        # libFuzzer runs each job as `sh -c "<argv> > log"`; a Ctrl-C killed that shell, and a
-        # job killed by SIGINT made a -jobs supervisor read a null Fuzzer (a segfault): exec'd,
-        # the job is the shell's process and exits with its own status
+        # libFuzzer runs each job as `sh -c "<argv> > log"`, its words joined unquoted; a Ctrl-C
+        # killed that shell, and a job killed by SIGINT made a -jobs supervisor read a null
+        # Fuzzer (a segfault): exec'd, the job is the shell's process, with its own status
         script = "exec " + shlex.quote(script)
-    return [script, *flags, *forwarded, *corpus]
+        if jobs > 0:  # a -jobs supervisor reads its flags only, none of them a path
+            rest = [shlex.quote(word) for word in rest]
+        else:  # -fork, a merge...: the parent reads the same words as its jobs
+            unsafe = next((word for word in rest if shlex.quote(word) != word), None)
+            if unsafe is not None:
+                raise ValueError(
+                    f"{unsafe!r}: libFuzzer hands this to its jobs through a shell, unquoted "
+                    "(-fork, -merge, -minimize_crash), which would split or expand it; use paths "
+                    "without spaces or shell characters here (-jobs quotes them)"
+                )
+    return [script, *rest]
