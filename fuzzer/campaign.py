@@ -288,6 +288,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             code = None
         if child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
+        meaning = None
+        if supervisor and status == 1 and code == 1 and int_flag(options.libfuzzer_flags, "-jobs", 0) > 0:
+            meaning = "a job failed: its fuzz-N.log in the artifacts folder says why"  # libFuzzer's 1
+            meaning = f"new divergences found; {meaning}" if found.divergences else meaning
         reporting.summary(
             harness.stats,
             len(features.seen),
@@ -299,6 +303,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             crashes=[shown(p) for p in found.crashes],
             explained=found.explained_kinds(),
             exit_code=code,
+            exit_meaning=meaning,
         )
         return code
 
@@ -359,7 +364,16 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         atheris.Setup(argv, test_one_input)
     else:
         atheris.Setup(argv, test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover)
-    atheris.Fuzz()
+    try:
+        atheris.Fuzz()
+    except SystemExit as exc:  # how Atheris ends a -jobs supervisor: with libFuzzer's status
+        if not supervisor or not isinstance(exc.code, int):
+            raise  # elsewhere (an exception of a target, Ctrl-C) the exit hooks end it
+        code = once(exc.code)
+        final = exc.code if code is None else code
+        if final:  # as the exit hook does (Python would end a run it saw interrupted by SIGINT)
+            flush_all()
+            os._exit(final)
     return once(0) or 0
 
 

@@ -120,13 +120,15 @@ def summary(
     crashes: Sequence[str] = (),
     explained: Mapping[str, int] | None = None,
     exit_code: int | None = None,
+    exit_meaning: str | None = None,
 ) -> None:
     """The end-of-campaign report (stderr). ``new_files``: crash files written since the
     start, by this process or by its -fork/-jobs workers; ``totals``: the workers' counters
     summed (``divlog.worker_totals``) when this process supervised them; ``timeouts`` and
     ``crashes``: libFuzzer's timeout-/crash- files written since the start; ``explained``: the
     crash files written since the start whose divergence the oracle explains (kinds in
-    ``processes.NOT_FINDINGS``), counted by kind: not findings, but on disk for triage."""
+    ``processes.NOT_FINDINGS``), counted by kind: not findings, but on disk for triage;
+    ``exit_meaning``: what ``exit_code`` means here, when not what it means alone."""
     lines = [
         "campaign summary",
         f"  executions: {stats.execs} in {stats.elapsed:.1f} s "
@@ -179,6 +181,7 @@ def summary(
             130: "interrupted (Ctrl-C)",
             143: "terminated (SIGTERM)",
         }.get(exit_code, "libFuzzer's status")
+        meaning = exit_meaning or meaning
         lines.append(f"  exit status {exit_code} ({meaning})")
     for line in lines:
         info(line)

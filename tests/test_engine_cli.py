@@ -620,3 +620,17 @@ def test_ctrl_c_ends_jobs_and_their_supervisor_with_130(tmp_path: Path, flag: st
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)
+
+
+def test_a_jobs_campaign_whose_job_failed_says_so(tmp_path: Path) -> None:
+    # Atheris ends a -jobs supervisor with SystemExit(libFuzzer's status): the summary, made at
+    # exit with no status, said nothing of it (or "exit status 0" when no job left a file)
+    artifacts = tmp_path / "a"
+    run = fuzz(
+        str(tmp_path / "corpus"), "-jobs=2", "-rss_limit_mb=1", "-max_total_time=30", "-seed=1",
+        f"--artifacts={artifacts}", "--no-progress", timeout=180,
+    )  # fmt: skip
+    assert run.returncode == 1, run.stderr[-3000:]
+    said = "exit status 1 (a job failed: its fuzz-N.log in the artifacts folder says why)"
+    assert said in run.stderr, run.stderr[-3000:]
+    assert "out-of-memory" in (artifacts / "fuzz-0.log").read_text()
