@@ -17,7 +17,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from fuzzer import dry_harness, dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog, worker_totals
@@ -314,14 +314,18 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     unwritable: list[bool] = []  # the artifacts folder could not be written (said once)
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
 
+    def end_now(status: int) -> NoReturn:
+        """End this process with ``status`` from inside an input, its exit hook run first."""
+        once(status)
+        flush_all()
+        os._exit(status)
+
     def test_one_input(data: bytes) -> None:
         if stop_requested():  # a SIGINT or SIGTERM since the last input (fuzzer.signals)
             if not child:
                 raise KeyboardInterrupt  # Atheris ends it with its summary, as after Ctrl-C
             harness.interrupted = True  # in its last snapshot, for the supervisor's status
-            once(interrupted)  # a worker: libFuzzer's status for an interrupted job
-            flush_all()
-            os._exit(interrupted)
+            end_now(interrupted)  # a worker: libFuzzer's status for an interrupted job
         if not edge_callback:  # atheris.Fuzz() has put its core module's _trace_branch in place
             edge_callback.append(fastcov.install(atheris))
             if edge_callback[0] is not None:
@@ -329,17 +333,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         if not data:
             return  # libFuzzer always runs the empty input first: not a test case, not counted
         if deadline is not None and time.time() >= deadline:
-            once(0)  # the -fork budget is spent: end this job as if its own time were up
-            flush_all()
-            os._exit(0)
+            end_now(0)  # the -fork budget is spent: end this job as if its own time were up
         in_callback[0] = True
         try:
             harness.test_one_input(data)
         except ArtifactsUnwritable:  # said, with the input it could not save: not a crash of a target
             unwritable.append(True)
-            once(WRITE_FAILED_EXIT)
-            flush_all()
-            os._exit(WRITE_FAILED_EXIT)
+            end_now(WRITE_FAILED_EXIT)
         in_callback[0] = False
 
     reporting.info(
