@@ -17,24 +17,17 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from fuzzer import dry_harness, dry_run, reporting
-from fuzzer.artifacts.divlog import CampaignLog, worker_totals
+from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
+from fuzzer.campaign_end import CampaignEnd
 from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, versions
-from fuzzer.generation.corpus import (
-    bag_seeds,
-    make_seeds,
-    orientation_cases,
-    prescan,
-    space_filling_count,
-    space_filling_seeds,
-    tutorial_seeds,
-    write_seeds,
-)
+from fuzzer.generation.corpus import bag_seeds, prescan, write_seeds
+from fuzzer.generation.initial import initial_seeds
 from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS, libfuzzer_argv
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation.dictionary import parse_dictionary
@@ -44,12 +37,10 @@ from fuzzer.processes import (
     DEADLINE_ENV,
     SUPERVISOR_ENV,
     TIMEOUT_EXIT,
-    exit_status,
     flag_value,
     int_flag,
     is_number,
     libfuzzer_seed,
-    new_artifacts,
     one_campaign,
     supervises,
 )
@@ -58,15 +49,16 @@ from fuzzer.selection import fastcov
 from fuzzer.selection.instrument import instrument
 from fuzzer.selection.search import search_parts
 from fuzzer.signals import (
-    INT_EXIT,
     INTERRUPTED_EXIT,
-    TERM_EXIT,
     defer_to_next_input,
     end_with_supervisor,
     on_signal,
     stop_requested,
-    terminated,
 )
+
+if TYPE_CHECKING:
+    from fuzzer.harness import Harness
+    from fuzzer.selection.guidance import Features
 
 
 @dataclass(frozen=True)
@@ -179,7 +171,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         # until libFuzzer runs, an exit (a usage error such as seeds Hypothesis cannot draw, a full
         # disk, Ctrl-C) ends the children too: they ran on for up to -timeout after the error
         atexit.register(dry.stop)
-    seeds, filling = _initial_seeds(session, options, wanted if not child else 0, folders, seeds, dry)
+    seeds, filling = initial_seeds(
+        session, wanted if not child else 0, options.seed, options.mutator, folders, seeds, dry
+    )
     if not child:  # the seeds made: record the configuration in the corpus manifest
         from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
 
@@ -196,51 +190,16 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     import atheris
 
     instrument(config)
-    from fuzzer.harness import Harness
-    from fuzzer.mutation import mutators
-    from fuzzer.selection.guidance import Features
-
-    limits = session.reference.joint_limits
-    lower = tuple(lim.lower for lim in limits)
-    upper = tuple(lim.upper for lim in limits)
-    # a scenario's steps have their own types (the scenario mutators know them)
-    types = {} if config.op == "scenario" else field_types(session, config.message_type)
-    interesting = interesting_values(session)
-    dictionary: list[str | float] = [*session.reference.joint_names, *session.reference.link_names]
-    if options.dictionary_file:
-        dictionary += parse_dictionary(options.dictionary_file)
-    from fuzzer.input.mapping import FOCUS
-
-    focus = FOCUS.get(config.message_type, ())
-
-    context = mutators.MutationContext(
-        rng=random.Random(options.seed),
-        field_types=types,
-        interesting_floats=tuple(interesting),
-        dictionary=tuple(dictionary),
-        allow_special=not config.filtering,
-        libfuzzer_mutate=libfuzzer_mutate,
-        focus=focus,
-    )
-
-    features = Features()
-    search = search_parts(session, options.mutator, options.seed, features, seeded=len(filling))
-    context.compared = search["float_tracer"].compared  # what the targets compare floats against
-    harness = Harness(
-        **_scenario_mutators(session),
-        **search,
-        evaluator=evaluator,
-        store=store,
-        features=features,
-        context=context,
-        sidecar=sidecar,
-        seeds=seeds,
-        lower=lower,
-        upper=upper,
-        stop_on_divergence=options.stop_on_divergence,
-        log=CampaignLog(artifacts),
-        joint_names=tuple(session.reference.joint_names),
-        campaign_seeds=seeds_of_campaign,
+    harness, features = _harness(
+        session,
+        options,
+        evaluator,
+        store,
+        sidecar,
+        seeds,
+        len(filling),
+        CampaignLog(artifacts),
+        seeds_of_campaign,
     )
     total = flag_value(options.libfuzzer_flags, "-max_total_time")
     progress = reporting.Progress(
@@ -254,64 +213,24 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
 
     from fuzzer.exit_hook import flush_all, on_exit
 
-    def shown(path: Path) -> str:
-        return str(options.artifacts / path.name)  # as the user named the folder
-
     interrupted = int_flag(options.libfuzzer_flags, "-interrupted_exitcode", INTERRUPTED_EXIT)
-
-    def finish(status: int | None) -> int | None:
-        progress.close()
-        if harness.stats.execs and not unwritable:
-            try:
-                harness.maybe_snapshot(force=True)
-            except ArtifactsUnwritable:  # said; the crash files written before are this run's
-                unwritable.append(True)
-        if unwritable and not status:
-            status = WRITE_FAILED_EXIT
-        if terminated():
-            status = TERM_EXIT  # Atheris ends it as after Ctrl-C (130)
-        elif stop_requested():
-            status = INT_EXIT  # a Ctrl-C kept for an input's start: Atheris ends it, status unknown here
-        if dry is not None:  # its crash files are this run's, even one it died writing
-            dry.wait()
-            store.recovered = [*store.recovered, *store.recover()]
-        found = new_artifacts(artifacts, started)
-        if store.recovered:  # completed for a killed run that never reported them: new to the user
-            found = found.with_recovered([artifacts / name for name in store.recovered])
-        totals = worker_totals(artifacts, started, os.getpid()) if supervisor else None
-        if supervisor and not terminated() and (status == interrupted or (totals or {}).get("interrupted")):
-            status = INT_EXIT  # libFuzzer's is 1 for -jobs (a job's status), 72 for -fork
-        code: int | None = exit_status(status, found, supervisor, timeout_code)
-        if status is None and (in_callback[0] or found.crashes or found.timeouts):
-            # Atheris ending the process: an exception in the target (libFuzzer reports it as a
-            # crash next), or a -jobs run whose failed job set libFuzzer's status
-            code = None
-        if child:
-            return None  # a worker's status is libFuzzer's business (its parent reads it)
-        meaning = None
-        if supervisor and status == 1 and code == 1 and int_flag(options.libfuzzer_flags, "-jobs", 0) > 0:
-            meaning = "a job failed: its fuzz-N.log in the artifacts folder says why"  # libFuzzer's 1
-            meaning = f"new divergences found; {meaning}" if found.divergences else meaning
-        reporting.summary(
-            harness.stats,
-            len(features.seen),
-            str(options.artifacts),
-            [str(c) for c in options.corpus],
-            [shown(p) for p in found.divergences],
-            totals=totals,
-            timeouts=[shown(p) for p in found.timeouts],
-            crashes=[shown(p) for p in found.crashes],
-            explained=found.explained_kinds(),
-            exit_code=code,
-            exit_meaning=meaning,
-        )
-        return code
-
-    once = on_exit(finish)
+    end = CampaignEnd(
+        options,
+        harness,
+        features,
+        progress,
+        store,
+        artifacts,
+        started,
+        child=child,
+        supervisor=supervisor,
+        timeout_code=timeout_code,
+        interrupted=interrupted,
+        dry=dry,
+    )
+    once = on_exit(end)
     if dry is not None:
-        atexit.unregister(dry.stop)  # from here the campaign's end waits for them (finish)
-    in_callback = [False]
-    unwritable: list[bool] = []  # the artifacts folder could not be written (said once)
+        atexit.unregister(dry.stop)  # from here the campaign's end waits for them (CampaignEnd)
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
 
     def end_now(status: int) -> NoReturn:
@@ -334,13 +253,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             return  # libFuzzer always runs the empty input first: not a test case, not counted
         if deadline is not None and time.time() >= deadline:
             end_now(0)  # the -fork budget is spent: end this job as if its own time were up
-        in_callback[0] = True
+        end.in_callback = True
         try:
             harness.test_one_input(data)
         except ArtifactsUnwritable:  # said, with the input it could not save: not a crash of a target
-            unwritable.append(True)
+            end.unwritable = True
             end_now(WRITE_FAILED_EXIT)
-        in_callback[0] = False
+        end.in_callback = False
 
     reporting.info(
         f"fuzzing {config.op} on {session.urdf.name} ({session.reference.dof} joints): "
@@ -377,48 +296,61 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     return once(0) or 0
 
 
-def _initial_seeds(
+def _harness(
     session: Session,
     options: CampaignOptions,
-    wanted: int,
-    folders: tuple[Path, ...],
+    evaluator: Any,
+    store: ArtifactStore,
+    sidecar: Any,
     seeds: list[TestCase],
-    dry: dry_run.Stages | None,
-) -> tuple[list[TestCase], list[TestCase]]:
-    """The campaign's seeds and its space-filling ones: ``wanted`` seeds made and written to the
-    first corpus folder (with the full engine's space-filling points and tutorial scripts) before
-    the corpus's own ``seeds``; 8 in memory if there are none (to restart from damaged inputs).
+    seeded: int,
+    log: CampaignLog,
+    campaign_seeds: tuple[int | None, int],
+) -> tuple[Harness, Features]:
+    """The campaign's Harness (mutators, crossover, search parts, evaluator) and its feature
+    counters, built after ``instrument``: their modules import the instrumented ones.
+    ``seeded``: space-filling seeds already written (the Sobol sequence goes on after them)."""
+    from fuzzer.harness import Harness
+    from fuzzer.input.mapping import FOCUS
+    from fuzzer.mutation import mutators
+    from fuzzer.selection.guidance import Features
 
-    Raises
-    ------
-    ConfigError
-        Hypothesis draws no seed for this robot (a chain of 1,300 joints).
-    """
     config = session.config
-    filling: list[TestCase] = []
-    if wanted and folders:
-        generated = make_seeds(session, wanted, options.seed)
-        orientation = orientation_cases(session, len(generated) + space_filling_count(config.op, wanted))
-        if dry is not None:
-            dry.second(generated)
-        # the full engine's: as many space-filling points (IK: one, corpus.SLOW_OP_SPACEFILL_SEEDS)
-        count = space_filling_count(config.op, wanted) if options.mutator == "rrosfuzz" else 0
-        filling = space_filling_seeds(session, count, options.seed, len(generated)) if count else []
-        filling += orientation if count else []  # a pose target's quaternion at lengths other than one
-        tutorials = (
-            tutorial_seeds(session, options.seed, len(generated)) if options.mutator == "rrosfuzz" else []
-        )
-        write_seeds(folders[0], generated + filling + tutorials)
-        seeds = generated + seeds
-        reporting.info(
-            f"wrote {len(generated)} seeds from Hypothesis ({config.message_type})"
-            + (f" and {len(filling)} space-filling configurations" if filling else "")
-            + (f" and {len(tutorials)} script(s) of MoveIt's tutorials" if tutorials else "")
-            + f" to {folders[0]}"
-        )
-    if not seeds:
-        seeds = make_seeds(session, 8, options.seed)  # in memory, to restart from damaged inputs
-    return seeds, filling
+    limits = session.reference.joint_limits
+    # a scenario's steps have their own types (the scenario mutators know them)
+    types = {} if config.op == "scenario" else field_types(session, config.message_type)
+    dictionary: list[str | float] = [*session.reference.joint_names, *session.reference.link_names]
+    if options.dictionary_file:
+        dictionary += parse_dictionary(options.dictionary_file)
+    context = mutators.MutationContext(
+        rng=random.Random(options.seed),
+        field_types=types,
+        interesting_floats=tuple(interesting_values(session)),
+        dictionary=tuple(dictionary),
+        allow_special=not config.filtering,
+        libfuzzer_mutate=libfuzzer_mutate,
+        focus=FOCUS.get(config.message_type, ()),
+    )
+    features = Features()
+    search = search_parts(session, options.mutator, options.seed, features, seeded=seeded)
+    context.compared = search["float_tracer"].compared  # what the targets compare floats against
+    harness = Harness(
+        **_scenario_mutators(session),
+        **search,
+        evaluator=evaluator,
+        store=store,
+        features=features,
+        context=context,
+        sidecar=sidecar,
+        seeds=seeds,
+        lower=tuple(lim.lower for lim in limits),
+        upper=tuple(lim.upper for lim in limits),
+        stop_on_divergence=options.stop_on_divergence,
+        log=log,
+        joint_names=tuple(session.reference.joint_names),
+        campaign_seeds=campaign_seeds,
+    )
+    return harness, features
 
 
 def check_seconds(timeout: int) -> float | None:

@@ -364,7 +364,7 @@ def test_a_goal_nudge_without_a_pose_goal_gives_no_evidence(runners: tuple[Runne
 
 
 def test_seeds_are_valid_meaningful_scripts() -> None:
-    from fuzzer.campaign import make_seeds
+    from fuzzer.generation.corpus import make_seeds
 
     session = Session.open(RunConfig(op="scenario", max_steps=6))
     seeds = make_seeds(session, 12, seed=3)

@@ -1,0 +1,139 @@
+"""How a campaign ends: its exit status and its summary, made once, however the process ends.
+
+``fuzzer.campaign.run`` hands a :class:`CampaignEnd` to ``fuzzer.exit_hook.on_exit``, which
+calls it with libFuzzer's status (``-max_total_time``, ``-runs``, the end of ``-fork``), with the
+status the campaign chose itself (an unwritable artifacts folder, an interrupted worker, a
+``-jobs`` supervisor's ``SystemExit``), or with None where Python ends the process (Atheris after
+an exception of a target, Ctrl-C). It answers the status the process should end with
+(``processes.exit_status``; docs/engine.md, "Exit status").
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from fuzzer import dry_run, reporting
+from fuzzer.artifacts.divlog import worker_totals
+from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
+from fuzzer.processes import Found, exit_status, int_flag, new_artifacts
+from fuzzer.signals import INT_EXIT, TERM_EXIT, stop_requested, terminated
+
+if TYPE_CHECKING:
+    from fuzzer.campaign import CampaignOptions
+    from fuzzer.harness import Harness
+    from fuzzer.selection.guidance import Features
+
+JOB_FAILED = "a job failed: its fuzz-N.log in the artifacts folder says why"
+"""What a ``-jobs`` supervisor's status 1 means when no divergence explains it (libFuzzer's 1
+for a job that ended with a non-zero status)."""
+
+
+@dataclass
+class CampaignEnd:
+    """The state a campaign's end reads, and the call that ends it.
+
+    The two flags are set by the campaign's input callback: ``in_callback`` while an input is
+    being evaluated (an end from there is Atheris reporting a target's exception), ``unwritable``
+    once the artifacts folder could not be written (said once, when it happened).
+    """
+
+    options: CampaignOptions
+    harness: Harness
+    features: Features
+    progress: reporting.Progress
+    store: ArtifactStore
+    artifacts: Path
+    """The artifacts folder, resolved (a ``-jobs`` supervisor changes its working folder)."""
+    started: float
+    """When the campaign started (s since the epoch): crash files since then are this run's."""
+    child: bool
+    supervisor: bool
+    timeout_code: int
+    interrupted: int
+    """libFuzzer's ``-interrupted_exitcode``: a worker's status after Ctrl-C."""
+    dry: dry_run.Stages | None = None
+    in_callback: bool = False
+    unwritable: bool = False
+
+    def __call__(self, status: int | None) -> int | None:
+        """End the campaign: the last snapshot, the dry run's children, the summary; returns the
+        status the process should end with (None: keep libFuzzer's or Atheris')."""
+        self.progress.close()
+        if self.harness.stats.execs and not self.unwritable:
+            try:
+                self.harness.maybe_snapshot(force=True)
+            except ArtifactsUnwritable:  # said; the crash files written before are this run's
+                self.unwritable = True
+        status = self._signalled(WRITE_FAILED_EXIT if self.unwritable and not status else status)
+        found = self._found()
+        totals = worker_totals(self.artifacts, self.started, os.getpid()) if self.supervisor else None
+        if (
+            self.supervisor
+            and not terminated()
+            and (status == self.interrupted or (totals or {}).get("interrupted"))
+        ):
+            status = INT_EXIT  # libFuzzer's is 1 for -jobs (a job's status), 72 for -fork
+        code: int | None = exit_status(status, found, self.supervisor, self.timeout_code)
+        if status is None and (self.in_callback or found.crashes or found.timeouts):
+            # Atheris ending the process: an exception in the target (libFuzzer reports it as a
+            # crash next), or a -jobs run whose failed job set libFuzzer's status
+            code = None
+        if self.child:
+            return None  # a worker's status is libFuzzer's business (its parent reads it)
+        self._summary(found, totals, code, self._meaning(status, code, found))
+        return code
+
+    @staticmethod
+    def _signalled(status: int | None) -> int | None:
+        """``status``, or the status of a SIGTERM or a Ctrl-C the campaign kept (fuzzer.signals)."""
+        if terminated():
+            return TERM_EXIT  # Atheris ends it as after Ctrl-C (130)
+        if stop_requested():
+            return INT_EXIT  # a Ctrl-C kept for an input's start: Atheris ends it, status unknown here
+        return status
+
+    def _found(self) -> Found:
+        """This run's crash, timeout and divergence files, the dry run's and recovered ones included."""
+        if self.dry is not None:  # its crash files are this run's, even one it died writing
+            self.dry.wait()
+            self.store.recovered = [*self.store.recovered, *self.store.recover()]
+        found = new_artifacts(self.artifacts, self.started)
+        if self.store.recovered:  # completed for a killed run that never reported them: new to the user
+            found = found.with_recovered([self.artifacts / name for name in self.store.recovered])
+        return found
+
+    def _meaning(self, status: int | None, code: int | None, found: Found) -> str | None:
+        """What the exit status means where it means more than one thing (a ``-jobs`` 1)."""
+        if not (
+            self.supervisor
+            and status == 1
+            and code == 1
+            and int_flag(self.options.libfuzzer_flags, "-jobs", 0) > 0
+        ):
+            return None
+        return f"new divergences found; {JOB_FAILED}" if found.divergences else JOB_FAILED
+
+    def _summary(
+        self, found: Found, totals: dict[str, Any] | None, code: int | None, meaning: str | None
+    ) -> None:
+        """The end-of-campaign report, files named as the user named the artifacts folder."""
+
+        def shown(path: Path) -> str:
+            return str(self.options.artifacts / path.name)
+
+        reporting.summary(
+            self.harness.stats,
+            len(self.features.seen),
+            str(self.options.artifacts),
+            [str(c) for c in self.options.corpus],
+            [shown(p) for p in found.divergences],
+            totals=totals,
+            timeouts=[shown(p) for p in found.timeouts],
+            crashes=[shown(p) for p in found.crashes],
+            explained=found.explained_kinds(),
+            exit_code=code,
+            exit_meaning=meaning,
+        )
