@@ -22,7 +22,8 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
+from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
+from fuzzer.artifacts.trust import config_from
 from fuzzer.execution.evaluate import Evaluation, Verdict
 from fuzzer.execution.records import Comparison, Kind, Outcome, Signature, Status
 from fuzzer.input.testcase import TestCase

@@ -133,7 +133,7 @@ def fill(manifest: Manifest, given: set[str], trust: bool = False) -> dict[str, 
     only when it is a shipped name or an existing regular file in the corpus folder or the
     working directory (anywhere with ``trust``).
     """
-    from fuzzer.artifacts.sidecar import foreign_targets, safe_robot
+    from fuzzer.artifacts.trust import foreign_targets, safe_robot
 
     c = manifest.config
     out: dict[str, str] = {}

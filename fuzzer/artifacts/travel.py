@@ -80,7 +80,8 @@ def adopt_sidecar(args: argparse.Namespace, files: Sequence[Path]) -> bool:
         A damaged sidecar, or one naming targets that may not be imported.
     """
     for path in files:
-        from fuzzer.artifacts.sidecar import config_from, read_sidecar  # a campaign on folders: not needed
+        from fuzzer.artifacts.sidecar import read_sidecar  # a campaign on folders: not needed
+        from fuzzer.artifacts.trust import config_from
 
         sidecar = read_sidecar(path)
         if sidecar is None:

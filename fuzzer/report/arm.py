@@ -28,7 +28,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
-from fuzzer.artifacts.sidecar import SidecarError, config_from, validate_config
+from fuzzer.artifacts.sidecar import SidecarError, validate_config
+from fuzzer.artifacts.trust import config_from
 from fuzzer.execution.evaluate import Verdict
 from fuzzer.execution.records import Outcome, Status
 from fuzzer.execution.session import Session

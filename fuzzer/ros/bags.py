@@ -231,7 +231,8 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     BagError
         The crash file or its sidecar cannot be used, or the bag cannot be written.
     """
-    from fuzzer.artifacts.sidecar import read_sidecar, sidecar_model
+    from fuzzer.artifacts.sidecar import read_sidecar
+    from fuzzer.artifacts.trust import sidecar_model
     from fuzzer.input.testcase import decode
 
     try:

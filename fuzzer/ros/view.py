@@ -196,7 +196,8 @@ def start_xvfb(log_dir: str) -> tuple[str, processes.Process]:
 
 def load(crash: Path, trust: bool = False) -> tuple[Any, dict[str, Any], Any, Any]:
     """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
-    from fuzzer.artifacts.sidecar import read_sidecar, sidecar_model
+    from fuzzer.artifacts.sidecar import read_sidecar
+    from fuzzer.artifacts.trust import sidecar_model
     from fuzzer.input.testcase import decode
     from python_impl.urdf import load_urdf
 

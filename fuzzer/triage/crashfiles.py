@@ -15,8 +15,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fuzzer.artifacts.sidecar import SidecarError, config_from, read_sidecar
+from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import ArtifactStore, sidecar_path
+from fuzzer.artifacts.trust import config_from
 from fuzzer.execution.history import history_of
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.input.testcase import TestCase, TestCaseError, decode

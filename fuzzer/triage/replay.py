@@ -23,8 +23,9 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts import manifest
-from fuzzer.artifacts.sidecar import config_from, describe, read_sidecar
+from fuzzer.artifacts.sidecar import read_sidecar
 from fuzzer.artifacts.store import sidecar_path
+from fuzzer.artifacts.trust import config_from, describe
 from fuzzer.execution.evaluate import Evaluation, Verdict
 from fuzzer.execution.records import UNCOUNTED
 from fuzzer.execution.session import ConfigError, RunConfig, Session
