@@ -4,6 +4,7 @@ status, never a traceback. Also ``--help`` and the exit status of campaigns."""
 from __future__ import annotations
 
 import os
+import shlex
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -350,3 +351,32 @@ def test_minimize_into_a_full_folder_exits_74_and_an_already_minimal_file_writes
     assert [p.name for p in (tmp_path / "full").iterdir()] == [".signatures"]  # no half of a pair
     fits = run(crash, tmp_path / "fits")
     assert fits.returncode == 0 and "minimized to" in fits.stdout, fits.stderr[-2000:]
+
+
+def test_a_fork_campaign_runs_from_a_working_folder_with_a_space(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The default ``-artifact_prefix`` was absolute, so ``-fork`` and merges run from a folder
+    such as "/home/me/My robots" were refused (their words reach the jobs through a shell,
+    unquoted). The jobs run in the same working folder: the prefix is made relative to it
+    there, where the absolute one is not a safe word; elsewhere it stays absolute."""
+    from fuzzer.input.libfuzzer_flags import libfuzzer_argv
+    from fuzzer.processes import CHILD_ENV
+
+    monkeypatch.delenv(CHILD_ENV, raising=False)
+    work = tmp_path / "my robots"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    for flags in (("-fork=2",), ("-merge=1",), ("-minimize_crash=1",)):
+        words = libfuzzer_argv(_options(flags))
+        assert "-artifact_prefix=art/" in words, flags
+    # one process runs no shell, -jobs quotes its words: the prefix stays absolute
+    assert f"-artifact_prefix={work / 'art'}/" in libfuzzer_argv(_options(()))
+    assert shlex.quote(f"-artifact_prefix={work / 'art'}/") in libfuzzer_argv(_options(("-jobs=2",)))
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    monkeypatch.chdir(plain)
+    assert f"-artifact_prefix={plain / 'art'}/" in libfuzzer_argv(_options(("-fork=2",)))
+    monkeypatch.chdir(work)
+    with pytest.raises(ValueError, match="my robots/my art/': libFuzzer hands this"):  # a space of the user's own
+        libfuzzer_argv(replace(_options(("-fork=2",)), artifacts=Path("my art")))

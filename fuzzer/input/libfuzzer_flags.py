@@ -174,6 +174,7 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
         if jobs > 0:  # a -jobs supervisor reads its flags only, none of them a path
             rest = [shlex.quote(word) for word in rest]
         else:  # -fork, a merge...: the parent reads the same words as its jobs
+            rest = [shell_word(word) for word in rest]  # a working folder "/home/me/My robots"
             unsafe = next((word for word in rest if shlex.quote(word) != word), None)
             if unsafe is not None:
                 raise ValueError(
@@ -182,3 +183,21 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
                     "without spaces or shell characters here (-jobs quotes them)"
                 )
     return [script, *rest]
+
+
+def shell_word(word: str) -> str:
+    """``word``, or the same path relative to the working folder where only that form is a word a
+    shell keeps whole (no space, no shell character): for the words a ``-fork`` or merge parent
+    hands its jobs, which run in the same working folder. ``word`` is a path or ``-name=path``;
+    what is not an absolute path, or stays unsafe, is returned as it is."""
+    if shlex.quote(word) == word:
+        return word
+    head, sep, value = word.partition("=") if word.startswith("-") else ("", "", word)
+    if not os.path.isabs(value):
+        return word
+    try:
+        relative = os.path.relpath(value) + ("/" if value.endswith("/") else "")
+    except (OSError, ValueError):  # no working folder
+        return word
+    candidate = head + sep + relative
+    return candidate if shlex.quote(candidate) == candidate else word
