@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from fuzzer import dry_run, reporting
 from fuzzer.artifacts.divlog import worker_totals
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
-from fuzzer.processes import Found, exit_status, int_flag, new_artifacts
+from fuzzer.processes import ERROR_EXIT, Found, exit_status, failed_job_status, int_flag, new_artifacts
 from fuzzer.signals import INT_EXIT, TERM_EXIT, stop_requested, terminated
 
 if TYPE_CHECKING:
@@ -70,12 +70,14 @@ class CampaignEnd:
         status = self._signalled(WRITE_FAILED_EXIT if self.unwritable and not status else status)
         found = self._found()
         totals = worker_totals(self.artifacts, self.started, os.getpid()) if self.supervisor else None
-        if (
-            self.supervisor
-            and not terminated()
-            and (status == self.interrupted or (totals or {}).get("interrupted"))
-        ):
+        stopped = status == self.interrupted or (totals or {}).get("interrupted")
+        job_failed = False
+        if self.supervisor and not terminated() and stopped:
             status = INT_EXIT  # libFuzzer's is 1 for -jobs (a job's status), 72 for -fork
+        elif self._jobs() and status == 1:  # some job ended non-zero: as one process would have
+            error_code = int_flag(self.options.libfuzzer_flags, "-error_exitcode", ERROR_EXIT)
+            status = failed_job_status(found, self.options.stop_on_divergence, self.timeout_code, error_code)
+            job_failed = True
         code: int | None = exit_status(status, found, self.supervisor, self.timeout_code)
         if status is None and (self.in_callback or found.crashes or found.timeouts):
             # Atheris ending the process: an exception in the target (libFuzzer reports it as a
@@ -83,8 +85,12 @@ class CampaignEnd:
             code = None
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
-        self._summary(found, totals, code, self._meaning(status, code, found))
+        self._summary(found, totals, code, self._job_meaning(code, found) if job_failed else None)
         return code
+
+    def _jobs(self) -> bool:
+        """Whether this process is a ``-jobs`` supervisor."""
+        return self.supervisor and int_flag(self.options.libfuzzer_flags, "-jobs", 0) > 0
 
     @staticmethod
     def _signalled(status: int | None) -> int | None:
@@ -105,16 +111,14 @@ class CampaignEnd:
             found = found.with_recovered([self.artifacts / name for name in self.store.recovered])
         return found
 
-    def _meaning(self, status: int | None, code: int | None, found: Found) -> str | None:
-        """What the exit status means where it means more than one thing (a ``-jobs`` 1)."""
-        if not (
-            self.supervisor
-            and status == 1
-            and code == 1
-            and int_flag(self.options.libfuzzer_flags, "-jobs", 0) > 0
-        ):
+    @staticmethod
+    def _job_meaning(code: int | None, found: Found) -> str | None:
+        """What a ``-jobs`` supervisor's status says when one of its jobs ended non-zero."""
+        if code is None:
             return None
-        return f"new divergences found; {JOB_FAILED}" if found.divergences else JOB_FAILED
+        if code == 1:  # libFuzzer's 1, which nothing the jobs left explains
+            return f"new divergences found; {JOB_FAILED}" if found.divergences else JOB_FAILED
+        return f"{reporting.meaning_of(code)}, in a job: its fuzz-N.log in the artifacts folder says more"
 
     def _summary(
         self, found: Found, totals: dict[str, Any] | None, code: int | None, meaning: str | None

@@ -35,11 +35,14 @@ exit status of a campaign:
   0   no new divergence          1   new divergences (crash files written by this run)
   2   usage error                70  a timeout (libFuzzer's -timeout_exitcode; also when
                                      a -fork/-jobs worker timed out)
+  71  out of memory (libFuzzer's -rss_limit_mb, -malloc_limit_mb)
   74  a folder could not be written (a full disk, a read-only mount), with a message
       naming it and any divergent input it could not save
   77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
       (libFuzzer's -error_exitcode)
   130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary
+  -jobs: a job's 70, 71 or 77 is the campaign's (libFuzzer's supervisor says 1 for any);
+      a 1 no file explains reads "a job failed" in the summary
   any other status is libFuzzer's own
 """
 

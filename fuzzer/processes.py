@@ -34,6 +34,10 @@ SUPERVISOR_ENV = "RROSFUZZ_SUPERVISOR"
 """Set by a campaign's first process for the processes libFuzzer starts: its pid."""
 TIMEOUT_EXIT = 70
 """libFuzzer's -timeout_exitcode default."""
+OOM_EXIT = 71
+"""libFuzzer's status after an out-of-memory (``-rss_limit_mb``, ``-malloc_limit_mb``; no flag sets it)."""
+ERROR_EXIT = 77
+"""libFuzzer's -error_exitcode default: a deadly signal, or ``--stop-on-divergence``."""
 PATH_FLAGS = (
     "-dict",
     "-exact_artifact_path",
@@ -202,6 +206,23 @@ def exit_status(status: int | None, found: Found, supervisor: bool, timeout_code
     if supervisor and found.timeouts:
         return timeout_code
     return 1 if found.divergences else 0
+
+
+def failed_job_status(found: Found, stop_on_divergence: bool, timeout_code: int, error_code: int) -> int:
+    """What a ``-jobs`` supervisor's status 1 (libFuzzer's: some job ended non-zero) stands for,
+    from what the jobs left in the artifacts folder, as one process would have ended: a target
+    that died (a crash- or leak- file without a sidecar), or a divergence under
+    ``--stop-on-divergence``: ``error_code``; an out-of-memory (an oom- file): :data:`OOM_EXIT`;
+    a timeout: ``timeout_code``; none of these (a job's usage error, an out-of-memory before its
+    first input, a job killed): 1, which the summary explains."""
+    died = any(not path.name.startswith("oom-") for path in found.crashes)
+    if died or (stop_on_divergence and found.divergences):
+        return error_code
+    if found.crashes:
+        return OOM_EXIT
+    if found.timeouts:
+        return timeout_code
+    return 1
 
 
 def flag_value(flags: tuple[str, ...], name: str) -> str | None:

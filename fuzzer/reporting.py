@@ -108,6 +108,24 @@ class Progress:
             self._bar = None
 
 
+EXIT_MEANINGS = {
+    0: "no new divergence",
+    1: "new divergences found",
+    70: "timeouts",
+    71: "out of memory",
+    74: "the artifacts folder could not be written",
+    77: "a target died, or --stop-on-divergence stopped at a divergence",
+    130: "interrupted (Ctrl-C)",
+    143: "terminated (SIGTERM)",
+}
+"""What a campaign's exit status means (docs/engine.md, "Exit status of a campaign")."""
+
+
+def meaning_of(exit_code: int) -> str:
+    """What ``exit_code`` means at the end of a campaign (:data:`EXIT_MEANINGS`)."""
+    return EXIT_MEANINGS.get(exit_code, "libFuzzer's status")
+
+
 def summary(
     stats: Stats,
     features: int,
@@ -173,16 +191,7 @@ def summary(
     lines.append(f"  corpus: {', '.join(corpus)}")
     lines.append("  replay one with: python fuzz_diff.py <crash file>")
     if exit_code is not None:
-        meaning = {
-            0: "no new divergence",
-            1: "new divergences found",
-            70: "timeouts",
-            74: "the artifacts folder could not be written",
-            130: "interrupted (Ctrl-C)",
-            143: "terminated (SIGTERM)",
-        }.get(exit_code, "libFuzzer's status")
-        meaning = exit_meaning or meaning
-        lines.append(f"  exit status {exit_code} ({meaning})")
+        lines.append(f"  exit status {exit_code} ({exit_meaning or meaning_of(exit_code)})")
     for line in lines:
         info(line)
 

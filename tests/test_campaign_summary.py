@@ -12,7 +12,7 @@ import pytest
 
 from fuzzer import reporting
 from fuzzer.artifacts.store import sidecar_path
-from fuzzer.processes import NOT_FINDINGS, new_artifacts
+from fuzzer.processes import NOT_FINDINGS, OOM_EXIT, failed_job_status, new_artifacts
 from fuzzer.selection.state import Stats
 from tests.support import fuzz
 
@@ -36,6 +36,25 @@ def test_explained_crash_files_are_listed_apart_from_findings(tmp_path: Path) ->
     assert found.explained == [known, chaotic]
     assert [p.name for p in found.crashes] == ["crash-e"]
     assert dict(found.explained_kinds()) == {"known_limitation": 1, "ill_conditioned": 1}
+
+
+def test_a_failed_job_s_status_is_what_its_files_say(tmp_path: Path) -> None:
+    """A -jobs supervisor's 1 (some job ended non-zero) becomes what one process would have
+    exited with: a target that died or a divergence under --stop-on-divergence first, then an
+    out-of-memory, then a timeout; 1 when no file explains it."""
+
+    def status(stop: bool = False) -> int:
+        return failed_job_status(new_artifacts(tmp_path, since=0.0), stop, timeout_code=70, error_code=77)
+
+    assert status() == 1  # nothing left: a job's usage error, a job killed
+    _crash(tmp_path, "a", "value")
+    assert status() == 1 and status(stop=True) == 77  # a divergence fails no job unless it stops
+    (tmp_path / "timeout-b").write_bytes(b"x")
+    assert status() == 70
+    (tmp_path / "oom-c").write_bytes(b"x")
+    assert status() == OOM_EXIT
+    (tmp_path / "leak-d").write_bytes(b"x")
+    assert status() == 77
 
 
 def test_recovered_files_are_sorted_by_kind_too(tmp_path: Path) -> None:

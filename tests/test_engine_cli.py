@@ -624,13 +624,37 @@ def test_ctrl_c_ends_jobs_and_their_supervisor_with_130(tmp_path: Path, flag: st
 
 def test_a_jobs_campaign_whose_job_failed_says_so(tmp_path: Path) -> None:
     # Atheris ends a -jobs supervisor with SystemExit(libFuzzer's status): the summary, made at
-    # exit with no status, said nothing of it (or "exit status 0" when no job left a file)
+    # exit with no status, said nothing of it (or "exit status 0" when no job left a file). A job
+    # that ended with no file to explain it (here a target calling exit(3)) leaves libFuzzer's 1
     artifacts = tmp_path / "a"
     run = fuzz(
-        str(tmp_path / "corpus"), "-jobs=2", "-rss_limit_mb=1", "-max_total_time=30", "-seed=1",
-        f"--artifacts={artifacts}", "--no-progress", timeout=180,
+        str(tmp_path / "corpus"), "-jobs=2", "-max_total_time=30", "-seed=1", f"--artifacts={artifacts}",
+        "--no-progress", "--targets=native,tests.plugins.faults:exits", timeout=180,
     )  # fmt: skip
     assert run.returncode == 1, run.stderr[-3000:]
     said = "exit status 1 (a job failed: its fuzz-N.log in the artifacts folder says why)"
     assert said in run.stderr, run.stderr[-3000:]
-    assert "out-of-memory" in (artifacts / "fuzz-0.log").read_text()
+    assert "exited with exit code 3" in run.stderr
+
+
+@pytest.mark.parametrize(
+    ("target", "flag", "code", "said", "left"),
+    [
+        ("aborts", "-seed=1", 77, "a target died, or --stop-on-divergence stopped at a divergence", "crash-"),
+        ("python", "-rss_limit_mb=1", 71, "out of memory", "oom-"),
+    ],
+)
+def test_a_jobs_campaign_whose_target_died_exits_as_one_process_would(
+    tmp_path: Path, target: str, flag: str, code: int, said: str, left: str
+) -> None:
+    # libFuzzer's -jobs supervisor exits 1 for any failed job, the status of "new divergences":
+    # a job whose target died (77 alone) or ran out of memory (71) read as one that found some
+    artifacts = tmp_path / "a"
+    run = fuzz(
+        str(tmp_path / "corpus"), "-jobs=2", "-max_total_time=30", flag, f"--artifacts={artifacts}",
+        "--no-progress", f"--targets=native,{'tests.plugins.faults:' if target != 'python' else ''}{target}",
+        timeout=180,
+    )  # fmt: skip
+    assert run.returncode == code, run.stderr[-3000:]
+    assert f"exit status {code} ({said}, in a job: its fuzz-N.log" in run.stderr, run.stderr[-3000:]
+    assert [p for p in artifacts.glob(f"{left}*") if not p.name.endswith(".json")], f"no {left} file"

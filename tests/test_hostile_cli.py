@@ -378,5 +378,5 @@ def test_a_fork_campaign_runs_from_a_working_folder_with_a_space(
     monkeypatch.chdir(plain)
     assert f"-artifact_prefix={plain / 'art'}/" in libfuzzer_argv(_options(("-fork=2",)))
     monkeypatch.chdir(work)
-    with pytest.raises(ValueError, match="my robots/my art/': libFuzzer hands this"):  # a space of the user's own
+    with pytest.raises(ValueError, match="my robots/my art/': libFuzzer hands this"):  # the user's own space
         libfuzzer_argv(replace(_options(("-fork=2",)), artifacts=Path("my art")))

@@ -61,8 +61,21 @@ class _AbortsBeyondThree(python_impl.MoveGroup):
         return super().go(joints, wait)
 
 
+class _ExitsBeyondThree(python_impl.MoveGroup):
+    """Ends the process with status 3 and no crash file (as a library calling ``exit()`` would)
+    when joint_1's target is above 3 rad."""
+
+    def go(self, joints=None, wait=True):  # type: ignore[no-untyped-def]
+        if self.get_joint_value_target()[0] > 3.0:
+            import os
+
+            os._exit(3)
+        return super().go(joints, wait)
+
+
 hangs = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_HangsBeyondThree)
 aborts = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_AbortsBeyondThree)
+exits = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_ExitsBeyondThree)
 
 
 class _AlwaysHangs(python_impl.MoveGroup):
