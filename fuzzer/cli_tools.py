@@ -103,6 +103,9 @@ def minimize_main(argv: Sequence[str]) -> int:
         prog="fuzz_diff.py minimize",
         description="Shrink crash files to the simplest input with the same signature, under the "
         "configuration their sidecars record (options given here override it).",
+        epilog="exit status: 0 every file minimized or already minimal; 1 a file that no longer "
+        "reproduces its signature (nothing written for it); 2 a file or sidecar that cannot be read; "
+        "74 an output that cannot be written",
     )
     parser.add_argument("paths", nargs="+", type=given_path, help="crash files with sidecars (globs work)")
     config_options(parser)
@@ -124,7 +127,7 @@ def minimize_main(argv: Sequence[str]) -> int:
 
         prepare_folder(args.output, "--output", writable=True)
     sessions: dict[Any, Any] = {}
-    errors = unwritten = 0
+    errors = unwritten = stale = 0
     for path in files:
         try:
             loaded = crashfiles.load(path, given, args.trust_sidecar, sessions)
@@ -134,8 +137,9 @@ def minimize_main(argv: Sequence[str]) -> int:
             continue
         try:
             shrunk = crashfiles.shrink(loaded, args.budget)
-        except ValueError as exc:
+        except ValueError as exc:  # it does not reproduce its signature: nothing is written
             reporting.verdict(str(path), f"not minimized: {exc}")
+            stale += 1
             continue
         if crashfiles.already_minimal(loaded, shrunk):
             detail = f"{shrunk.evaluations} evaluations, no file written"
@@ -156,7 +160,7 @@ def minimize_main(argv: Sequence[str]) -> int:
             f"joints that matter: {', '.join(out['joints_that_matter']) or 'none'}"
             + ("" if shrunk.complete else ", budget exhausted"),
         )
-    return WRITE_FAILED_EXIT if unwritten else (2 if errors else 0)
+    return WRITE_FAILED_EXIT if unwritten else (2 if errors else (1 if stale else 0))
 
 
 def report_main(argv: Sequence[str]) -> int:

@@ -151,6 +151,16 @@ def _many_buckets(tmp: Path) -> Path:
     return art
 
 
+def _stale_minimize(tmp: Path, crash: Path, *args: str) -> Row:
+    """``minimize`` of a crash file that does not reproduce its signature: status 1, no file."""
+
+    def nothing_written(_: subprocess.CompletedProcess[str]) -> None:
+        assert sorted(p.name for p in crash.parent.iterdir()) == [crash.name, f"{crash.name}.json"]
+
+    said = "not minimized: (the input does not diverge|it no longer diverges) with its signature"
+    return Row(["minimize", str(crash), *args], 1, said, stream="stdout", checks=[nothing_written])
+
+
 def _minimize_crash_foreign(tmp: Path) -> Row:
     row = foreign_target(tmp)
     row.args = ["-minimize_crash=1", "-runs=10", *row.args]
@@ -300,6 +310,14 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         0,
         "minimized-34e1a33bf5c25be1ca333b3736986c6e1f2cc248: already minimal",  # read once, sidecar skipped
         stream="stdout",
+    ),
+    # a file that no longer reproduces its signature: each candidate was measured against it, and a
+    # "minimized" file with that signature written for an input that agrees
+    "minimize-stale-agrees": lambda t: _stale_minimize(
+        t, copy_crash(t, DIVERGE), "--targets", "native,python"
+    ),
+    "minimize-stale-other-signature": lambda t: _stale_minimize(
+        t, copy_crash(t, DIVERGE, edit=_set("signature.key", "0" * 40)), "--trust-sidecar"
     ),
     "minimize-no-sidecar": lambda t: Row(
         ["minimize", str(shutil.copyfile(AGREE, t / "crash-x"))], 2, "no sidecar"

@@ -155,12 +155,25 @@ class Minimizer:
         return key
 
     def minimize(self, case: TestCase, key: str | None = None) -> Shrunk:
-        """Shrink ``case``, keeping the signature ``key`` (default: its current one)."""
-        target = key if key is not None else self._key(case)
-        if target is None:
-            raise ValueError("the input does not diverge: nothing to minimize")
+        """Shrink ``case``, keeping the signature ``key`` (default: its current one).
+
+        Raises
+        ------
+        ValueError
+            ``case`` does not diverge, or not with the signature ``key`` (a crash file whose bug
+            was fixed, or replayed under other targets or tolerances): every candidate would be
+            measured against a signature the input itself no longer has.
+        """
+        current = self._key(case)
+        if current is None:
+            now = "" if key is None else f"with its signature {key[:12]} or any other "
+            raise ValueError(f"the input does not diverge {now}now: nothing to minimize")
+        if key is not None and current != key:
+            said = f"it no longer diverges with its signature {key[:12]} (now {current[:12]})"
+            raise ValueError(f"{said}: nothing to minimize")
+        target = current
         message = copy.deepcopy(case.message)
-        evaluations = accepted = 0
+        evaluations, accepted = 1, 0
 
         def holds(candidate: dict[str, Any]) -> bool:
             nonlocal evaluations
