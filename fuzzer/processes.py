@@ -12,7 +12,6 @@ campaign's exit status from what it wrote; and a forked child with a time budget
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 import select
@@ -26,6 +25,7 @@ from pathlib import Path
 
 from fuzzer.artifacts.store import oversized, sidecar_path
 from fuzzer.execution.records import UNCOUNTED
+from fuzzer.input import untrusted_json
 
 CHILD_ENV = "RROSFUZZ_CHILD"
 DEADLINE_ENV = "RROSFUZZ_DEADLINE"
@@ -163,7 +163,7 @@ def _sidecar_kind(path: Path) -> str | None:
     if oversized(path):
         return None  # no reader accepts it
     try:
-        data = json.loads(path.read_bytes())
+        data = untrusted_json.loads(path.read_bytes())
     except (OSError, ValueError, RecursionError):
         return None
     signature = data.get("signature") if isinstance(data, dict) else None

@@ -19,6 +19,8 @@ from fuzzer.report.records import read_records
 
 BIG = "1" + "0" * 5000
 """An integer literal past CPython's 4,300-digit limit of int(str)."""
+FLOATLESS = "1" + "0" * 400
+"""An integer literal ``json`` parses and no float can hold: ``float()`` of it raised OverflowError."""
 DEEP = "[" * 100_000 + "]" * 100_000
 
 CRASH = "crash-0123456789abcdef0123456789abcdef01234567"
@@ -35,7 +37,10 @@ def test_a_test_case_is_not_json_not_a_traceback(value: str) -> None:
         decode(_case_with(value))
 
 
-@pytest.mark.parametrize("text", ['{"signature": {"key": ' + BIG + "}}", DEEP])
+@pytest.mark.parametrize(
+    "text",
+    ['{"signature": {"key": ' + BIG + "}}", DEEP, '{"config": {"tolerance": {"m": ' + FLOATLESS + "}}}"],
+)
 def test_a_sidecar_is_damaged_not_a_traceback(tmp_path: Path, text: str) -> None:
     crash = tmp_path / CRASH
     crash.write_bytes(b"{}")
@@ -47,10 +52,39 @@ def test_a_sidecar_is_damaged_not_a_traceback(tmp_path: Path, text: str) -> None
 
 def test_log_lines_past_the_parser_are_skipped(tmp_path: Path) -> None:
     log = tmp_path / "divergences.jsonl"
-    log.write_text("\n".join(['{"sig": "a"}', '{"n": ' + BIG + "}", DEEP, '{"sig": "b"}']) + "\n")
+    lines = ['{"sig": "a"}', '{"n": ' + BIG + "}", DEEP, '{"t": ' + FLOATLESS + "}", '{"sig": "b"}']
+    log.write_text("\n".join(lines) + "\n")
     assert [r["sig"] for r in read_lines(log)] == ["a", "b"]
     records, skipped = read_records(log)
-    assert [r["sig"] for r in records] == ["a", "b"] and skipped == 2
+    assert [r["sig"] for r in records] == ["a", "b"] and skipped == 3
+
+
+def test_bounded_int_parses_what_a_float_holds() -> None:
+    from fuzzer.input.untrusted_json import bounded_int, loads
+
+    assert loads("[12, -3]") == [12, -3]
+    assert bounded_int("1" + "0" * 308) == 10**308 and bounded_int("-" + "9" * 308) == -int("9" * 308)
+    for text in ("2" + "0" * 308, "-2" + "0" * 308, FLOATLESS, BIG):  # 2e308 and beyond: no float
+        with pytest.raises(ValueError, match="beyond the range of a float"):
+            bounded_int(text)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("t", 1e308), ("t", float("nan")), ("elapsed", float("inf")), ("t", -1.0), ("execs", 2**70)],
+)
+def test_the_report_skips_times_and_counters_past_their_range(field: str, value: float) -> None:
+    """A snapshot with ``"t": 1e308`` or ``NaN``, or ``"elapsed": Infinity``, ended the report in
+    a traceback (no ``time_t`` or plot axis holds them): its times are refused, or the line."""
+    from fuzzer.report.records import Divergence, Snapshot
+
+    good = {"t": 1.7e9, "pid": 7, "execs": 10, "elapsed": 2.0}
+    assert Snapshot.parse(good) is not None
+    snap = Snapshot.parse({**good, field: value})
+    assert snap is None or (snap.elapsed == 0.0 and field == "elapsed")
+    if field == "t":
+        div = Divergence.parse({"sig": "s", "kind": "value", "t": value})
+        assert div is not None and div.t is None
 
 
 def test_triage_counts_only_string_signatures(tmp_path: Path) -> None:

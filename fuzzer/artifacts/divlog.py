@@ -29,6 +29,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fuzzer.input import untrusted_json
+
 if TYPE_CHECKING:
     from fuzzer.execution.evaluate import Evaluation
 
@@ -81,8 +83,8 @@ def read_lines(path: Path) -> Iterator[dict[str, Any]]:
     with open(path, encoding="utf-8", errors="replace") as handle:
         for line in handle:
             try:
-                record = json.loads(line)
-            except (ValueError, RecursionError):  # bad JSON, an int past 4,300 digits, nesting
+                record = untrusted_json.loads(line)
+            except (ValueError, RecursionError):  # bad JSON, an int past a float's range, nesting
                 continue
             if isinstance(record, dict):
                 yield record

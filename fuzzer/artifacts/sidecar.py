@@ -9,7 +9,6 @@ is :mod:`fuzzer.artifacts.trust`'s. The same rules apply to a corpus manifest
 
 from __future__ import annotations
 
-import json
 import math
 import stat
 from collections.abc import Callable
@@ -20,6 +19,7 @@ from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.records import Status
 from fuzzer.execution.session import ConfigError
+from fuzzer.input import untrusted_json
 from fuzzer.input.mapping import OPS
 
 BUILTIN_TARGETS = ("native", "python")
@@ -69,12 +69,12 @@ def read_json_file(path: Path, what: str = "sidecar") -> dict[str, Any]:
     if info.st_size > MAX_SIDECAR_BYTES:
         raise SidecarError(f"{path}: the {what} is larger than {MAX_SIDECAR_BYTES} bytes")
     try:
-        data = json.loads(path.read_bytes().decode("utf-8"))
+        data = untrusted_json.loads(path.read_bytes().decode("utf-8"))
     except OSError as exc:
         raise SidecarError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
         raise SidecarError(f"{path}: the {what} is not UTF-8 text") from None
-    except (ValueError, RecursionError) as exc:  # ValueError: bad JSON, or an int past 4,300 digits
+    except (ValueError, RecursionError) as exc:  # ValueError: bad JSON, or an int past a float's range
         raise SidecarError(f"{path}: the {what} is not valid JSON ({exc})") from None
     if not isinstance(data, dict):
         raise SidecarError(f"{path}: the {what} is a JSON {_type_name(data)}, expected an object")

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import os
 import re
 import secrets
@@ -30,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES, encode_sidecar
+from fuzzer.input import untrusted_json
 
 TMP_PREFIX = ".tmp-"
 CRASH_NAME = re.compile(r"crash-[0-9a-f]{40}")
@@ -250,7 +250,7 @@ class ArtifactStore:
                 continue
             name = side.name.removeprefix(TMP_PREFIX).split(".json", 1)[0]
             with contextlib.suppress(OSError, ValueError, AttributeError, TypeError, RecursionError):
-                key = json.loads(side.read_text(encoding="utf-8"))["signature"]["key"]
+                key = untrusted_json.loads(side.read_text(encoding="utf-8"))["signature"]["key"]
                 names.setdefault(str(key), name)
         return names
 
@@ -318,7 +318,7 @@ def load_sidecar(crash: Path) -> dict[str, Any] | None:
     if not path.is_file() or oversized(path):
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8", errors="replace"))
-    except (OSError, ValueError, RecursionError):  # bad JSON, an int past 4,300 digits, nesting
+        data = untrusted_json.loads(path.read_text(encoding="utf-8", errors="replace"))
+    except (OSError, ValueError, RecursionError):  # bad JSON, an int past a float's range, nesting
         return None  # a damaged sidecar is treated as none
     return data if isinstance(data, dict) else None

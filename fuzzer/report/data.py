@@ -17,7 +17,6 @@ back, or the workers of ``-fork``/``-jobs``), plotted on its own time axis.
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -27,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS
+from fuzzer.input import untrusted_json
 from fuzzer.report.buckets import BucketView, bucket_view
 from fuzzer.report.records import Divergence, Process, Snapshot, processes, read_records
 from fuzzer.report.tables import (
@@ -297,8 +297,8 @@ def _sidecars(directory: Path) -> list[dict[str, Any]]:
         if not contained(directory, path) or not path.is_file() or oversized(path):
             continue
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError, RecursionError):  # not UTF-8, bad JSON, an int past 4,300 digits
+            data = untrusted_json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):  # not UTF-8, bad JSON, an int past a float's range
             continue
         if isinstance(data, dict) and "signature" in data:
             out.append(data)

@@ -11,11 +11,12 @@ process. The totals of the page sum the *last* snapshot of each process.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from fuzzer.input import untrusted_json
 
 # -- reading ----------------------------------------------------------------------------------------
 
@@ -42,8 +43,8 @@ def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
             if not line.strip():
                 continue
             try:
-                record = json.loads(line)
-            except (ValueError, RecursionError):  # ValueError: bad JSON, or an int past 4,300 digits
+                record = untrusted_json.loads(line)
+            except (ValueError, RecursionError):  # ValueError: bad JSON, or an int past a float's range
                 skipped += 1
                 continue
             if isinstance(record, dict):
@@ -53,20 +54,37 @@ def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
     return records, skipped
 
 
+LATEST = 253402300799.0
+"""The last second of the year 9999 (s since the epoch): the latest time the page can print."""
+COUNT_LIMIT = 2**63
+"""A counter at or past this (a 64-bit counter's range) is not one a campaign wrote."""
+
+
 def _number(value: Any) -> float | None:
     if isinstance(value, bool) or not isinstance(value, int | float):
         return None
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an integer past a float's range (untrusted_json refuses most)
+        return None
+
+
+def _time(value: Any) -> float | None:
+    """A time in seconds (since the epoch, or elapsed): a finite number from 0 to :data:`LATEST`,
+    else None (a line with ``"t": 1e308`` or ``NaN`` made the page's clock and plots fail)."""
+    number = _number(value)
+    return number if number is not None and 0.0 <= number <= LATEST else None
 
 
 def _int(value: Any, default: int = 0) -> int:
-    return value if isinstance(value, int) and not isinstance(value, bool) else default
+    counter = isinstance(value, int) and not isinstance(value, bool) and abs(value) < COUNT_LIMIT
+    return value if counter else default
 
 
 def _counter(value: Any) -> dict[str, int]:
     if not isinstance(value, dict):
         return {}
-    return {str(k): v for k, v in value.items() if isinstance(v, int) and not isinstance(v, bool)}
+    return {str(k): v for k, v in value.items() if _int(v, -1) == v}
 
 
 @dataclass(frozen=True)
@@ -108,7 +126,7 @@ class Divergence:
             strategy=strategy if isinstance(strategy, str) else "unknown",
             near_zero=near_zero if isinstance(near_zero, int) and not isinstance(near_zero, bool) else None,
             closer=closer if closer in ("a", "b", "tie", "n/a") else "n/a",
-            t=_number(record.get("t")),
+            t=_time(record.get("t")),
             pid=pid if isinstance(pid, int) and not isinstance(pid, bool) else None,
             sha1=sha1 if isinstance(sha1, str) else "",
         )
@@ -141,10 +159,10 @@ class Snapshot:
     @classmethod
     def parse(cls, record: Mapping[str, Any]) -> Snapshot | None:
         """The snapshot a record describes, or None without numeric ``t``, ``pid``, ``execs``."""
-        t, pid, execs = _number(record.get("t")), record.get("pid"), record.get("execs")
-        if t is None or not isinstance(pid, int) or not isinstance(execs, int) or isinstance(execs, bool):
+        t, pid, execs = _time(record.get("t")), record.get("pid"), _int(record.get("execs"), -1)
+        if t is None or not isinstance(pid, int) or isinstance(pid, bool) or execs < 0:
             return None
-        elapsed = _number(record.get("elapsed"))
+        elapsed = _time(record.get("elapsed"))
         return cls(
             t=t,
             pid=pid,

@@ -1,0 +1,49 @@
+"""JSON from files anyone may have written (sidecars, manifests, campaign logs): numbers a float
+can hold.
+
+Python's ``json`` reads an integer of any length up to 4,300 digits (past that, a ValueError),
+and code that then takes it as a float (a tolerance, a difference, a timestamp) raised an
+OverflowError from 309 digits on: a traceback instead of "not valid JSON" naming the file.
+:func:`loads` refuses such an integer as bad JSON, a ``ValueError`` every reader of these files
+already turns into its message (or a skipped log line).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+MAX_DIGITS = 308
+"""The longest integer :func:`bounded_int` parses without checking it: every integer of 308 digits
+or fewer is below 1e308, within a float's range (about 1.8e308)."""
+
+
+def bounded_int(text: str) -> int:
+    """``json``'s ``parse_int`` for untrusted files: the integer ``text``, if a float can hold it.
+
+    Raises
+    ------
+    ValueError
+        An integer beyond a float's range (longer than 309 characters, or above about 1.8e308).
+    """
+    digits = len(text.lstrip("-"))
+    if digits > MAX_DIGITS:
+        if digits > MAX_DIGITS + 1:  # refused before int() parses it (quadratic in its length)
+            raise ValueError(f"an integer of {digits} digits, beyond the range of a float")
+        try:
+            float(int(text))
+        except OverflowError:
+            raise ValueError(f"an integer of {digits} digits, beyond the range of a float") from None
+    return int(text)
+
+
+def loads(text: str | bytes, **options: Any) -> Any:
+    """``json.loads`` with :func:`bounded_int` (``options``: any other of its hooks).
+
+    Raises
+    ------
+    ValueError
+        Not JSON, or an integer beyond a float's range; RecursionError for deep nesting, as
+        ``json.loads``.
+    """
+    return json.loads(text, parse_int=bounded_int, **options)
