@@ -100,3 +100,48 @@ def test_the_report_opens_no_fifo_planted_as_a_sidecar(tmp_path: Path) -> None:
     os.mkfifo(tmp_path / (CRASH + ".json"))  # reading it would wait for a writer for ever
     (tmp_path / "crash-1.json").write_text(json.dumps({"signature": {"key": "k"}}))
     assert _sidecars(tmp_path) == [{"signature": {"key": "k"}}]
+
+
+def test_a_huge_crash_file_is_refused_unread(tmp_path: Path) -> None:
+    """A 3 GB sparse crash file took 3 GB of memory (and 15 s) in replay, report, coverage,
+    minimize, export-bag and view before the size check: now no more than a test case is read."""
+    import tracemalloc
+
+    from fuzzer.input.testcase import MAX_BYTES, read_case
+
+    crash = tmp_path / CRASH
+    with open(crash, "wb") as handle:
+        handle.truncate(3 << 30)
+    tracemalloc.start()
+    try:
+        with pytest.raises(TestCaseError, match=f"larger than {MAX_BYTES} bytes"):
+            read_case(crash)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 * MAX_BYTES
+
+
+def test_a_log_line_past_its_length_is_skipped_unheld(tmp_path: Path) -> None:
+    """A 2 GB sparse divergences.jsonl (one line of NULs) took 4.2 GB in triage: a line longer
+    than MAX_LINE is now read past in pieces and skipped, and the lines after it are read."""
+    import tracemalloc
+
+    from fuzzer.input.untrusted_json import MAX_LINE, jsonl_records
+
+    log = tmp_path / "divergences.jsonl"
+    with open(log, "wb") as handle:
+        handle.write(b'{"sig": "a"}\n')
+        handle.seek(40 * MAX_LINE)
+        handle.write(b'\n{"sig": "b"}\n\n[1]\n')
+    tracemalloc.start()
+    try:
+        records = list(jsonl_records(log))
+        triaged = [r["sig"] for r in read_lines(log)]  # triage's reader
+        reported = read_records(log)  # the report's
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert records == [{"sig": "a"}, None, {"sig": "b"}, [1]]
+    assert triaged == ["a", "b"] and reported == ([{"sig": "a"}, {"sig": "b"}], 2)
+    assert peak < 16 * MAX_LINE  # a character of text takes up to 4 bytes in a str

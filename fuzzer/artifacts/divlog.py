@@ -78,16 +78,9 @@ def end_torn_line(path: Path) -> None:
 
 def read_lines(path: Path) -> Iterator[dict[str, Any]]:
     """Records of a JSON Lines file; unparsable lines are skipped."""
-    if not path.is_file():
-        return
-    with open(path, encoding="utf-8", errors="replace") as handle:
-        for line in handle:
-            try:
-                record = untrusted_json.loads(line)
-            except (ValueError, RecursionError):  # bad JSON, an int past a float's range, nesting
-                continue
-            if isinstance(record, dict):
-                yield record
+    for record in untrusted_json.jsonl_records(path):
+        if isinstance(record, dict):
+            yield record
 
 
 def near_zero_count(values: Sequence[float]) -> int:

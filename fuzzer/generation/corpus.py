@@ -13,7 +13,7 @@ from fuzzer import reporting
 from fuzzer.artifacts.store import atomic_write, clean_temporaries
 from fuzzer.execution.session import ConfigError, Session
 from fuzzer.input.paths import contained
-from fuzzer.input.testcase import MAX_BYTES, TestCase, TestCaseError, decode
+from fuzzer.input.testcase import MAX_BYTES, TestCase, TestCaseError, read_case
 
 
 def make_seeds(session: Session, n: int, seed: int) -> list[TestCase]:
@@ -371,7 +371,7 @@ def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestC
                     raise TestCaseError("a link to a file outside the corpus folder")
                 if path.stat().st_size > MAX_BYTES:  # read whole, a 3 GB file filled the memory
                     raise TestCaseError(f"larger than a test case may be ({MAX_BYTES} bytes)")
-                case = decode(path.read_bytes())
+                case = read_case(path)
                 if case.msg_type != msg_type:
                     raise TestCaseError(f"message type {case.msg_type}, this campaign fuzzes {msg_type}")
                 session.validate(case.message)

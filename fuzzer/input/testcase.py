@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 FORMAT = 1
@@ -97,6 +98,37 @@ def from_json(data: Any) -> TestCase:
     if not isinstance(origin, str):
         raise TestCaseError("origin must be a string")
     return TestCase(msg_type, message, sequence, origin, tuple(lineage), length)
+
+
+def read_bytes(path: Path) -> bytes:
+    """A test case file's bytes, at most :data:`MAX_BYTES` of them read.
+
+    Raises
+    ------
+    TestCaseError
+        The file is larger than a test case may be (it is not read further: a 3 GB sparse file
+        took 3 GB of memory and 15 s before the size check refused it).
+    OSError
+        The file cannot be read.
+    """
+    with open(path, "rb") as handle:
+        data = handle.read(MAX_BYTES + 1)
+    if len(data) > MAX_BYTES:
+        raise TestCaseError(f"test case larger than {MAX_BYTES} bytes")
+    return data
+
+
+def read_case(path: Path) -> TestCase:
+    """The test case in the file ``path`` (:func:`read_bytes`, then :func:`decode`).
+
+    Raises
+    ------
+    TestCaseError
+        Too large, or not a test case.
+    OSError
+        The file cannot be read.
+    """
+    return decode(read_bytes(path))
 
 
 def decode(data: bytes) -> TestCase:

@@ -11,6 +11,8 @@ already turns into its message (or a skipped log line).
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 MAX_DIGITS = 308
@@ -47,3 +49,35 @@ def loads(text: str | bytes, **options: Any) -> Any:
         ``json.loads``.
     """
     return json.loads(text, parse_int=bounded_int, **options)
+
+
+MAX_LINE = 1 << 20
+"""The longest line of a campaign log (characters) a reader parses; a longer one is skipped
+without being held in memory (a log's lines are under 10 kB; a 2 GB sparse "log" was one line,
+which took 4.2 GB to read)."""
+
+
+def jsonl_records(path: Path) -> Iterator[Any]:
+    """The values of the JSON Lines file ``path``, in order: None for a line that is not JSON
+    (or longer than :data:`MAX_LINE`), nothing for a blank line. A missing file has none.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    if not path.is_file():
+        return
+    with open(path, encoding="utf-8", errors="replace") as handle:
+        while line := handle.readline(MAX_LINE):
+            if len(line) == MAX_LINE and not line.endswith("\n"):  # too long: read past the rest
+                while (rest := handle.readline(MAX_LINE)) and not rest.endswith("\n"):
+                    pass
+                yield None
+                continue
+            if not line.strip():
+                continue
+            try:
+                yield loads(line)
+            except (ValueError, RecursionError):  # bad JSON, an int past a float's range, nesting
+                yield None

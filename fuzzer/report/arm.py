@@ -35,7 +35,7 @@ from fuzzer.execution.records import Outcome, Status
 from fuzzer.execution.session import Session
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import FkCall, IkCall, MoveCall
-from fuzzer.input.testcase import TestCase, TestCaseError, decode, from_json
+from fuzzer.input.testcase import TestCase, TestCaseError, from_json, read_case
 from fuzzer.triage.pipeline import Bucket
 
 COLORS = ("#1f5fbf", "#e8710a")
@@ -142,7 +142,7 @@ def _command(call: Any, joint_names: Sequence[str]) -> tuple[float, ...] | None:
 
 def _test_case(bucket: Bucket) -> TestCase:
     try:
-        return decode(bucket.best.read_bytes())
+        return read_case(bucket.best)
     except (OSError, TestCaseError):
         assert bucket.sidecar is not None
         return from_json(bucket.sidecar.get("testcase"))

@@ -118,7 +118,8 @@ def bucket_view(bucket: Bucket) -> BucketView:
     sidecar = bucket.sidecar
     if sidecar is None or bucket.signature is None:
         try:
-            head = path.read_bytes()[:240]
+            with open(path, "rb") as handle:
+                head = handle.read(240)
         except OSError:
             head = b""
         return replace(common, preview=head.decode("utf-8", errors="replace"))

@@ -15,7 +15,7 @@ from pathlib import Path
 from fuzzer.execution.session import RunConfig
 from fuzzer.input.mapping import mapping_for
 from fuzzer.input.msgdef import MessageRegistry
-from fuzzer.input.testcase import TestCaseError, decode
+from fuzzer.input.testcase import TestCaseError, read_case
 from robot_api import robots
 
 
@@ -67,7 +67,7 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
         run = skipped = 0
         for path in files:
             try:
-                case = decode(path.read_bytes())
+                case = read_case(path)
                 if config.op == "scenario":
                     from fuzzer.scenario.steps import validate as validate_scenario
 

@@ -36,21 +36,11 @@ def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
     """
     records: list[dict[str, Any]] = []
     skipped = 0
-    if not path.is_file():
-        return records, skipped
-    with open(path, encoding="utf-8", errors="replace") as handle:
-        for line in handle:
-            if not line.strip():
-                continue
-            try:
-                record = untrusted_json.loads(line)
-            except (ValueError, RecursionError):  # ValueError: bad JSON, or an int past a float's range
-                skipped += 1
-                continue
-            if isinstance(record, dict):
-                records.append(record)
-            else:
-                skipped += 1
+    for record in untrusted_json.jsonl_records(path):
+        if isinstance(record, dict):
+            records.append(record)
+        else:
+            skipped += 1
     return records, skipped
 
 

@@ -233,10 +233,10 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     """
     from fuzzer.artifacts.sidecar import read_sidecar
     from fuzzer.artifacts.trust import sidecar_model
-    from fuzzer.input.testcase import decode
+    from fuzzer.input.testcase import read_case
 
     try:
-        case = decode(crash.read_bytes())
+        case = read_case(crash)
     except (OSError, ValueError) as exc:
         raise BagError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}

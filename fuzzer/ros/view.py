@@ -198,11 +198,11 @@ def load(crash: Path, trust: bool = False) -> tuple[Any, dict[str, Any], Any, An
     """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
     from fuzzer.artifacts.sidecar import read_sidecar
     from fuzzer.artifacts.trust import sidecar_model
-    from fuzzer.input.testcase import decode
+    from fuzzer.input.testcase import read_case
     from python_impl.urdf import load_urdf
 
     try:
-        case = decode(crash.read_bytes())
+        case = read_case(crash)
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}

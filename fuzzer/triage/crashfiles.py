@@ -20,7 +20,7 @@ from fuzzer.artifacts.store import ArtifactStore, sidecar_path
 from fuzzer.artifacts.trust import config_from
 from fuzzer.execution.history import history_of
 from fuzzer.execution.session import RunConfig, Session
-from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.input.testcase import TestCase, TestCaseError, decode, read_bytes
 from fuzzer.triage.minimize import Minimizer, Shrunk, joints_that_matter
 
 
@@ -61,7 +61,7 @@ def load(path: Path, given: dict[str, Any], trust: bool, sessions: dict[RunConfi
     if config not in sessions:
         sessions[config] = Session.open(config)
     try:
-        raw = path.read_bytes()
+        raw = read_bytes(path)
         case = decode(raw)
     except (OSError, TestCaseError) as exc:
         raise SidecarError(f"{path}: not a test case: {exc}") from None

@@ -30,7 +30,7 @@ from fuzzer.execution.evaluate import Evaluation, Verdict
 from fuzzer.execution.records import UNCOUNTED
 from fuzzer.execution.session import ConfigError, RunConfig, Session
 from fuzzer.input.paths import crash_inputs
-from fuzzer.input.testcase import TestCase, TestCaseError, decode
+from fuzzer.input.testcase import TestCase, TestCaseError, read_case
 from fuzzer.report.steps import SCENARIO_TYPE, scenario_steps
 
 
@@ -119,7 +119,7 @@ def replay_file(
     config, sidecar = config_for(path, base, overrides, trust)
     unrecorded = sidecar is None
     try:
-        case = decode(path.read_bytes())
+        case = read_case(path)
     except (OSError, TestCaseError) as exc:
         return Replay(path, Result.SKIPPED, None, None, f"not a test case: {exc}", config, not unrecorded)
     cache = sessions if sessions is not None else {}
