@@ -161,6 +161,25 @@ def _stale_minimize(tmp: Path, crash: Path, *args: str) -> Row:
     return Row(["minimize", str(crash), *args], 1, said, stream="stdout", checks=[nothing_written])
 
 
+def _manifest_link_out(tmp: Path, link: str, command: str | None = None) -> Row:
+    """A corpus whose ``link`` (its manifest's folder or file) is a symlink to a folder outside."""
+    victim = tmp / "victim"
+    victim.mkdir()
+    corpus = tmp / "corpus"
+    (corpus / ".rrosfuzz").mkdir(parents=True)
+    if link == ".rrosfuzz":
+        (corpus / ".rrosfuzz").rmdir()
+        (corpus / ".rrosfuzz").symlink_to(victim)
+    else:
+        (corpus / link).symlink_to(victim / "manifest.json")
+
+    def untouched(_: subprocess.CompletedProcess[str]) -> None:
+        assert not list(victim.iterdir()), "a manifest was written outside the corpus"
+
+    args = [command, str(corpus)] if command else [str(corpus), *CAMPAIGN, f"--artifacts={tmp / 'a'}"]
+    return Row(args, 2, "leads outside the corpus folder", checks=[untouched])
+
+
 def _minimize_crash_foreign(tmp: Path) -> Row:
     row = foreign_target(tmp)
     row.args = ["-minimize_crash=1", "-runs=10", *row.args]
@@ -421,6 +440,10 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         "manifest.json: robot .*README.md' leads outside",
     ),
     "corpus-manifest-import-refused": lambda t: _manifest_foreign(t),
+    # a .rrosfuzz (or manifest.json) symlink made a campaign read and write a manifest outside
+    "corpus-manifest-folder-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz"),
+    "corpus-manifest-file-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz/manifest.json"),
+    "coverage-manifest-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz", "coverage"),
     "failed-campaign-records-no-manifest": lambda t: _no_manifest_for_a_bad_robot(t),
     "coverage-of-another-robot": lambda t: Row(
         ["coverage", str(_corpus_with_manifest(t)), "--robot", "ur5", "--html", str(t / "html")],

@@ -39,6 +39,29 @@ def path_of(corpus: Path) -> Path:
     return corpus / MANIFEST
 
 
+def _outside(corpus: Path) -> str | None:
+    """Where the manifest's folder or file leads out of ``corpus`` (symlinks followed), or None
+    when they are inside it or do not exist yet. A ``.rrosfuzz`` symlink made a campaign read
+    and write a manifest wherever it pointed."""
+    from fuzzer.input.paths import contained
+
+    for path in (corpus / MANIFEST.parent, path_of(corpus)):
+        if (path.exists() or path.is_symlink()) and not contained(corpus, path):
+            return str(path)
+    return None
+
+
+def _refuse_outside(corpus: Path) -> None:
+    from fuzzer.artifacts.sidecar import SidecarError
+
+    where = _outside(corpus)
+    if where is not None:
+        raise SidecarError(
+            f"{where} leads outside the corpus folder {corpus} (symlinks followed); a corpus's "
+            "settings are never read or written elsewhere: remove the link"
+        )
+
+
 def robot_digest(spec: str) -> str | None:
     """SHA-256 of the robot file a spec resolves to, or None when it does not resolve."""
     try:
@@ -80,7 +103,9 @@ def read(corpus: Path) -> Manifest | None:
     """
     path = path_of(corpus)
     if not path.exists() and not path.is_symlink():
+        _refuse_outside(corpus)  # a dangling or outside .rrosfuzz, written to next
         return None
+    _refuse_outside(corpus)
     # imported when there is a manifest to read (as below): a new corpus folder has none
     from fuzzer.artifacts.sidecar import SidecarError, read_json_file, validate_config
 
@@ -185,7 +210,16 @@ def recorded_max_steps(paths: Sequence[Path], op: str | None) -> int | None:
 
 
 def write(corpus: Path, config: RunConfig) -> Path:
-    """Write the manifest of a corpus folder (left alone when it already says the same)."""
+    """Write the manifest of a corpus folder (left alone when it already says the same).
+
+    Raises
+    ------
+    SidecarError
+        The manifest's folder or file leads outside the corpus folder (a symlink).
+    OSError
+        It cannot be written.
+    """
+    _refuse_outside(corpus)
     path = path_of(corpus)
     data: dict[str, Any] = {
         "rrosfuzz_corpus": FORMAT,

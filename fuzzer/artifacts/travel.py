@@ -155,10 +155,14 @@ def record_corpus(corpus: Sequence[Path], config: RunConfig) -> None:
     so a configuration that cannot run is never recorded); a corpus without one is adopted."""
     folders = [p for p in corpus if p.is_dir()]
     if folders:
+        from fuzzer.artifacts.sidecar import SidecarError
+
         try:
             manifest.write(folders[0], config)
         except OSError as exc:
             reporting.warn(f"cannot write the corpus manifest of {folders[0]}: {exc.strerror or exc}")
+        except SidecarError as exc:  # a link made since the manifest was read
+            reporting.warn(f"the corpus manifest is not written: {exc}")
 
 
 def prepare_campaign(corpus: Sequence[Path], artifacts: Path) -> list[Path]:
