@@ -267,6 +267,15 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "sidecar-signature-key-number": sidecar_row(_set("signature.key", 5), "signature.key"),
     "sidecar-signature-joints": sidecar_row(_set("signature.joints", {"a": 1}), "signature.joints"),
     "sidecar-lineage-number": sidecar_row(_set("lineage", 5), "'lineage' must be a list"),
+    # a damaged call history read as "skipped" with status 0 (in CI: "no longer diverges")
+    "sidecar-history-string": sidecar_row(
+        _set("history", "abc"), "field 'history': 'history' must be a list"
+    ),
+    "minimize-sidecar-history-string": lambda t: Row(
+        ["minimize", str(copy_crash(t, DIVERGE, edit=_set("history", "abc"))), "--trust-sidecar"],
+        2,
+        "field 'history'",
+    ),
     "sidecar-not-json": sidecar_row(lambda s: b"{not json", "not valid JSON"),
     "sidecar-json-list": sidecar_row(lambda s: b"[1, 2]", "expected an object"),
     "sidecar-not-utf8": sidecar_row(lambda s: b'{"config": "\xff\xfe"}', "not UTF-8"),

@@ -65,6 +65,10 @@ def load(path: Path, given: dict[str, Any], trust: bool, sessions: dict[RunConfi
         case = decode(raw)
     except (OSError, TestCaseError) as exc:
         raise SidecarError(f"{path}: not a test case: {exc}") from None
+    try:
+        history_of(sidecar)  # read now: a damaged one is the sidecar's error (exit 2), not a stale file's
+    except ValueError as exc:
+        raise SidecarError(f"{sidecar_path(path)}: field 'history': {exc}") from None
     return Loaded(path, raw, case, sidecar, config, sessions[config])
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts import manifest
-from fuzzer.artifacts.sidecar import read_sidecar
+from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.artifacts.trust import config_from, describe
 from fuzzer.execution.evaluate import Evaluation, Verdict
@@ -145,8 +145,8 @@ def replay_file(
 
     try:
         history = history_of(sidecar)
-    except ValueError as exc:
-        return Replay(path, Result.SKIPPED, None, None, f"sidecar history: {exc}", config, not unrecorded)
+    except ValueError as exc:  # a damaged sidecar, as a field of the wrong type is (exit 2)
+        raise SidecarError(f"{sidecar_path(path)}: field 'history': {exc}") from None
     # fresh targets for every file, and a state_dependent divergence's recorded calls first
     evaluation = session.evaluator().evaluate(case, history=history)
     expected = sidecar["signature"]["key"] if sidecar else None
