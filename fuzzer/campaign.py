@@ -79,6 +79,8 @@ class CampaignOptions:
     verbose: bool = False
     seeds_from_bag: Path | None = None
     """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
+    max_len: int = int(DEFAULT_FLAGS["-max_len"])
+    """The ``-max_len`` libFuzzer gets unless given (``libfuzzer_flags.default_max_len``)."""
 
 
 def libfuzzer_mutate(data: bytes, max_size: int) -> bytes:

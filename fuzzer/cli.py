@@ -73,7 +73,12 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         folders = travel.prepare_campaign(args.corpus, args.artifacts)
         travel.check_manifests(folders, config)
-    from fuzzer.input.libfuzzer_flags import check_dictionary, check_int_flags, libfuzzer_argv
+    from fuzzer.input.libfuzzer_flags import (
+        check_dictionary,
+        check_int_flags,
+        default_max_len,
+        libfuzzer_argv,
+    )
     from fuzzer.processes import drawn_seed, flag_value
 
     try:
@@ -117,6 +122,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         mutator=args.mutator,
         verbose=args.verbose,
         seeds_from_bag=args.seeds_from_bag,
+        max_len=default_max_len(config.op, config.max_steps),
     )
     try:
         libfuzzer_argv(options)  # a word a -fork parent's shell would split: refused before start-up

@@ -180,8 +180,11 @@ _ERROR_TWIST = error_twist
 
 
 def is_small(twist: Array) -> bool:
-    """Every component within ``[-IK_EPS, IK_EPS]``."""
-    return all(x <= IK_EPS and x + IK_EPS >= 0.0 for x in twist.tolist())
+    """Every component strictly inside ``(-IK_EPS, IK_EPS)``: the contract's "within IK_EPS"
+    (docs/api.md, "Inverse kinematics"), open as KDL's ``Equal`` is (``a + eps > b && a - eps <
+    b``); closed until 2026-12-06, a target exactly ``IK_EPS`` away was a twin's success and
+    KDL's failure."""
+    return all(x < IK_EPS and x + IK_EPS > 0.0 for x in twist.tolist())
 
 
 def pinv_step(jac: Array, twist: Array) -> Array:

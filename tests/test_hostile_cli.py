@@ -380,3 +380,21 @@ def test_a_fork_campaign_runs_from_a_working_folder_with_a_space(
     monkeypatch.chdir(work)
     with pytest.raises(ValueError, match="my robots/my art/': libFuzzer hands this"):  # the user's own space
         libfuzzer_argv(replace(_options(("-fork=2",)), artifacts=Path("my art")))
+
+
+def test_a_long_scenario_campaign_gets_room_for_its_seeds() -> None:
+    """At ``--max-steps 256`` 20 of the 32 Hypothesis seeds were longer than the default
+    ``-max_len=16384``: libFuzzer cut them short into malformed inputs, never run, never said.
+    A scenario campaign's default makes room for its steps; a given ``-max_len`` is kept."""
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.generation.corpus import make_seeds
+    from fuzzer.input.libfuzzer_flags import default_max_len, libfuzzer_argv
+
+    assert default_max_len("move", 256) == default_max_len("scenario", 16) == 16384
+    room = default_max_len("scenario", 256)
+    seeds = make_seeds(Session.open(RunConfig(op="scenario", max_steps=256)), 32, 1)
+    assert max(len(case.encode()) for case in seeds) > 16384  # what was cut short
+    assert all(len(case.encode()) <= room for case in seeds)
+    options = replace(_options(()), max_len=room)
+    assert f"-max_len={room}" in libfuzzer_argv(options)
+    assert "-max_len=999" in libfuzzer_argv(replace(options, libfuzzer_flags=("-max_len=999",)))

@@ -288,3 +288,23 @@ def test_the_twins_ik_ends_a_cycle_as_running_it_would(robot: str, monkeypatch) 
         assert trace == expected_trace
         assert kinematics._ik(chain, target, list(seed), tip, nvars, None)[:2] == (converged, values)
     assert periods and max(periods) > 1
+
+
+@pytest.mark.parametrize(
+    ("offset", "status"),
+    [
+        (IK_EPS, IKStatus.NO_SOLUTION),
+        (-IK_EPS, IKStatus.NO_SOLUTION),
+        (0.999999 * IK_EPS, IKStatus.SUCCESS),
+        (-0.999999 * IK_EPS, IKStatus.SUCCESS),
+    ],
+)
+def test_ik_tolerance_is_strict_in_both_targets(offset: float, status: IKStatus) -> None:
+    """A chain without joints (UR5 to its base) reaches only its own pose: a target exactly IK_EPS
+    from it is not within IK_EPS in KDL (``Equal``: ``|x| < eps``), and the twin agrees (its
+    closed interval made it a success there; a helper's probe found it as ``ill_conditioned``)."""
+    for name, impl in IMPLEMENTATIONS.items():
+        model = impl.RobotModel(robot_path("ur5"), "base")
+        home = model.forward_kinematics([])
+        target = ((home.position[0] + offset, home.position[1], home.position[2]), home.orientation)
+        assert model.inverse_kinematics(target).status is status, name
