@@ -91,7 +91,11 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         value = flag_value(tuple(flags), "-seed") or "0"  # the last -seed, as libFuzzer takes it
         seed = int(value) if value.lstrip("-").isdigit() else 0
     from fuzzer import reporting
+    from fuzzer.execution.tolerance import below_ik_precision
 
+    noise = below_ik_precision(config.op, config.tolerance)
+    if noise is not None and not travel.is_child():
+        reporting.warn(noise)
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
     if drawn is not None:
         reporting.info(

@@ -398,3 +398,15 @@ def test_a_long_scenario_campaign_gets_room_for_its_seeds() -> None:
     options = replace(_options(()), max_len=room)
     assert f"-max_len={room}" in libfuzzer_argv(options)
     assert "-max_len=999" in libfuzzer_argv(replace(options, libfuzzer_flags=("-max_len=999",)))
+
+
+def test_an_ik_tolerance_below_the_solvers_precision_is_warned_of() -> None:
+    """``--op ik --tolerance 1e-10`` reported the solver's own tolerance as divergences (a helper's
+    probe: two, both answers within sqrt(3) IK_EPS of the target), with no word of it."""
+    from fuzzer.execution.tolerance import Tolerance, below_ik_precision, default_tolerance
+
+    said = below_ik_precision("ik", Tolerance(1e-10, 1e-10))
+    assert said is not None and "below what two correct IK answers can differ by (3.5e-06" in said
+    assert below_ik_precision("ik", Tolerance(1e-5, 1e-6)) is not None  # either one
+    assert below_ik_precision("ik", default_tolerance("ik")) is None
+    assert below_ik_precision("fk", Tolerance(1e-10, 1e-10)) is None

@@ -57,3 +57,20 @@ def default_tolerance(op: str) -> Tolerance:
     answers may each sit up to sqrt(3) * IK_EPS (1.7e-6) from the target, so two
     correct answers can differ by 3.5e-6."""
     return Tolerance(1e-5, 1e-5) if op == "ik" else Tolerance()
+
+
+def below_ik_precision(op: str, tolerance: Tolerance) -> str | None:
+    """A warning for an ``ik`` campaign whose tolerance is below what two correct IK answers
+    can differ by (2 sqrt(3) IK_EPS, 3.5e-6): its divergences are the solver's noise (a helper's
+    probe at ``--tolerance 1e-10`` found two, both answers within sqrt(3) IK_EPS of the target);
+    None otherwise."""
+    from robot_api.constants import IK_EPS
+
+    floor = 2 * math.sqrt(3) * IK_EPS
+    if op != "ik" or min(tolerance.metres, tolerance.radians) >= floor:
+        return None
+    return (
+        f"--tolerance {tolerance.metres:g} m / {tolerance.radians:g} rad is below what two correct IK "
+        f"answers can differ by ({floor:.2g}: each may end sqrt(3) * IK_EPS from the target); "
+        "divergences that small are the solver's tolerance, not a bug (default for ik: 1e-05)"
+    )
