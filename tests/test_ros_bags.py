@@ -124,6 +124,41 @@ def test_a_bag_message_definition_is_never_compiled(
     assert len(seeds) == 1 and seeds[0]["position"] == [0.0] * 6
 
 
+def test_a_record_that_names_another_connection_is_not_compiled_either(
+    ros: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The connection filter reads the index; a message record names its connection itself, and
+    rosbag compiled the definition of the one it named (a helper's hostile bag, whose record of
+    /joint_states said connection 1, a type whose definition ran Python: it wrote a file)."""
+    import struct
+
+    import genpy.dynamic
+
+    from fuzzer.ros import bags
+
+    rosbag, sensor_msgs, _std_msgs = ros
+    hostile = tmp_path / "hostile.bag"
+    evil = "evil/E"
+    header = {"type": evil, "md5sum": "1" * 32, "message_definition": "int32 X\n"}
+    with rosbag.Bag(str(hostile), "w") as bag:
+        bag.write("/joint_states", _state(sensor_msgs, [0.1] * 6, 1))
+        fake = type("Evil", (), {"_md5sum": "1" * 32})  # rosbag wants a class for a raw write
+        bag.write("/evil", (evil, b"", "1" * 32, None, fake), raw=True, connection_header=header)
+    data = bytearray(hostile.read_bytes())
+    first = data.find(b"\x04\x00\x00\x00op=\x02")  # the first message record: /joint_states
+    conn = data.find(b"conn=\x00\x00\x00\x00", first - 40, first + 60)
+    data[conn + 5 : conn + 9] = struct.pack("<I", 1)  # now it says connection 1 (evil/E)
+    hostile.write_bytes(bytes(data))
+
+    def refuse(*_args: Any) -> Any:
+        raise AssertionError("a bag's message definition was compiled")
+
+    monkeypatch.setattr(genpy.dynamic, "generate_dynamic", refuse)
+    with pytest.raises(bags.BagError, match="a message record of type evil/E"):
+        bags.read_seeds(hostile, "sensor_msgs/JointState", lambda m: None)
+    assert rosbag.bag._get_message_type.__module__ == "rosbag.bag"  # put back
+
+
 def test_export_bag_writes_the_input_and_each_targets_answer(ros: Any, tmp_path: Path) -> None:
     rosbag, _sensor_msgs, _std_msgs = ros
     message = {

@@ -4,7 +4,9 @@ A bag is untrusted data. It embeds the definition of each message type it
 holds, and rosbag would compile a Python class from that text on first use
 (``genpy.dynamic``); here it never does: only connections whose type name and
 MD5 sum are those of Debian's compiled class for the campaign's type are read,
-and rosbag's class cache is filled with that class beforehand. Messages become
+rosbag's class cache is filled with that class beforehand, and while a bag is
+read rosbag's type lookup answers that class only (:func:`known_types_only`: a
+message record may name another connection than the index does). Messages become
 plain data (:func:`to_data`) and pass the campaign's own validation.
 """
 
@@ -110,6 +112,32 @@ class BagError(ConfigError):
     """A bag that cannot be read or written (the CLI exits with 2 and this message)."""
 
 
+class UncompiledTypeError(Exception):
+    """A message record of a type rosbag would compile from the bag's own definition."""
+
+
+@contextlib.contextmanager
+def known_types_only(rosbag: Any, cls: Any) -> Iterator[None]:
+    """While reading: rosbag's ``_get_message_type`` (a module global its readers look up for
+    every message record) answers ``cls`` for connections of its type and MD5 sum, and raises
+    :class:`UncompiledTypeError` for any other instead of compiling the bag's definition
+    (``genpy.dynamic``). The connection filter alone did not stop it: a record may name another
+    connection than the index says (a helper's hostile bag ran its definition's Python)."""
+    module = rosbag.bag
+    saved = module._get_message_type
+
+    def known(info: Any) -> Any:
+        if info.datatype == cls._type and info.md5sum == cls._md5sum:
+            return cls
+        raise UncompiledTypeError(f"{info.datatype} (MD5 sum {info.md5sum})")
+
+    module._get_message_type = known
+    try:
+        yield
+    finally:
+        module._get_message_type = saved
+
+
 def message_class(msg_type: str) -> Any:
     """Debian's compiled genpy class of ``pkg/Type``."""
     package, _, name = msg_type.partition("/")
@@ -171,7 +199,7 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
     out: list[dict[str, Any]] = []
     held: set[str] = set()
     try:
-        with bounded_chunks(rosbag), rosbag.Bag(str(path), "r") as bag:
+        with bounded_chunks(rosbag), known_types_only(rosbag, cls), rosbag.Bag(str(path), "r") as bag:
             held = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
             largest = max((h.uncompressed_size for h in bag._chunk_headers.values()), default=0)
             if largest > MAX_CHUNK_BYTES:  # as declared (one that lies stops in bounded_chunks)
@@ -194,6 +222,11 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
                     break
     except BagError:
         raise
+    except UncompiledTypeError as exc:
+        raise BagError(
+            f"--seeds-from-bag {path}: a message record of type {exc}, whose definition would "
+            f"have to be compiled from the bag (a record that contradicts the bag's index); not read"
+        ) from None
     except ChunkTooLargeError:
         raise BagError(
             f"--seeds-from-bag {path}: a chunk decompresses past {MAX_CHUNK_BYTES} bytes "
