@@ -180,6 +180,24 @@ def _manifest_link_out(tmp: Path, link: str, command: str | None = None) -> Row:
     return Row(args, 2, "leads outside the corpus folder", checks=[untouched])
 
 
+def _promote_through_link(tmp: Path) -> Row:
+    """``promote`` into a suite where a symlink to a file outside has the crash file's name."""
+    crash = copy_crash(tmp)
+    victim = tmp / "victim"
+    victim.write_text("precious data")
+    suite = tmp / "suite"
+    suite.mkdir()
+    (suite / crash.name).symlink_to(victim)
+
+    def replaced(_: subprocess.CompletedProcess[str]) -> None:
+        assert victim.read_text() == "precious data", "promote wrote through the link"
+        assert not (suite / crash.name).is_symlink()
+        assert (suite / crash.name).read_bytes() == crash.read_bytes()
+
+    args = ["promote", str(crash), "--fixed", "--suite", str(suite)]
+    return Row(args, 0, "promoted", stream="stdout", checks=[replaced])
+
+
 def _minimize_crash_foreign(tmp: Path) -> Row:
     row = foreign_target(tmp)
     row.args = ["-minimize_crash=1", "-runs=10", *row.args]
@@ -392,6 +410,8 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         ["coverage", str(copy_crash(t)), "--html", str(_touch(t / "file"))], 2, "--html .*is a file"
     ),
     "promote-missing-file": lambda t: Row(["promote", str(t / "crash-gone")], 2, "no such file"),
+    # a symlink planted under the crash file's name in the suite: copyfile wrote through it
+    "promote-through-a-planted-link": lambda t: _promote_through_link(t),
     # -- campaign paths ---------------------------------------------------------------------------
     "corpus-under-a-file": lambda t: Row(
         [str(_touch(t / "file") / "corpus"), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "is a file"

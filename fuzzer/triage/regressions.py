@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import datetime
 import json
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,6 +17,7 @@ from typing import Any
 from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import atomic_write, load_sidecar, sidecar_path
 from fuzzer.execution.session import ConfigError, RunConfig
+from fuzzer.input.testcase import TestCaseError, read_bytes
 from fuzzer.triage.replay import Result, replay_file
 
 SUITE = Path(__file__).resolve().parents[2] / "tests" / "regressions"
@@ -67,9 +67,13 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
     try:
         suite.mkdir(parents=True, exist_ok=True)
         if not (target.exists() and target.samefile(crash)):  # promoted again (--fixed): in place
-            shutil.copyfile(crash, target)
+            # written whole and renamed over the name: a symlink planted there is replaced, not
+            # followed (shutil.copyfile wrote the crash file over whatever it pointed at)
+            atomic_write(target, read_bytes(crash))
     except OSError as exc:
         raise PromoteError(f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})") from None
+    except TestCaseError as exc:  # replaced since it was replayed
+        raise PromoteError(f"{crash}: not a test case: {exc}") from None
     entry: dict[str, Any] = dict(sidecar)
     entry["regression"] = {
         "expect": "agree" if fixed else "diverge",
