@@ -239,5 +239,9 @@ def coverage_main(argv: Sequence[str]) -> int:
     check_manifests([p for p in args.corpus if p.is_dir()], config)
     if args.html.exists() and not args.html.is_dir():
         raise PathError(f"--html {args.html}: is a file, not a folder")
+    html = args.html.resolve()
+    for folder in (p.resolve() for p in args.corpus if p.is_dir()):
+        if html == folder or folder in html.parents:  # its pages became the corpus's inputs
+            raise PathError(f"--html {args.html}: inside the corpus folder {folder}; choose one outside it")
     reporting.out(measure(list(args.corpus), config, args.html).line())
     return 0

@@ -180,6 +180,23 @@ def _manifest_link_out(tmp: Path, link: str, command: str | None = None) -> Row:
     return Row(args, 2, "leads outside the corpus folder", checks=[untouched])
 
 
+def _show_folder_with_link_out(tmp: Path) -> Row:
+    """``show FOLDER`` with a symlink in it to a test case outside: only the folder's own shown."""
+    from fuzzer.input.testcase import TestCase
+
+    folder = tmp / "d"
+    folder.mkdir()
+    shutil.copyfile(AGREE, folder / AGREE.name)
+    outside = tmp / "outside"
+    outside.write_bytes(TestCase("std_msgs/Float64MultiArray", {"data": [12345.678]}).encode())
+    (folder / "link").symlink_to(outside)
+
+    def not_shown(run: subprocess.CompletedProcess[str]) -> None:
+        assert "12345.678" not in run.stdout, "a link out of the folder was read"
+
+    return Row(["show", str(folder)], 0, '"msg_type"', stream="stdout", checks=[not_shown])
+
+
 def _promote_through_link(tmp: Path) -> Row:
     """``promote`` into a suite where a symlink to a file outside has the crash file's name."""
     crash = copy_crash(tmp)
@@ -412,6 +429,12 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "promote-missing-file": lambda t: Row(["promote", str(t / "crash-gone")], 2, "no such file"),
     # a symlink planted under the crash file's name in the suite: copyfile wrote through it
     "promote-through-a-planted-link": lambda t: _promote_through_link(t),
+    "show-folder-link-out": lambda t: _show_folder_with_link_out(t),
+    "coverage-html-in-its-corpus": lambda t: Row(
+        ["coverage", str(_corpus_with_manifest(t)), "--html", str(t / "corpus" / "html")],
+        2,
+        "inside the corpus folder",
+    ),
     # -- campaign paths ---------------------------------------------------------------------------
     "corpus-under-a-file": lambda t: Row(
         [str(_touch(t / "file") / "corpus"), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "is a file"

@@ -64,7 +64,9 @@ def _beside_crash_files(path: Path) -> bool:
 
 
 def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
-    """Files to work on: files as given, folders expanded to their files; sidecars skipped.
+    """Files to work on: files as given, folders expanded to their files; sidecars skipped, and a
+    folder's symlinks that lead outside it (``show FOLDER`` printed what a link to a file
+    elsewhere held; a file given by name is read wherever it is).
 
     Raises
     ------
@@ -91,7 +93,10 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
             out.extend(
                 f
                 for f in entries
-                if f.is_file() and not f.name.endswith((".json", ".jsonl")) and not f.name.startswith(".")
+                if f.is_file()
+                and not f.name.endswith((".json", ".jsonl"))
+                and not f.name.startswith(".")
+                and (not f.is_symlink() or contained(path, f))  # a folder's link out of it: not read
             )
         elif not stat.S_ISREG(mode):
             raise PathError(f"{path}: is {_kind(mode)}, not a regular file")
