@@ -16,8 +16,12 @@ ROS_PACKAGES=(
 )
 VIZ_PACKAGES=(rviz xvfb x11-apps imagemagick)
 
-if [ "${1:-}" = "--viz" ]; then
-  scripts/apt-ensure.sh "${ROS_PACKAGES[@]}" "${VIZ_PACKAGES[@]}"
-else
-  scripts/apt-ensure.sh "${ROS_PACKAGES[@]}"
-fi
+case "$#:${1:-}" in
+  0:) scripts/apt-ensure.sh "${ROS_PACKAGES[@]}" ;;
+  1:--viz) scripts/apt-ensure.sh "${ROS_PACKAGES[@]}" "${VIZ_PACKAGES[@]}" ;;
+  1:-h | 1:--help) sed -n '2,6p' "$0" | sed 's/^# \{0,1\}//' ;;
+  *)
+    echo "scripts/ros-ensure.sh: unknown argument(s): $*; usage: scripts/ros-ensure.sh [--viz | --help]" >&2
+    exit 2
+    ;;
+esac
