@@ -173,9 +173,15 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         # until libFuzzer runs, an exit (a usage error such as seeds Hypothesis cannot draw, a full
         # disk, Ctrl-C) ends the children too: they ran on for up to -timeout after the error
         atexit.register(dry.stop)
+    if one_campaign(options.libfuzzer_flags):
+        # Hypothesis' gc callback and scipy's Sobol set-up swallow a KeyboardInterrupt raised in
+        # them (2 Ctrl-Cs of 110 were lost, the campaign fuzzing on): kept until the seeds are made
+        defer_to_next_input()
     seeds, filling = initial_seeds(
         session, wanted if not child else 0, options.seed, options.mutator, folders, seeds, dry
     )
+    if stop_requested() and not child:
+        raise KeyboardInterrupt  # fuzzer.cli: "interrupted" (or "terminated"), 130 (143)
     if not child:  # the seeds made: record the configuration in the corpus manifest
         from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
 

@@ -26,6 +26,13 @@ if TYPE_CHECKING:
     from fuzzer.harness import Harness
     from fuzzer.selection.guidance import Features
 
+USAGE_EXIT = 2
+"""A usage error's status (``fuzzer.cli``)."""
+LIBFUZZER_ERROR = "libFuzzer stopped with an error: its message above says which"
+"""What a campaign's status 2 means when libFuzzer itself ended it with its status 1 (an
+``-artifact_prefix`` folder that is not there, a merge's control file it cannot write,
+``-minimize_crash`` on an input that does not crash): the status a campaign gives new divergences,
+which it had found none of."""
 JOB_FAILED = "a job failed: its fuzz-N.log in the artifacts folder says why"
 """What a ``-jobs`` supervisor's status 1 means when no divergence explains it (libFuzzer's 1
 for a job that ended with a non-zero status)."""
@@ -71,21 +78,24 @@ class CampaignEnd:
         found = self._found()
         totals = worker_totals(self.artifacts, self.started, os.getpid()) if self.supervisor else None
         stopped = status == self.interrupted or (totals or {}).get("interrupted")
-        job_failed = False
-        if self.supervisor and not terminated() and stopped:
+        job_failed = refused = False
+        if status == 1 and not self.supervisor and not (found.divergences or found.crashes or found.timeouts):
+            status, refused = USAGE_EXIT, True  # libFuzzer's own error (exit(1)): no divergence of ours
+        elif self.supervisor and not terminated() and stopped:
             status = INT_EXIT  # libFuzzer's is 1 for -jobs (a job's status), 72 for -fork
-        elif self._jobs() and status == 1:  # some job ended non-zero: as one process would have
-            error_code = int_flag(self.options.libfuzzer_flags, "-error_exitcode", ERROR_EXIT)
+        error_code = int_flag(self.options.libfuzzer_flags, "-error_exitcode", ERROR_EXIT)
+        if not refused and self._jobs() and status == 1:  # a job ended non-zero: as one process would
             status = failed_job_status(found, self.options.stop_on_divergence, self.timeout_code, error_code)
             job_failed = True
-        code: int | None = exit_status(status, found, self.supervisor, self.timeout_code)
+        code: int | None = exit_status(status, found, self.supervisor, self.timeout_code, error_code)
         if status is None and (self.in_callback or found.crashes or found.timeouts):
             # Atheris ending the process: an exception in the target (libFuzzer reports it as a
             # crash next), or a -jobs run whose failed job set libFuzzer's status
             code = None
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
-        self._summary(found, totals, code, self._job_meaning(code, found) if job_failed else None)
+        meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
+        self._summary(found, totals, code, meaning)
         return code
 
     def _jobs(self) -> bool:

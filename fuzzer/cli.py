@@ -76,6 +76,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     from fuzzer.input.libfuzzer_flags import (
         check_dictionary,
         check_int_flags,
+        check_path_flags,
         default_max_len,
         libfuzzer_argv,
     )
@@ -103,11 +104,17 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             f"the same command with -seed={drawn} --seed={seed} repeats its choices"
         )
     if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
-        raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: no such file")
+        what = "not a regular file" if args.seeds_from_bag.exists() else "no such file"
+        raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: {what}")
+    try:  # libFuzzer refuses these after start-up with its status 1, the status of "divergences"
+        check_path_flags(tuple(flags))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
     if dictionary is not None:
         if not Path(dictionary).is_file():
-            raise UsageError(f"-dict={dictionary}: no such file")
+            what = "not a regular file" if Path(dictionary).exists() else "no such file"
+            raise UsageError(f"-dict={dictionary}: {what}")
         try:  # libFuzzer refuses a bad one only after start-up, with an exit status of its own
             check_dictionary(Path(dictionary))
         except ValueError as exc:

@@ -5,7 +5,8 @@ targets, feed its behaviour to libFuzzer as coverage features, keep
 high-difference inputs as preferred parents (Algorithm 3), and record the first
 input of every new divergence signature as a crash file with a sidecar. By
 default the campaign goes on past divergences. With ``stop_on_divergence`` the
-first one raises, libFuzzer writes ``crash-<sha1>`` and exits.
+first one raises (its crash file and sidecar written first), libFuzzer writes
+``crash-<sha1>`` again (the same bytes) and exits.
 
 The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
 a high-difference one or a new input for its input-to-state stage,
@@ -295,10 +296,11 @@ class Harness:
                 self.log.divergence(record)
             if key not in stats.signatures:
                 # claim and write together (the store's record); None: another process has it.
-                # With stop_on_divergence libFuzzer writes crash-<sha1> itself when this raises.
-                written = self.store.record(
-                    key, data, self._sidecar(case, data, ev), with_input=not self.stop_on_divergence
-                )
+                # With stop_on_divergence libFuzzer writes crash-<sha1> too when this raises, the
+                # same bytes under the same name: left to it alone, the pair was split by an
+                # -exact_artifact_path (a folder: the input lost) and the summary, made first,
+                # counted no new file
+                written = self.store.record(key, data, self._sidecar(case, data, ev))
                 stats.signatures[key] = str(written or "")
         except OSError as exc:
             raise self._unwritable(exc, data if key not in stats.signatures else None, key) from None

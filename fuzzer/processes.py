@@ -194,17 +194,26 @@ def new_artifacts(directory: Path, since: float) -> Found:
     return Found(divergences, crashes, timeouts, explained)
 
 
-def exit_status(status: int | None, found: Found, supervisor: bool, timeout_code: int = TIMEOUT_EXIT) -> int:
+def exit_status(
+    status: int | None,
+    found: Found,
+    supervisor: bool,
+    timeout_code: int = TIMEOUT_EXIT,
+    error_code: int = ERROR_EXIT,
+) -> int:
     """The campaign's exit status, given the one libFuzzer exits with.
 
     libFuzzer's own non-zero status (a crash, a timeout, a -fork job's status) is kept.
-    Otherwise: ``timeout_code`` if a -fork/-jobs worker timed out (libFuzzer's fork
-    mode ignores timeouts by default), 1 if new divergences were written, else 0.
+    Otherwise: for a -fork/-jobs supervisor whose workers left crash, oom or timeout files
+    (libFuzzer's fork mode ignores timeouts and out-of-memories by default, and crashes with
+    ``-ignore_crashes=1``), what one process would have exited with (:func:`failed_job_status`:
+    a campaign of 12 crash files exited 0, "no new divergence"); 1 if new divergences were
+    written, else 0.
     """
     if status:
         return status
-    if supervisor and found.timeouts:
-        return timeout_code
+    if supervisor and (found.crashes or found.timeouts):
+        return failed_job_status(found, False, timeout_code, error_code)
     return 1 if found.divergences else 0
 
 
@@ -286,6 +295,8 @@ class DryRun:
         code = 1
         try:  # the child: no exit hooks of the campaign, no buffered output of its own to flush
             signal.signal(signal.SIGALRM, signal.SIG_DFL)
+            if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:  # not the campaign's deferral:
+                signal.signal(signal.SIGINT, signal.default_int_handler)  # a Ctrl-C ends it at once
             signal.alarm(max(1, math.ceil(budget)))
             work()
             code = 0

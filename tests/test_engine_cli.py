@@ -658,3 +658,35 @@ def test_a_jobs_campaign_whose_target_died_exits_as_one_process_would(
     assert run.returncode == code, run.stderr[-3000:]
     assert f"exit status {code} ({said}, in a job: its fuzz-N.log" in run.stderr, run.stderr[-3000:]
     assert [p for p in artifacts.glob(f"{left}*") if not p.name.endswith(".json")], f"no {left} file"
+
+
+def test_stop_on_divergence_keeps_the_pair_and_counts_it(tmp_path: Path) -> None:
+    # libFuzzer alone wrote the crash file: the summary, made before, counted no new file, and an
+    # -exact_artifact_path took the input away from its sidecar (a folder there: the input lost)
+    for exact in (None, tmp_path / "exact"):
+        artifacts = tmp_path / f"a-{exact is not None}"
+        run = fuzz(
+            str(tmp_path / f"c-{exact is not None}"), "-seed=1", "-runs=300", "--stop-on-divergence",
+            *([f"-exact_artifact_path={exact}"] if exact else []), f"--artifacts={artifacts}",
+            "--targets=native,tests.plugins.faults:tight_tolerance", "--no-progress",
+        )  # fmt: skip
+        assert run.returncode == 77, run.stderr[-3000:]
+        crashes = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+        assert len(crashes) == 1 and crashes[0].with_name(crashes[0].name + ".json").is_file()
+        assert "crash files (1 new this run)" in run.stderr, run.stderr[-3000:]
+        if exact is not None:
+            assert exact.read_bytes() == crashes[0].read_bytes()
+
+
+def test_a_fork_campaign_that_ignored_its_crashes_still_says_so(tmp_path: Path) -> None:
+    # -fork=1 -ignore_crashes=1: 12 crash files of a dying target, "exit status 0 (no new
+    # divergence)"; fork mode's ignored timeouts were already 70
+    artifacts = tmp_path / "a"
+    run = fuzz(
+        str(tmp_path / "corpus"), "-fork=1", "-ignore_crashes=1", "-max_total_time=8", "-seed=3",
+        f"--artifacts={artifacts}", "--targets=native,tests.plugins.faults:aborts", "--no-progress",
+        timeout=180,
+    )  # fmt: skip
+    assert run.returncode == 77, run.stderr[-3000:]
+    assert "exit status 77 (a target died" in run.stderr
+    assert [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]

@@ -430,6 +430,38 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     # a symlink planted under the crash file's name in the suite: copyfile wrote through it
     "promote-through-a-planted-link": lambda t: _promote_through_link(t),
     "show-folder-link-out": lambda t: _show_folder_with_link_out(t),
+    # libFuzzer refuses these after start-up with its status 1, which read as "new divergences"
+    "artifact-prefix-missing-folder": lambda t: Row(
+        [str(t / "c"), *CAMPAIGN, f"-artifact_prefix={t / 'nodir'}/", f"--artifacts={t / 'a'}"],
+        2,
+        "-artifact_prefix=.*: the folder .*nodir does not exist",
+    ),
+    "exact-artifact-path-folder": lambda t: Row(
+        [str(t / "c"), *CAMPAIGN, f"-exact_artifact_path={t}", f"--artifacts={t / 'a'}"],
+        2,
+        "-exact_artifact_path=.*: a folder; give a file's path",
+    ),
+    "seed-inputs-missing-list-file": lambda t: Row(
+        [str(t / "c"), *CAMPAIGN, "-seed_inputs=@/nonexistent", f"--artifacts={t / 'a'}"],
+        2,
+        "-seed_inputs=@/nonexistent: no such file",
+    ),
+    "merge-control-file-missing-folder": lambda t: Row(
+        [
+            str(t / "m"),
+            str(t / "c"),
+            "-merge=1",
+            "-merge_control_file=/nonexistent/ctl",
+            f"--artifacts={t / 'a'}",
+        ],
+        2,
+        "-merge_control_file=/nonexistent/ctl: the folder /nonexistent does not exist",
+    ),
+    "minimize-crash-that-does-not-crash": lambda t: Row(
+        [str(copy_crash(t)), "-minimize_crash=1", "-runs=20", f"--artifacts={t / 'a'}"],
+        2,
+        r"exit status 2 \(libFuzzer stopped with an error",
+    ),
     "coverage-html-in-its-corpus": lambda t: Row(
         ["coverage", str(_corpus_with_manifest(t)), "--html", str(t / "corpus" / "html")],
         2,

@@ -190,14 +190,11 @@ class ArtifactStore:
         """True for the first caller (in any process) to report this signature."""
         return self._marker_link(signature_key, crash)
 
-    def record(
-        self, signature_key: str, data: bytes, sidecar: dict[str, Any], *, with_input: bool = True
-    ) -> Path | None:
+    def record(self, signature_key: str, data: bytes, sidecar: dict[str, Any]) -> Path | None:
         """Claim ``signature_key`` and write its crash file and sidecar, atomically together.
 
         Returns the crash file's path, or None if another process (or an earlier
-        run) holds the signature. With ``with_input=False`` only the sidecar is
-        written (libFuzzer writes the input itself, ``--stop-on-divergence``).
+        run) holds the signature.
         """
         self.recorded += 1
         path = self.directory / crash_name(data)
@@ -206,7 +203,7 @@ class ArtifactStore:
         tmp_data: Path | None = None
         claimed = False
         try:
-            tmp_data = _write_temporary(path, data) if with_input else None
+            tmp_data = _write_temporary(path, data)
             _test_kill("temp", self.recorded)
             claimed = self.claim(signature_key, path.name)
         finally:  # not claimed (another process has it, or a full disk): no temporaries left

@@ -139,6 +139,29 @@ def check_dictionary(path: Path) -> None:
             )
 
 
+def check_path_flags(flags: tuple[str, ...]) -> None:
+    """Raise ValueError naming a path flag that libFuzzer would refuse after start-up, exiting
+    with its status 1 (which a campaign reads as "new divergences"): an ``-artifact_prefix``,
+    ``-exact_artifact_path`` or ``-merge_control_file`` whose folder does not exist, an
+    ``-exact_artifact_path`` that is a folder (the crash file written "to" it was lost), a
+    ``-seed_inputs=@FILE`` whose file does not exist."""
+
+    def folder_of(value: str) -> Path:
+        return Path(value) if value.endswith("/") else Path(value).parent
+
+    for name in ("-artifact_prefix", "-exact_artifact_path", "-merge_control_file"):
+        value = flag_value(flags, name)
+        if not value:
+            continue
+        if not folder_of(value).is_dir():
+            raise ValueError(f"{name}={value}: the folder {folder_of(value)} does not exist")
+        if name != "-artifact_prefix" and Path(value).is_dir():
+            raise ValueError(f"{name}={value}: a folder; give a file's path")
+    seeds = flag_value(flags, "-seed_inputs")
+    if seeds and seeds.startswith("@") and not Path(seeds[1:]).is_file():
+        raise ValueError(f"-seed_inputs={seeds}: no such file {seeds[1:]}")
+
+
 def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     """argv for Atheris: our script (absolute, for re-execution), libFuzzer flags with our
     defaults, our options as --name=value tokens, the corpus folders.
