@@ -33,7 +33,8 @@ commands (fuzz_diff.py COMMAND --help for each):
 
 exit status of a campaign:
   0   no new divergence          1   new divergences (crash files written by this run)
-  2   usage error                70  a timeout (libFuzzer's -timeout_exitcode; also when
+  2   usage error (or libFuzzer's  70  a timeout (libFuzzer's -timeout_exitcode; also when
+      own error: see the summary)
                                      a -fork/-jobs worker timed out)
   71  out of memory (libFuzzer's -rss_limit_mb, -malloc_limit_mb)
   74  a folder could not be written (a full disk, a read-only mount), with a message
@@ -41,8 +42,8 @@ exit status of a campaign:
   77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
       (libFuzzer's -error_exitcode)
   130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary
-  -jobs: a job's 70, 71 or 77 is the campaign's (libFuzzer's supervisor says 1 for any);
-      a 1 no file explains reads "a job failed" in the summary
+  -jobs/-fork: the workers' crash, oom and timeout files make it 77, 71 or 70 (libFuzzer's
+      supervisor says 1 or 0); a 1 no file explains reads "a job failed" in the summary
   any other status is libFuzzer's own
 """
 
