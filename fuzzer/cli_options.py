@@ -33,9 +33,8 @@ commands (fuzz_diff.py COMMAND --help for each):
 
 exit status of a campaign:
   0   no new divergence          1   new divergences (crash files written by this run)
-  2   usage error (or libFuzzer's  70  a timeout (libFuzzer's -timeout_exitcode; also when
-      own error: see the summary)
-                                     a -fork/-jobs worker timed out)
+  2   usage error, or libFuzzer's own error (the summary says so)
+  70  a timeout (libFuzzer's -timeout_exitcode; also when a -fork/-jobs worker timed out)
   71  out of memory (libFuzzer's -rss_limit_mb, -malloc_limit_mb)
   74  a folder could not be written (a full disk, a read-only mount), with a message
       naming it and any divergent input it could not save
