@@ -28,7 +28,7 @@ from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.generation.corpus import bag_seeds, prescan, write_seeds
 from fuzzer.generation.initial import initial_seeds
-from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS, libfuzzer_argv
+from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS, cut_seeds, libfuzzer_argv
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation.dictionary import parse_dictionary
 from fuzzer.mutation.session_values import field_types, interesting_values
@@ -182,6 +182,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     )
     if stop_requested() and not child:
         raise KeyboardInterrupt  # fuzzer.cli: "interrupted" (or "terminated"), 130 (143)
+    if flag_value(options.libfuzzer_flags, "-max_len") is not None and not child:  # given: a check
+        cut = cut_seeds(options.libfuzzer_flags, [len(case.encode()) for case in (*seeds, *filling)])
+        if cut is not None:
+            reporting.warn(cut)
     if not child:  # the seeds made: record the configuration in the corpus manifest
         from fuzzer.artifacts.travel import record_corpus  # (fuzzer/artifacts/manifest.py)
 

@@ -34,7 +34,7 @@ from fuzzer.cli_options import (
 )
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE
-from fuzzer.processes import CHILD_ENV
+from fuzzer.processes import CHILD_ENV, int_flag
 from fuzzer.signals import INT_EXIT, INTERRUPTED_EXIT, TERM_EXIT, terminated
 
 MAX_SEEDS = 100_000
@@ -71,7 +71,8 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         )
     config, _ = config_from(args)
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
-        folders = travel.prepare_campaign(args.corpus, args.artifacts)
+        merge = any(int_flag(tuple(flags), name, 0) > 0 for name in ("-merge", "-set_cover_merge"))
+        folders = travel.prepare_campaign(args.corpus, args.artifacts, merge=merge)
         travel.check_manifests(folders, config)
     from fuzzer.input.libfuzzer_flags import (
         check_dictionary,

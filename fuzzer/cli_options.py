@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fuzzer.execution.session import RunConfig
-from fuzzer.execution.tolerance import Tolerance, default_tolerance
+from fuzzer.execution.tolerance import DECIMAL, Tolerance, default_tolerance
 from fuzzer.input.mapping import OPS
 from fuzzer.input.paths import given_path
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT
@@ -55,6 +56,8 @@ def seconds(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"{text!r}: must be a positive, finite number of seconds")
+    if not DECIMAL.fullmatch(text):  # float() takes 1_0 for 10, and other scripts' digits
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds")
     return value
 
 
@@ -263,10 +266,9 @@ def config_from(
 
 def max_steps_of(text: Any) -> int:
     """``--max-steps``: an integer in 1..MAX_STEPS_LIMIT."""
-    try:
-        value = int(str(text), 10)
-    except ValueError:
-        raise UsageError(f"--max-steps {text!r}: not an integer") from None
+    if not re.fullmatch(r"\s*[+-]?\d+\s*", str(text), re.ASCII):  # int() takes 1_0 and other digits
+        raise UsageError(f"--max-steps {text!r}: not an integer")
+    value = int(str(text), 10)
     if not 1 <= value <= MAX_STEPS_LIMIT:
         raise UsageError(f"--max-steps {value}: must be from 1 to {MAX_STEPS_LIMIT}")
     return value

@@ -56,6 +56,12 @@ HOSTILE = [
     (["--robot=/nonexistent/robot.urdf"], "--robot"),
     (["--robot=ur5", "--tip-link=nope"], "tip link 'nope'"),
     (["--tolerance=m=1e-5,m=1e-6"], "m given twice"),
+    # float() and int() take 1_0 for 10 and other scripts' digits (libFuzzer's flags are refused them)
+    (["--tolerance=1_0"], "tolerance '1_0' is not a number"),
+    (["--tolerance=\u0661"], "is not a number"),
+    (["--max-steps=\u0665"], "--max-steps '\u0665': not an integer"),
+    (["--max-steps=1_6"], "--max-steps '1_6': not an integer"),
+    (["--progress-interval=1_0"], "'1_0' is not a number of seconds"),
     (["--tolerance=,"], "an empty part"),
     (["--msg-type=sensor_msgs/Nope"], "--msg-type"),
     (["--op=ik", "--msg-type=sensor_msgs/JointState"], "supported: geometry_msgs/PoseStamped"),
@@ -416,3 +422,15 @@ def test_an_ik_tolerance_below_the_solvers_precision_is_warned_of() -> None:
     assert below_ik_precision("ik", Tolerance(1e-5, 1e-6)) is not None  # either one
     assert below_ik_precision("ik", default_tolerance("ik")) is None
     assert below_ik_precision("fk", Tolerance(1e-10, 1e-10)) is None
+
+
+def test_a_given_max_len_shorter_than_the_seeds_is_warned_of() -> None:
+    """At ``-max_len=1`` libFuzzer cut all 64 seeds into malformed inputs: a campaign that tested
+    nothing, exit 0, with no word of it."""
+    from fuzzer.input.libfuzzer_flags import cut_seeds
+
+    said = cut_seeds(("-max_len=100",), [50, 411, 200])
+    assert said is not None and said.startswith("2 of 3 seeds are longer than -max_len=100")
+    assert cut_seeds(("-max_len=500",), [50, 411]) is None
+    assert cut_seeds(("-max_len=0",), [50, 411]) is None  # 0: libFuzzer's choice, from the seeds
+    assert cut_seeds((), [50, 411]) is None

@@ -119,6 +119,11 @@ def sidecar_row(edit: Callable[[dict[str, Any]], Any], message: str) -> Callable
     return build
 
 
+def _folder(path: Path) -> Path:
+    path.mkdir()
+    return path
+
+
 def _fifo(path: Path) -> Path:
     os.mkfifo(path)
     return path
@@ -449,13 +454,19 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "merge-control-file-missing-folder": lambda t: Row(
         [
             str(t / "m"),
-            str(t / "c"),
+            str(_folder(t / "c")),
             "-merge=1",
             "-merge_control_file=/nonexistent/ctl",
             f"--artifacts={t / 'a'}",
         ],
         2,
         "-merge_control_file=/nonexistent/ctl: the folder /nonexistent does not exist",
+    ),
+    # a mistyped folder to merge from was created empty, and nothing merged, without a word
+    "merge-from-a-missing-folder": lambda t: Row(
+        [str(t / "m"), str(t / "typo"), "-merge=1", f"--artifacts={t / 'a'}"],
+        2,
+        "corpus .*typo: no such folder \\(a merge reads the folders after the first\\)",
     ),
     "minimize-crash-that-does-not-crash": lambda t: Row(
         [str(copy_crash(t)), "-minimize_crash=1", "-runs=20", f"--artifacts={t / 'a'}"],

@@ -27,7 +27,7 @@ from fuzzer import reporting
 from fuzzer.artifacts import manifest
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.session import RunConfig
-from fuzzer.input.paths import check_input_file, prepare_folder
+from fuzzer.input.paths import PathError, check_input_file, prepare_folder
 
 OPTIONS = ("op", "robot", "tip_link", "msg_type", "tolerance", "targets")
 CHILD_ENV = "RROSFUZZ_CHILD"
@@ -165,20 +165,25 @@ def record_corpus(corpus: Sequence[Path], config: RunConfig) -> None:
             reporting.warn(f"the corpus manifest is not written: {exc}")
 
 
-def prepare_campaign(corpus: Sequence[Path], artifacts: Path) -> list[Path]:
+def prepare_campaign(corpus: Sequence[Path], artifacts: Path, *, merge: bool = False) -> list[Path]:
     """Check and create a campaign's folders; return the corpus folders.
+
+    ``merge``: a ``-merge=1`` run, whose folders after the first are what it reads: they must
+    exist (a mistyped one was created empty, and nothing merged from it, without a word).
 
     Raises
     ------
     fuzzer.input.paths.PathError
         A corpus entry that is a FIFO or device, a folder that cannot be created,
-        listed or written, an artifacts path that is a file.
+        listed or written, an artifacts path that is a file, a merge's input that is not there.
     """
     folders: list[Path] = []
     for path in corpus:
         check_input_file(path)
         if path.is_file():
             continue
+        if merge and folders and not path.exists():
+            raise PathError(f"corpus {path}: no such folder (a merge reads the folders after the first)")
         prepare_folder(path, "corpus", writable=not folders)
         folders.append(path)
     prepare_folder(artifacts, "artifacts", writable=True)

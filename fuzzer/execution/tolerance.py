@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 
@@ -42,11 +43,15 @@ class Tolerance:
         return cls(values["m"], values["rad"])
 
 
+DECIMAL = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\s*", re.ASCII)
+"""A number as written on a command line: ASCII digits, no ``_`` (``float()`` also takes
+``1_0`` for 10 and other scripts' digits, which libFuzzer's flags are refused for)."""
+
+
 def _positive(raw: str) -> float:
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ValueError(f"tolerance {raw!r} is not a number") from None
+    if not DECIMAL.fullmatch(raw):
+        raise ValueError(f"tolerance {raw!r} is not a number")
+    value = float(raw)
     if not (math.isfinite(value) and value > 0.0):
         raise ValueError(f"tolerance {raw!r} must be a positive finite number")
     return value

@@ -8,6 +8,7 @@ import os
 import shlex
 import string
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -137,6 +138,20 @@ def check_dictionary(path: Path) -> None:
                 f"-dict={path}: line {number} is not a libFuzzer dictionary entry "
                 f'(name="value" or "value", no comment after it): {shown!r}'
             )
+
+
+def cut_seeds(flags: tuple[str, ...], sizes: Sequence[int]) -> str | None:
+    """A warning when a given ``-max_len`` is shorter than some seeds (``sizes``: their encoded
+    lengths, bytes): libFuzzer cuts them short into malformed inputs, never run (at
+    ``-max_len=1`` a campaign tested nothing and exited 0); None otherwise."""
+    limit = int_flag(flags, "-max_len", 0)
+    longer = [size for size in sizes if size > limit]
+    if limit <= 0 or not longer:
+        return None
+    return (
+        f"{len(longer)} of {len(sizes)} seeds are longer than -max_len={limit}: libFuzzer cuts them "
+        f"short into malformed inputs, which are never run (the longest is {max(longer)} bytes)"
+    )
 
 
 def check_path_flags(flags: tuple[str, ...]) -> None:
