@@ -98,6 +98,10 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     noise = below_ik_precision(config.op, config.tolerance)
     if noise is not None and not travel.is_child():
         reporting.warn(noise)
+    if args.max_steps is not None and config.op != "scenario" and not travel.is_child():
+        reporting.warn(
+            f"--max-steps {args.max_steps}: only a scenario has steps; --op {config.op} ignores it"
+        )
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
     if drawn is not None:
         reporting.info(

@@ -239,6 +239,8 @@ def config_from(
             )
         if len(specs) != 2:
             raise UsageError(f"--targets needs exactly two targets, got {len(specs)}: {args.targets!r}")
+        if len(args.targets.split(",")) != 2:  # native,python, : a third name left out?
+            raise UsageError(f"--targets {args.targets!r}: an empty name between its commas")
         given["targets"] = specs
     if args.tolerance is not None:
         try:

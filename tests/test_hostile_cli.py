@@ -27,6 +27,7 @@ HOSTILE = [
     (["--targets=native"], "exactly two targets, got 1"),
     (["--targets=native,python,python"], "exactly two targets, got 3"),
     (["--targets=,"], "exactly two targets, got 0"),
+    (["--targets=native,python,"], "an empty name between its commas"),
     (["--targets=native,no_such_module_xyz:impl"], "cannot import no_such_module_xyz"),
     (["--targets=native,os:path"], "no callable RobotModel"),
     (["--targets=native,justaname"], "expected native, python or module:attribute"),
@@ -434,3 +435,9 @@ def test_a_given_max_len_shorter_than_the_seeds_is_warned_of() -> None:
     assert cut_seeds(("-max_len=500",), [50, 411]) is None
     assert cut_seeds(("-max_len=0",), [50, 411]) is None  # 0: libFuzzer's choice, from the seeds
     assert cut_seeds((), [50, 411]) is None
+
+
+def test_max_steps_outside_a_scenario_is_said_to_do_nothing(tmp_path: Path) -> None:
+    run = fuzz(str(tmp_path / "c"), "-runs=1", "--op=move", "--max-steps=5", f"--artifacts={tmp_path / 'a'}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "--max-steps 5: only a scenario has steps; --op move ignores it" in run.stderr
