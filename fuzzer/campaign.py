@@ -174,8 +174,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         # disk, Ctrl-C) ends the children too: they ran on for up to -timeout after the error
         atexit.register(dry.stop)
     if one_campaign(options.libfuzzer_flags):
+        # from here a signal ends the campaign at an input's start (once the seeds are made, below):
         # Hypothesis' gc callback and scipy's Sobol set-up swallow a KeyboardInterrupt raised in
-        # them (2 Ctrl-Cs of 110 were lost, the campaign fuzzing on): kept until the seeds are made
+        # them (2 Ctrl-Cs of 110 were lost, the campaign fuzzing on)
         defer_to_next_input()
     seeds, filling = initial_seeds(
         session, wanted if not child else 0, options.seed, options.mutator, folders, seeds, dry
@@ -279,9 +280,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         f"{config.message_type}, tolerance "
         f"{config.tolerance.metres:g} m / {config.tolerance.radians:g} rad, artifacts in {options.artifacts}"
     )
-    argv = libfuzzer_argv(options)
-    if one_campaign(options.libfuzzer_flags):  # from here a signal ends it at an input's start
-        defer_to_next_input()
+    argv = libfuzzer_argv(options)  # a signal already waits for an input's start (before the seeds)
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
     if not child and total and is_number(total) and int_flag(options.libfuzzer_flags, "-fork", 0) > 0:

@@ -34,8 +34,8 @@ LIBFUZZER_ERROR = "libFuzzer stopped with an error: its message above says which
 ``-minimize_crash`` on an input that does not crash): the status a campaign gives new divergences,
 which it had found none of."""
 JOB_FAILED = "a job failed: its fuzz-N.log in the artifacts folder says why"
-"""What a ``-jobs`` supervisor's status 1 means when no divergence explains it (libFuzzer's 1
-for a job that ended with a non-zero status)."""
+"""What a ``-jobs`` supervisor's status 1 means when no file its jobs left explains it
+(``processes.failed_job_status``: libFuzzer's 1 for a job that ended with a non-zero status)."""
 
 
 @dataclass

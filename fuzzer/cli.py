@@ -81,6 +81,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         default_max_len,
         libfuzzer_argv,
     )
+    from fuzzer.input.paths import file_problem
     from fuzzer.processes import drawn_seed, flag_value
 
     try:
@@ -108,18 +109,18 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "
             f"the same command with -seed={drawn} --seed={seed} repeats its choices"
         )
-    if args.seeds_from_bag is not None and not args.seeds_from_bag.is_file():
-        what = "not a regular file" if args.seeds_from_bag.exists() else "no such file"
-        raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: {what}")
+    bag_problem = None if args.seeds_from_bag is None else file_problem(args.seeds_from_bag)
+    if bag_problem is not None:
+        raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: {bag_problem}")
     try:  # libFuzzer refuses these after start-up with its status 1, the status of "divergences"
         check_path_flags(tuple(flags))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
     if dictionary is not None:
-        if not Path(dictionary).is_file():
-            what = "not a regular file" if Path(dictionary).exists() else "no such file"
-            raise UsageError(f"-dict={dictionary}: {what}")
+        dict_problem = file_problem(Path(dictionary))
+        if dict_problem is not None:
+            raise UsageError(f"-dict={dictionary}: {dict_problem}")
         try:  # libFuzzer refuses a bad one only after start-up, with an exit status of its own
             check_dictionary(Path(dictionary))
         except ValueError as exc:

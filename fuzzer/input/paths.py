@@ -53,6 +53,18 @@ def _kind(mode: int) -> str:
     return "a file"
 
 
+def file_problem(path: Path) -> str | None:
+    """Why ``path`` is not a regular file to read (``no such file``, ``is a folder, not a regular
+    file``...), or None when it is one."""
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return "no such file"
+    except OSError as exc:
+        return str(exc.strerror or exc)
+    return None if stat.S_ISREG(mode) else f"is {_kind(mode)}, not a regular file"
+
+
 def is_sidecar(path: Path) -> bool:
     """``X.json`` next to an existing file ``X`` (the sidecar of a crash file)."""
     return path.name.endswith(".json") and path.with_name(path.name[: -len(".json")]).is_file()

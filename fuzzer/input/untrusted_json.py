@@ -29,14 +29,16 @@ def bounded_int(text: str) -> int:
         An integer beyond a float's range (longer than 309 characters, or above about 1.8e308).
     """
     digits = len(text.lstrip("-"))
-    if digits > MAX_DIGITS:
-        if digits > MAX_DIGITS + 1:  # refused before int() parses it (quadratic in its length)
-            raise ValueError(f"an integer of {digits} digits, beyond the range of a float")
+    beyond = f"an integer of {digits} digits, beyond the range of a float"
+    if digits > MAX_DIGITS + 1:  # refused before int() parses it
+        raise ValueError(beyond)
+    value = int(text)
+    if digits > MAX_DIGITS:  # 309 digits: 1e308 fits, 2e308 does not
         try:
-            float(int(text))
+            float(value)
         except OverflowError:
-            raise ValueError(f"an integer of {digits} digits, beyond the range of a float") from None
-    return int(text)
+            raise ValueError(beyond) from None
+    return value
 
 
 def loads(text: str | bytes, **options: Any) -> Any:

@@ -1,7 +1,7 @@
 """``fuzz_diff.py show FILE...``: a crash or corpus file's test case, printed as JSON.
 
-The file is read as data (at most ``MAX_BYTES`` + 1 bytes, then parsed by
-``fuzzer.input.testcase.decode``); nothing it names is imported or run, and its
+The file is read as data (at most ``MAX_BYTES`` + 1 bytes, then parsed:
+``fuzzer.input.testcase.read_case``); nothing it names is imported or run, and its
 sidecar is not read. One file prints its test case (``msg_type``, ``message``,
 ``origin``, ``lineage``...) as one indented JSON object, ready for ``jq``; several
 print one object keyed by path. NaN and infinities print as JSON's usual
@@ -22,7 +22,7 @@ from typing import Any
 from fuzzer import reporting
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import PathError, crash_inputs, given_path
-from fuzzer.input.testcase import MAX_BYTES, TestCaseError, decode
+from fuzzer.input.testcase import TestCaseError, read_case
 
 
 def load(path: Path) -> dict[str, Any]:
@@ -34,12 +34,9 @@ def load(path: Path) -> dict[str, Any]:
         Naming the file and the problem (``fuzz_diff.py`` prints it and exits 2).
     """
     try:
-        with path.open("rb") as stream:
-            data = stream.read(MAX_BYTES + 1)
+        return read_case(path).to_json()
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    try:
-        return decode(data).to_json()
     except TestCaseError as exc:
         raise ConfigError(f"{path}: not an RROSFuzz test case: {exc}") from None
 
