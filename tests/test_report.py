@@ -361,6 +361,19 @@ def test_strings_from_files_are_escaped_and_a_missing_robot_gives_a_note(tmp_pat
     assert "timeout-1234" in text and "no sidecar" in text
 
 
+def test_control_and_bidi_characters_from_files_are_shown_as_escapes(tmp_path: Path) -> None:
+    """A right-to-left override (U+202E) reorders what a reader sees; NUL, ESC and a lone
+    surrogate are not text. The page shows each as its escape."""
+    odd = "a\x00b\x1b[31mc\u202edcba\ud800"
+    bad = config(robot=f"/gone/{odd}.urdf", targets=("native", f"mod:{odd}"))
+    car = sidecar(signature_fields(), bad, "sha-odd")
+    car["outcomes"][1]["message"] = odd
+    place_crash(tmp_path, "crash-odd", b"{}", car)
+    text = write_report(tmp_path).read_text()
+    assert not set(text) & {"\x00", "\x1b", "\u202e", "\ud800"}
+    assert "a\\x00b\\x1b[31mc\\u202edcba\\ud800" in text
+
+
 # -- the 3D view's pieces ---------------------------------------------------------------------------------
 
 

@@ -1,6 +1,8 @@
 """Small HTML helpers of the report page: escaping, number and time formats, inline images.
 
-Every string that comes from a file goes through :func:`esc` (:func:`html.escape`, quotes too).
+Every string that comes from a file goes through :func:`esc` (:func:`html.escape`, quotes too,
+after :func:`visible`: control, format and other unprintable characters, such as NUL, ESC or a
+right-to-left override, U+202E, which would reorder what a reader sees, shown as escapes).
 """
 
 from __future__ import annotations
@@ -12,8 +14,16 @@ from html import escape
 from typing import Any
 
 
+def visible(text: str) -> str:
+    """``text`` with its unprintable characters but line breaks and tabs as Python escapes
+    (``\\x1b``, ``\\u202e``), so that a sidecar's string shows what it holds."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c in "\n\t" else repr(c)[1:-1] for c in text)
+
+
 def esc(value: Any) -> str:
-    return escape(str(value), quote=True)
+    return escape(visible(str(value)), quote=True)
 
 
 def pct(x: float | None) -> str:

@@ -24,7 +24,6 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from html import escape
 from typing import Any
 
 import matplotlib
@@ -33,6 +32,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from fuzzer.execution.records import Outcome
+from fuzzer.report.markup import esc
 from fuzzer.report.steps import ScenarioSteps, clean, scenario_of
 
 MAX_PLOTS = 4
@@ -286,7 +286,7 @@ def figures(key: str, view: ScenarioView) -> dict[str, bytes]:
 
 
 def _e(value: Any) -> str:
-    return escape(str(value), quote=True)
+    return esc(value)
 
 
 def _table(view: ScenarioView) -> str:
