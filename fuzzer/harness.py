@@ -8,29 +8,20 @@ default the campaign goes on past divergences. With ``stop_on_divergence`` the
 first one raises (its crash file and sidecar written first), libFuzzer writes
 ``crash-<sha1>`` again (the same bytes) and exits.
 
-The mutator (``mutate``) decodes, picks a parent (usually libFuzzer's, sometimes
-a high-difference one or a new input for its input-to-state stage,
-``fuzzer.selection.i2s``), applies one registered mutator (``fuzzer.mutation.mutators``,
-or for ``--op scenario`` the sequence mutators of ``fuzzer.scenario.mutate``,
-given as ``mutate_message``/``crossover_message``) with an RNG seeded by
-libFuzzer, records it in the lineage, and encodes. With the bandit over sources and
-mutators, libFuzzer's crossover (``crossover``, half of its mutation calls) is the same step:
-it crosses with libFuzzer's second parent only when the bandit picks the crossover's arm. It
-never raises: an exception there would hang Atheris. Scenario outcomes also feed bigrams of
+The custom mutator and crossover (``mutate``, ``crossover``) are its other half,
+``fuzzer.mutation.step.MutationStep``. Scenario outcomes also feed bigrams of
 consecutive (step kind, step status) to libFuzzer (``guidance.step_bigrams``).
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-import random
 import sys
 import time
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 from fuzzer import reporting
 from fuzzer.artifacts.divlog import CampaignLog, divergence_record, near_zero_count
@@ -41,13 +32,13 @@ from fuzzer.generation.sweep import CENTRES, Sweep
 from fuzzer.input.mapping import FkCall, MoveCall
 from fuzzer.input.testcase import TestCase, TestCaseError, decode
 from fuzzer.mutation import mutators
+from fuzzer.mutation.step import MessageCrossover, MessageMutator, MutationStep, digest
 from fuzzer.selection.floatcmp import FloatCompareTracer
 from fuzzer.selection.guidance import Features, input_features, step_bigrams
 from fuzzer.selection.i2s import I2SQueue
-from fuzzer.selection.state import Made, Pool, Sources, Stats
+from fuzzer.selection.state import Pool, Sources, Stats
 
 SNAPSHOT_SECONDS = 5.0
-POOL_PARENT_CHANCE = 0.2
 DECODE_CACHE = 4096
 
 
@@ -55,25 +46,8 @@ class DivergenceFound(Exception):
     """Raised from TestOneInput with --stop-on-divergence: libFuzzer turns it into a crash."""
 
 
-class MessageMutator(Protocol):
-    """``fuzzer.mutation.mutators.mutate``'s signature: ``(message, ctx, name=None) -> (message, name)``."""
-
-    def __call__(
-        self, message: dict[str, Any], ctx: mutators.MutationContext, name: str | None = None
-    ) -> tuple[dict[str, Any], str]: ...
-
-
-class MessageCrossover(Protocol):
-    """``fuzzer.mutation.mutators.crossover``'s signature: ``(a, b, ctx) -> message``. A crossover may
-    name itself in the lineage with a ``lineage_name`` attribute (default ``splice``)."""
-
-    def __call__(
-        self, a: dict[str, Any], b: dict[str, Any], ctx: mutators.MutationContext
-    ) -> dict[str, Any]: ...
-
-
 @dataclass
-class Harness:
+class Harness(MutationStep):
     """Glue between libFuzzer and the evaluator."""
 
     evaluator: Evaluator
@@ -132,7 +106,7 @@ class Harness:
         compared = self.float_tracer.compared if self.float_tracer is not None else None
         new = len(self.features.seen) > seen
         if self.i2s is not None and compared is not None and new:
-            self.i2s.offer(data, compared.sites_of(_digest(data)))  # input-to-state (fuzzer.selection.i2s)
+            self.i2s.offer(data, compared.sites_of(digest(data)))  # input-to-state (fuzzer.selection.i2s)
         if self.sweep is not None and self.sweep.due():
             self.run_sweep()
         if self.log is not None and (first or not self.stats.execs & 255):
@@ -150,7 +124,7 @@ class Harness:
             compared.begin()
         evaluation = self.evaluator.evaluate(case, validated=trusted)
         if compared is not None:
-            compared.end(_digest(data))  # what this input compared, for when it is mutated
+            compared.end(digest(data))  # what this input compared, for when it is mutated
         if evaluation.verdict != Verdict.MALFORMED:
             self._remember(data, case)
         if evaluation.verdict == Verdict.FILTERED:
@@ -339,100 +313,3 @@ class Harness:
             sidecar["history"] = list(ev.history)
         sidecar.setdefault("unit", ev.comparison.unit)
         return sidecar
-
-    # -- custom mutator / crossover ------------------------------------------------------------
-
-    def mutate(self, data: bytes, max_size: int, seed: int) -> bytes:
-        return self._step(data, None, max_size, seed)
-
-    def crossover(self, data1: bytes, data2: bytes, max_size: int, seed: int) -> bytes:
-        """libFuzzer's CustomCrossOver, which it calls for about half of its mutations. With the
-        bandit (``sources``) this is one more bandit step on ``data1``: the crossover with
-        ``data2`` only when the bandit picks the crossover's arm (``splice``, ``seq_splice``),
-        so crossovers get the share they earn; without it, the crossover libFuzzer asked for."""
-        return self._step(data1, data2, max_size, seed)
-
-    def _step(self, data: bytes, partner: bytes | None, max_size: int, seed: int) -> bytes:
-        """One input made from ``data`` (and ``partner``, libFuzzer's second parent in a crossover):
-        a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
-        try:
-            rng = random.Random(seed)
-            taken = self.i2s.take(rng) if self.i2s is not None and partner is None else None
-            queued, focus = taken if taken is not None else (None, None)  # an input and the site it aims at
-            parent = self._parent(queued or data, rng, partner is None and queued is None, True, focus)
-            fresh = self._fresh(parent, rng) if queued is None else None
-            if fresh is not None:
-                return self._emit(parent.child(*fresh), parent, max_size, data)
-            ctx = self.context
-            ctx.rng = rng
-            splice = str(getattr(self.crossover_message, "lineage_name", "splice"))
-            if self.sources is None and partner is not None:
-                other = self._parent(partner, rng, False)
-                message = self.crossover_message(parent.message, other.message, ctx)
-                return self._emit(parent.child(message, splice), parent, max_size, data)
-            wanted = self.sources.mutators.choose(rng) if self.sources is not None else None
-            if queued is not None and self.i2s is not None:
-                wanted = self.i2s.arm  # the input-to-state stage of a new input
-            if wanted == splice or getattr(self.mutate_message, "uses_other", False):
-                other = self._parent(partner, rng, False) if partner is not None else self._other_parent(rng)
-                ctx.other = other.message
-            try:
-                message, name = self.mutate_message(parent.message, ctx, wanted)
-            finally:
-                ctx.other = None
-            return self._emit(parent.child(message, name), parent, max_size, data)
-        except Exception:  # noqa: BLE001 - must never raise into libFuzzer
-            return data[:max_size]
-
-    def _parent(
-        self,
-        data: bytes,
-        rng: random.Random,
-        pool: bool = True,
-        select: bool = False,
-        focus: int | None = None,
-    ) -> TestCase:
-        """The test case of ``data`` (or, ``pool``, sometimes a high-difference input instead);
-        ``select``: the one to mutate, whose compared values ``ComparedValues.operands`` gives
-        (those at the site ``focus`` only, when given)."""
-        if pool and rng.random() < POOL_PARENT_CHANCE:
-            preferred = self.pool.pick(rng)
-            if preferred is not None:
-                data = preferred
-        case, _ = self._decode(data)
-        if select and self.float_tracer is not None and self.float_tracer.compared is not None:
-            self.float_tracer.compared.select(_digest(data), focus)
-        if case is None:
-            # not a test case (a foreign or damaged file): restart from a generated seed
-            base = rng.choice(self.seeds)
-            return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
-        return case
-
-    def _fresh(self, parent: TestCase, rng: random.Random) -> Made:
-        """A fresh input (space-filling or aligned) made from ``parent`` and its lineage name,
-        when the source bandit picks one."""
-        if self.sources is None:
-            return None
-        return self.sources.make(self.sources.source.choose(rng), parent.message, rng)
-
-    def _other_parent(self, rng: random.Random) -> TestCase:
-        """A second parent for a mutator that uses one (``uses_other``, the scenario mutator's
-        step copies; the bandit's crossover arm outside libFuzzer's crossover): a high-difference
-        input half the time when there is one, else a seed."""
-        data = self.pool.pick(rng) if rng.random() < 0.5 else None
-        case = self._decode(data)[0] if data is not None else None
-        return case if case is not None else rng.choice(self.seeds)
-
-    def _emit(self, case: TestCase, parent: TestCase, max_size: int, fallback: bytes) -> bytes:
-        """The child's bytes; if too large, the (valid) parent's; if still too large, the input cut."""
-        for candidate in (case, parent):
-            out = candidate.encode()
-            if len(out) <= max_size:
-                self._last = (out, candidate)
-                return out
-        return fallback[:max_size]
-
-
-def _digest(data: bytes) -> bytes:
-    """A short key of an input's bytes (``ComparedValues``' memory of what each input compared)."""
-    return hashlib.blake2b(data, digest_size=16).digest()
