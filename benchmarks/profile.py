@@ -47,7 +47,15 @@ PARTS: tuple[tuple[str, tuple[str, ...]], ...] = (
         ("fuzzer/selection/floatcmp.py", "fuzzer/selection/compared.py", "fuzzer/selection/cmp_gap.py"),
     ),
     ("feature bookkeeping", ("fuzzer/selection/guidance.py",)),
-    ("evaluation and oracle", ("fuzzer/execution/", "fuzzer/scenario/oracle", "fuzzer/scenario/nudge.py")),
+    (
+        "evaluation and oracle",
+        (
+            "fuzzer/execution/",
+            "fuzzer/scenario/oracle",
+            "fuzzer/scenario/nudge.py",
+            "fuzzer/scenario/ik_rerun.py",
+        ),
+    ),
     (
         "mutator, crossover, bandits",
         (
