@@ -77,6 +77,7 @@ class CampaignEnd:
         status = self._signalled(WRITE_FAILED_EXIT if self.unwritable and not status else status)
         found = self._found()
         totals = worker_totals(self.artifacts, self.started, os.getpid()) if self.supervisor else None
+        dry = None if self.dry is None else worker_totals(self.artifacts, self.started, pids=self.dry.pids)
         stopped = status == self.interrupted or (totals or {}).get("interrupted")
         job_failed = refused = False
         if status == 1 and not self.supervisor and not (found.divergences or found.crashes or found.timeouts):
@@ -95,7 +96,7 @@ class CampaignEnd:
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
-        self._summary(found, totals, code, meaning)
+        self._summary(found, totals, code, meaning, dry)
         return code
 
     def _jobs(self) -> bool:
@@ -131,7 +132,12 @@ class CampaignEnd:
         return f"{reporting.meaning_of(code)}, in a job: its fuzz-N.log in the artifacts folder says more"
 
     def _summary(
-        self, found: Found, totals: dict[str, Any] | None, code: int | None, meaning: str | None
+        self,
+        found: Found,
+        totals: dict[str, Any] | None,
+        code: int | None,
+        meaning: str | None,
+        dry: dict[str, Any] | None = None,
     ) -> None:
         """The end-of-campaign report, files named as the user named the artifacts folder."""
 
@@ -150,4 +156,5 @@ class CampaignEnd:
             explained=found.explained_kinds(),
             exit_code=code,
             exit_meaning=meaning,
+            dry_run=dry,
         )

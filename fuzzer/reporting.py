@@ -139,6 +139,7 @@ def summary(
     explained: Mapping[str, int] | None = None,
     exit_code: int | None = None,
     exit_meaning: str | None = None,
+    dry_run: dict[str, Any] | None = None,
 ) -> None:
     """The end-of-campaign report (stderr). ``new_files``: crash files written since the
     start, by this process or by its -fork/-jobs workers; ``totals``: the workers' counters
@@ -146,7 +147,9 @@ def summary(
     ``crashes``: libFuzzer's timeout-/crash- files written since the start; ``explained``: the
     crash files written since the start whose divergence the oracle explains (kinds in
     ``processes.NOT_FINDINGS``), counted by kind: not findings, but on disk for triage;
-    ``exit_meaning``: what ``exit_code`` means here, when not what it means alone."""
+    ``exit_meaning``: what ``exit_code`` means here, when not what it means alone; ``dry_run``:
+    the dry run's children's counters summed (``divlog.worker_totals``), which the lines above
+    do not count."""
     lines = [
         "campaign summary",
         f"  executions: {stats.execs} in {stats.elapsed:.1f} s "
@@ -173,6 +176,13 @@ def summary(
         )
     if totals is not None:
         lines = _totals_lines(totals, stats.elapsed)
+    if dry_run and dry_run.get("execs"):
+        kinds = dry_run.get("divergent", {})
+        lines.append(
+            f"  the dry run, besides ({dry_run.get('processes', 0)} child process(es) before libFuzzer): "
+            f"{dry_run['execs']} executions, {dry_run.get('divergences', 0)} divergences"
+            + (f" ({', '.join(f'{k} {n}' for k, n in sorted(kinds.items()))})" if kinds else "")
+        )
     if timeouts:
         lines.append(f"  timeouts: {len(timeouts)} input(s) ran past -timeout: {', '.join(timeouts[:5])}")
     if crashes:

@@ -2,8 +2,10 @@
 
 A real number is an ``int`` (not ``bool``), a ``float``, or any object whose type
 defines ``__float__`` and is not ``str``/``bytes``/``bytearray`` (numpy scalars,
-``Decimal``, ``Fraction``). A joint vector is a ``list``/``tuple`` of real
-numbers or a 1-D integer/float ndarray. Anything else is INVALID_ARGUMENT.
+``Decimal``, ``Fraction``); whatever its ``__float__`` raises is INVALID_ARGUMENT. A joint
+vector is a ``list``/``tuple`` of real numbers, read once as ``tuple()`` reads it before its items
+are converted, or a 1-D integer/float ndarray (a masked array with masked entries is refused).
+Anything else is INVALID_ARGUMENT.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ def to_real(value: Any, what: str) -> float:
         raise bad(what, f"expected a real number, got {type(value).__name__}")
     try:
         return float(value)
-    except (TypeError, ValueError, OverflowError):
+    except Exception:  # noqa: BLE001 - any error of a __float__ is the argument's (docs/api.md)
         raise bad(what, f"cannot convert {type(value).__name__} to a float") from None
 
 
@@ -47,16 +49,32 @@ def is_sequence(value: Any) -> bool:
     return isinstance(value, list | tuple | np.ndarray)
 
 
+def items(values: list[Any] | tuple[Any, ...], what: str) -> tuple[Any, ...]:
+    """The items of a list or tuple, read once (as native reads them: ``PySequence_Tuple``), so
+    that converting them cannot change what is read."""
+    try:
+        return tuple(values)
+    except Exception:  # noqa: BLE001 - a subclass's __iter__ failing is the argument's
+        raise bad(what, f"cannot read the {type(values).__name__}") from None
+
+
+def refuse_masked(array: np.ndarray, what: str, code: ErrorCode = ErrorCode.INVALID_ARGUMENT) -> None:
+    """A masked array (``numpy.ma``) with masked entries: they have no value to use."""
+    if isinstance(array, np.ma.MaskedArray) and np.ma.is_masked(array):
+        raise InvalidInputError(f"{what}: a masked array with masked entries (they have no value)", code)
+
+
 def to_vector(values: Any, what: str) -> list[float]:
     """A joint vector as a list of floats (no length or finiteness check)."""
     if isinstance(values, list | tuple):
-        return [to_real(v, what) for v in values]
+        return [to_real(v, what) for v in items(values, what)]
     if isinstance(values, np.ndarray):
         if values.ndim != 1:
             raise bad(what, f"expected a 1-D array, got {values.ndim}-D")
         if values.dtype.kind not in _REAL_KINDS:
             raise bad(what, f"array of kind '{values.dtype.kind}' is not real")
-        return values.astype(np.float64).tolist()  # type: ignore[no-any-return]
+        refuse_masked(values, what)
+        return np.asarray(values, dtype=np.float64).tolist()  # type: ignore[no-any-return]
     raise bad(what, f"expected a list, tuple or 1-D array of numbers, got {type(values).__name__}")
 
 
@@ -77,7 +95,7 @@ def to_optional_string(value: Any, what: str) -> str | None:
 def to_strings(values: Any, what: str) -> list[str]:
     if not isinstance(values, list | tuple):
         raise bad(what, f"expected a list or tuple of names, got {type(values).__name__}")
-    return [to_string(v, what) for v in values]
+    return [to_string(v, what) for v in items(values, what)]
 
 
 def to_pose(pose: Any) -> tuple[list[float], list[float]]:
@@ -86,6 +104,7 @@ def to_pose(pose: Any) -> tuple[list[float], list[float]]:
         raise bad(
             "pose", f"expected a robot_api.Pose or a (position, orientation) pair, got {type(pose).__name__}"
         )
+    pose = items(pose, "pose")
     if len(pose) != 2:
         raise bad("pose", "expected a (position, orientation) pair")
     p = to_vector(pose[0], "pose position")

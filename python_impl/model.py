@@ -175,7 +175,7 @@ class RobotModel:
         what = "joint value rows"
         if isinstance(rows, list | tuple):
             data = []
-            for i, row in enumerate(rows):
+            for i, row in enumerate(convert.items(rows, what)):
                 values = convert.to_vector(row, what)
                 if len(values) != self.dof:
                     raise InvalidInputError(
@@ -192,6 +192,7 @@ class RobotModel:
                 raise InvalidInputError(
                     f"{what}: expected {self.dof} columns, got {rows.shape[1]}", ErrorCode.WRONG_LENGTH
                 )
+            convert.refuse_masked(rows, what)
             q = np.ascontiguousarray(rows, dtype=np.float64)
         else:
             raise convert.bad(what, f"expected a 2-D array or a list of rows, got {type(rows).__name__}")

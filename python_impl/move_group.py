@@ -161,7 +161,7 @@ class MoveGroup:
         if arg2 is None:
             if isinstance(arg1, dict):
                 names, values = [], []
-                for key, value in arg1.items():
+                for key, value in list(dict.items(arg1)):  # read once, as native reads a dict
                     names.append(convert.to_string(key, _WHAT))
                     values.append(convert.to_real(value, _WHAT))
                 self._set_named(names, values)
@@ -333,6 +333,7 @@ class MoveGroup:
                 "trajectory positions: expected a real array of shape (M, dof) matching the times",
                 ErrorCode.INVALID_TRAJECTORY,
             )
+        convert.refuse_masked(positions, "trajectory positions", ErrorCode.INVALID_TRAJECTORY)
         if not isinstance(wait, bool):
             raise convert.bad("wait", "expected a bool")
         self._execute(names, times, np.asarray(positions, dtype=np.float64))
@@ -349,11 +350,12 @@ class MoveGroup:
         ]
 
     def go(self, joints: JointTarget | None = None, wait: bool = True) -> bool:
-        """Plan and execute a move to the target (set first from ``joints`` if given)."""
-        if joints is not None:
-            self.set_joint_value_target(joints)
+        """Plan and execute a move to the target (set first from ``joints`` if given; ``wait`` is
+        checked before that, so a refused call changes nothing)."""
         if not isinstance(wait, bool):
             raise convert.bad("wait", "expected a bool")
+        if joints is not None:
+            self.set_joint_value_target(joints)
         try:
             trajectory = self._plan()
         except PlanningError:

@@ -90,3 +90,23 @@ def test_a_campaign_reports_the_explained_crash_files_it_wrote(tmp_path: Path) -
     match = re.search(r"explained, not findings: (\d+) more crash file\(s\) new this run", run.stderr)
     assert match and int(match.group(1)) == len(explained), run.stderr[-2000:]
     assert "crash files (0 new this run)" in run.stderr
+    # the campaign's divergences and the dry run's are every line of the log (they were its
+    # process's alone: 811 of 820 in a probe's campaign)
+    ours = re.search(r"\]\s+divergences: (\d+)", run.stderr)
+    dry = re.search(
+        r"the dry run, besides \(\d+ child process\(es\) before libFuzzer\): \d+ executions, (\d+)",
+        run.stderr,
+    )
+    assert ours and dry, run.stderr[-2000:]
+    logged = (artifacts / "divergences.jsonl").read_text().splitlines()
+    assert int(ours.group(1)) + int(dry.group(1)) == len(logged)
+
+
+def test_the_summary_counts_the_dry_run_apart(capsys: pytest.CaptureFixture[str]) -> None:
+    dry = {"processes": 1, "execs": 40, "divergences": 3, "divergent": {"value": 2, "ill_conditioned": 1}}
+    reporting.summary(Stats(), 0, "arts", ["c"], [], dry_run=dry)
+    err = capsys.readouterr().err
+    assert "the dry run, besides (1 child process(es) before libFuzzer): 40 executions, 3 divergences" in err
+    assert "(ill_conditioned 1, value 2)" in err
+    reporting.summary(Stats(), 0, "arts", ["c"], [], dry_run={"processes": 0, "execs": 0})
+    assert "dry run" not in capsys.readouterr().err

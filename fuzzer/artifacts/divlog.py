@@ -178,10 +178,13 @@ class CampaignLog:
         append_line(self.stats, {"t": time.time(), "pid": self.pid, **record})
 
 
-def worker_totals(directory: Path, since: float, exclude_pid: int | None = None) -> dict[str, Any]:
+def worker_totals(
+    directory: Path, since: float, exclude_pid: int | None = None, pids: Sequence[int] | None = None
+) -> dict[str, Any]:
     """Counters summed over the processes that logged to ``directory`` since ``since``
-    (``-fork``/``-jobs`` workers): the last ``stats.jsonl`` snapshot of each process, and
-    the distinct signatures of ``divergences.jsonl``.
+    (``-fork``/``-jobs`` workers; ``pids``: those processes only, e.g. the dry run's children):
+    the last ``stats.jsonl`` snapshot of each process, and the distinct signatures of
+    ``divergences.jsonl``.
 
     Returns ``processes``, ``execs``, ``filtered``, ``malformed``, ``interrupted`` (processes
     ended by a signal), ``divergent`` (kind -> count), ``divergences``, ``signatures`` and
@@ -190,7 +193,9 @@ def worker_totals(directory: Path, since: float, exclude_pid: int | None = None)
     last: dict[Any, dict[str, Any]] = {}
     for record in read_lines(directory / STATS):
         t, pid = record.get("t"), record.get("pid")
-        if not isinstance(t, int | float) or t < since or pid == exclude_pid:
+        if not isinstance(t, int | float) or t < since or not isinstance(pid, int) or pid == exclude_pid:
+            continue  # a pid that is no int (a damaged line) could not even be a key
+        if pids is not None and pid not in pids:
             continue
         last[pid] = record
     totals: dict[str, Any] = {"processes": len(last), "execs": 0, "filtered": 0, "malformed": 0}
@@ -210,7 +215,10 @@ def worker_totals(directory: Path, since: float, exclude_pid: int | None = None)
     signatures = {
         str(r.get("sig"))
         for r in read_lines(directory / DIVERGENCES)
-        if isinstance(r.get("t"), int | float) and r["t"] >= since and r.get("pid") != exclude_pid
+        if isinstance(r.get("t"), int | float)
+        and r["t"] >= since
+        and r.get("pid") != exclude_pid
+        and (pids is None or r.get("pid") in pids)
     }
     totals.update(
         divergent=divergent,

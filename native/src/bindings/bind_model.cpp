@@ -17,7 +17,7 @@ std::vector<double> batch_input(const Model& m, py::handle h, std::size_t& rows)
   const std::size_t n = m.dof();
   std::vector<double> data;
   if (PyList_Check(h.ptr()) || PyTuple_Check(h.ptr())) {
-    py::sequence seq = py::reinterpret_borrow<py::sequence>(h);
+    const py::tuple seq = py_api::items(h, "joint value rows");
     rows = seq.size();
     data.reserve(rows * n);
     for (std::size_t i = 0; i < rows; ++i) {
@@ -39,6 +39,7 @@ std::vector<double> batch_input(const Model& m, py::handle h, std::size_t& rows)
       fail(ErrorCode::kWrongLength, "joint value rows: expected " + std::to_string(n) + " columns, got " +
                                         std::to_string(a.shape(1)));
     }
+    py_api::refuse_masked(h, "joint value rows");
     auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
     rows = static_cast<std::size_t>(a.shape(0));
     data.assign(d.data(), d.data() + d.size());

@@ -20,9 +20,11 @@ void set_joint_value_target(MoveGroup& g, py::handle arg1, py::handle arg2) {
     if (PyDict_Check(arg1.ptr())) {
       std::vector<std::string> names;
       std::vector<double> values;
-      for (auto item : py::reinterpret_borrow<py::dict>(arg1)) {
-        names.push_back(py_api::to_string(item.first, what));
-        values.push_back(py_api::to_real(item.second, what));
+      // read once (PyDict_Items copies the pairs), so that converting a value cannot change the dict read
+      const py::list pairs = py::reinterpret_steal<py::list>(PyDict_Items(arg1.ptr()));
+      for (py::handle pair : pairs) {
+        names.push_back(py_api::to_string(PyTuple_GET_ITEM(pair.ptr(), 0), what));
+        values.push_back(py_api::to_real(PyTuple_GET_ITEM(pair.ptr(), 1), what));
       }
       g.set_target(names, values);
     } else if (py_api::is_sequence(arg1)) {
@@ -72,6 +74,7 @@ Trajectory to_trajectory(const MoveGroup& g, py::handle plan, std::vector<std::s
     fail(ErrorCode::kInvalidTrajectory, "trajectory positions: expected a real array of shape (M, dof) matching "
                                         "the times");
   }
+  py_api::refuse_masked(positions, "trajectory positions", ErrorCode::kInvalidTrajectory);
   auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
   t.positions.assign(d.data(), d.data() + d.size());
   return t;
@@ -185,8 +188,8 @@ void bind_move_group(py::module_& m) {
              return true;
            })
       .def("go", [](MoveGroup& g, py::handle joints, py::handle wait) {
+        check_wait(wait);  // first: a refused go() changes nothing
         if (!joints.is_none()) set_joint_value_target(g, joints, py::none());
-        check_wait(wait);
         return g.go();
       });
 }

@@ -15,7 +15,7 @@ struct Handles {
   py::object pose, ik_result, ik_success, ik_no_solution, joint_limit, mimic_joint, trajectory, make_error;
   py::object plan_result, moveit_error_code, robot_state, joint_state;
   py::object joint_type_revolute, joint_type_continuous, joint_type_prismatic;
-  py::object ndarray;
+  py::object ndarray, masked_array, is_masked;
 };
 Handles* handles = nullptr;
 
@@ -24,6 +24,13 @@ Handles* handles = nullptr;
 }
 
 std::string type_of(py::handle h) { return Py_TYPE(h.ptr())->tp_name; }
+
+// The Python error set now, when it is an Exception (the argument's fault: cleared, and the caller
+// raises ApiError); a BaseException that is not one (KeyboardInterrupt, SystemExit) propagates.
+void clear_or_propagate() {
+  if (!PyErr_ExceptionMatches(PyExc_Exception)) throw py::error_already_set();
+  PyErr_Clear();
+}
 
 }  // namespace
 
@@ -48,6 +55,9 @@ void init() {
   handles->robot_state = records.attr("RobotState");
   handles->joint_state = records.attr("JointState");
   handles->ndarray = py::module_::import("numpy").attr("ndarray");
+  auto ma = py::module_::import("numpy.ma");
+  handles->masked_array = ma.attr("MaskedArray");
+  handles->is_masked = ma.attr("is_masked");
 }
 
 bool is_string(py::handle h) { return PyUnicode_Check(h.ptr()); }
@@ -63,7 +73,7 @@ double to_real(py::handle h, const char* what) {
   if (!is_real(h)) bad(what, "expected a real number, got " + type_of(h));
   const double v = PyFloat_AsDouble(h.ptr());
   if (v == -1.0 && PyErr_Occurred()) {
-    PyErr_Clear();
+    clear_or_propagate();
     bad(what, "cannot convert " + type_of(h) + " to a float");
   }
   return v;
@@ -73,9 +83,25 @@ bool is_sequence(py::handle h) {
   return PyList_Check(h.ptr()) || PyTuple_Check(h.ptr()) || py::isinstance(h, handles->ndarray);
 }
 
+py::tuple items(py::handle h, const char* what) {
+  PyObject* t = PySequence_Tuple(h.ptr());
+  if (!t) {
+    clear_or_propagate();
+    bad(what, "cannot read the " + type_of(h));
+  }
+  return py::reinterpret_steal<py::tuple>(t);
+}
+
+void refuse_masked(py::handle array, const char* what, ErrorCode code) {
+  if (Py_TYPE(array.ptr()) == reinterpret_cast<PyTypeObject*>(handles->ndarray.ptr())) return;  // not a subclass
+  if (py::isinstance(array, handles->masked_array) && handles->is_masked(array).cast<bool>()) {
+    fail(code, std::string(what) + ": a masked array with masked entries (they have no value)");
+  }
+}
+
 std::vector<double> to_vector(py::handle h, const char* what) {
   if (PyList_Check(h.ptr()) || PyTuple_Check(h.ptr())) {
-    py::sequence seq = py::reinterpret_borrow<py::sequence>(h);
+    const py::tuple seq = items(h, what);
     const std::size_t n = seq.size();
     std::vector<double> out(n);
     for (std::size_t i = 0; i < n; ++i) out[i] = to_real(seq[i], what);
@@ -86,9 +112,10 @@ std::vector<double> to_vector(py::handle h, const char* what) {
     const char kind = a.dtype().kind();
     if (a.ndim() != 1) bad(what, "expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
     if (kind != 'f' && kind != 'i' && kind != 'u') bad(what, std::string("array of kind '") + kind + "' is not real");
+    refuse_masked(h, what);
     auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
     if (!d) {
-      PyErr_Clear();
+      clear_or_propagate();
       bad(what, "cannot convert the array to float64");
     }
     return std::vector<double>(d.data(), d.data() + d.size());
@@ -99,7 +126,7 @@ std::vector<double> to_vector(py::handle h, const char* what) {
 std::vector<std::string> to_strings(py::handle h, const char* what) {
   if (!PyList_Check(h.ptr()) && !PyTuple_Check(h.ptr())) bad(what, "expected a list or tuple of names, got " + type_of(h));
   std::vector<std::string> out;
-  for (py::handle item : py::reinterpret_borrow<py::sequence>(h)) out.push_back(to_string(item, what));
+  for (py::handle item : items(h, what)) out.push_back(to_string(item, what));
   return out;
 }
 
@@ -129,7 +156,7 @@ PoseParts to_pose_parts(py::handle pose) {
   if (!PyTuple_Check(pose.ptr()) && !PyList_Check(pose.ptr())) {
     bad("pose", "expected a robot_api.Pose or a (position, orientation) pair, got " + type_of(pose));
   }
-  py::sequence pair = py::reinterpret_borrow<py::sequence>(pose);
+  const py::tuple pair = items(pose, "pose");
   if (pair.size() != 2) bad("pose", "expected a (position, orientation) pair");
   const auto p = to_vector(pair[0], "pose position");
   const auto q = to_vector(pair[1], "pose orientation");

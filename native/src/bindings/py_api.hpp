@@ -32,6 +32,11 @@ double to_real(py::handle h, const char* what);
 bool is_real(py::handle h);
 bool is_string(py::handle h);
 bool is_sequence(py::handle h);  // list, tuple or ndarray
+// A list's or tuple's items, read once as tuple() reads them (a subclass through its __iter__),
+// so that converting them cannot change what is read.
+py::tuple items(py::handle h, const char* what);
+// A numpy.ma masked array with masked entries (they have no value): ApiError(code).
+void refuse_masked(py::handle array, const char* what, ErrorCode code = ErrorCode::kInvalidArgument);
 KDL::Frame to_frame(py::handle pose);  // robot_api.Pose or (position, orientation)
 PoseParts to_pose_parts(py::handle pose);  // the same checks; unit quaternion (x, y, z, w)
 
