@@ -82,6 +82,15 @@ def ik_errors(reached: Matrix, target: Matrix) -> tuple[float, float]:
     )
 
 
+def finite_or_seed(values: Sequence[float], seed: Sequence[float]) -> tuple[list[float], bool]:
+    """An IK answer, or the clamped ``seed`` when a value is not finite (an absurd target such as
+    1e308 m made an iterate inf or NaN), and whether it was finite: the contract's rule
+    (docs/api.md: "never NaN"; ``NO_SOLUTION``), as ``native`` and the twin keep it."""
+    if all(math.isfinite(v) for v in values):
+        return list(values), True
+    return list(seed), False
+
+
 def ik_result(
     converged: bool, values: Sequence[float], reached: Matrix, position: Matrix, rotation: Matrix
 ) -> IKResult:
@@ -224,8 +233,11 @@ class LibraryModel(python_impl.RobotModel):
         for i, lim in enumerate(self.joint_limits[:nvars]):
             if lim.type == JointType.CONTINUOUS and math.isfinite(values[i]):
                 values[i] = normalize_angle(values[i])
+        values, finite = finite_or_seed(values, q)
         reached = self._matrix(values, index)
-        if converged is None:
+        if not finite:
+            converged = False
+        elif converged is None:
             converged = meets_criterion(reached, target)
         status = IKStatus.SUCCESS if converged else IKStatus.NO_SOLUTION
         return IKResult(status, tuple(values), *ik_errors(reached, target))

@@ -77,12 +77,13 @@ URDF errors             pinocchio raises ``ValueError``/    only reached for URD
                                                             visible as a status divergence
 IK status               none (no solver)                    the contract's loop decides
                                                             ``SUCCESS`` / ``NO_SOLUTION``
-non-finite IK iterates  NaN in, NaN out (as KDL)            absurd targets (``|p|`` ~ 1e308) give
+non-finite IK iterates  NaN in, NaN out                     absurd targets (``|p|`` ~ 1e308) give
                                                             inf/NaN steps: ``cos``/``sin`` of a
                                                             non-finite angle and a failed numpy
                                                             SVD become NaN instead of raising, so
-                                                            the loop ends in ``NO_SOLUTION`` with
-                                                            NaN values, as ``native`` does
+                                                            the loop ends non-finite: then
+                                                            ``NO_SOLUTION`` with the clamped seed
+                                                            (``finite_or_seed``), as ``native``
 ======================  ==================================  ======================================
 
 Not normalized (semantics left to pinocchio): axis handling of its joint models,
@@ -111,7 +112,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from adapters._common import LibraryModel, canonical_quaternion, ik_result, make_api
+from adapters._common import LibraryModel, canonical_quaternion, finite_or_seed, ik_result, make_api
 from python_impl.angles import normalize_angle
 from python_impl.urdf import is_path_source
 from robot_api.constants import IK_EPS, IK_MAX_ITERATIONS, IK_PINV_EPS
@@ -318,7 +319,10 @@ class RobotModel(LibraryModel):
         for i, lim in enumerate(limits[:nvars]):
             if lim.type == JointType.CONTINUOUS:
                 result[i] = normalize_angle(result[i])
-        return ik_result(converged, result, self._matrix(result, index), target_position, target_rotation)
+        result, finite = finite_or_seed(result, q)
+        return ik_result(
+            converged and finite, result, self._matrix(result, index), target_position, target_rotation
+        )
 
 
 api = make_api(RobotModel, __name__)

@@ -118,7 +118,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from adapters._common import LibraryModel, canonical_quaternion, ik_result, make_api
+from adapters._common import LibraryModel, canonical_quaternion, finite_or_seed, ik_result, make_api
 from adapters._kdl import KDL, frame_matrix, segment_of
 from python_impl.angles import normalize_angle
 from python_impl.urdf import is_path_source, load_urdf
@@ -265,6 +265,7 @@ class RobotModel(LibraryModel):
             Status, joint values (within limits), position (m) and orientation (rad) errors.
         """
         position, orientation, q, index, nvars = self._ik_start(pose, seed, link)
+        start = list(q)
         limits = self.joint_limits
         x, y, z, w = orientation
         target = KDL.Frame(KDL.Rotation.Quaternion(x, y, z, w), KDL.Vector(*position))
@@ -281,9 +282,10 @@ class RobotModel(LibraryModel):
             for j in range(nvars):
                 v = float(q_out[j])
                 q[j] = normalize_angle(v) if limits[j].type == JointType.CONTINUOUS else v
+        q, finite = finite_or_seed(q, start)  # a non-finite iterate: the clamped seed, as native
         reached = self._matrix(q, index)
         goal = frame_matrix(target)
-        return ik_result(converged, q, reached, goal[:3, 3], goal[:3, :3])
+        return ik_result(converged and finite, q, reached, goal[:3, 3], goal[:3, :3])
 
 
 api = make_api(RobotModel, __name__)

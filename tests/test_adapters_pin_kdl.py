@@ -279,6 +279,21 @@ def test_ik_is_deterministic_and_clamps_the_seed(adapter: tuple[str, Any]) -> No
     assert root.status == IKStatus.SUCCESS and root.joint_values == a.home_values
 
 
+@pytest.mark.parametrize("far", [1e200, 1e308])
+def test_ik_of_an_absurd_target_is_the_clamped_seed_never_nan(adapter: tuple[str, Any], far: float) -> None:
+    """docs/api.md: a non-finite iterate gives ``NO_SOLUTION`` with the clamped seed (NaN from both
+    adapters before, which the fuzzer read through the runner's FK as a rejected argument)."""
+    name, impl = adapter
+    a, b = model_of(name, impl, "probot_anno"), native_model("probot_anno")
+    seed = [0.2, -0.3, 0.4, 0.1, -0.5, 0.0]
+    target = ((far, 0.0, 0.3), (0.0, 0.0, 0.0, 1.0))
+    result, expected = a.inverse_kinematics(target, seed), b.inverse_kinematics(target, seed)
+    assert result.status == expected.status == IKStatus.NO_SOLUTION
+    assert all(math.isfinite(v) for v in result.joint_values), result.joint_values
+    if far == 1e308:  # the first step is already non-finite: native keeps the clamped seed
+        assert result.joint_values == expected.joint_values == tuple(seed)
+
+
 def test_argument_errors_are_the_contract(adapter: tuple[str, Any]) -> None:
     name, impl = adapter
     a, b = model_of(name, impl, "panda", "panda_rightfinger"), native_model("panda", "panda_rightfinger")

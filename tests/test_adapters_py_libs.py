@@ -293,6 +293,18 @@ def test_ik_statuses_are_honest(adapter: tuple[Adapter, Any]) -> None:
     assert solved >= spec.ik_min_success * len(q), f"{spec.name}: {solved} of {len(q)}"
 
 
+@pytest.mark.parametrize("far", [1e200, 1e308])
+def test_ik_of_an_absurd_target_is_never_nan(adapter: tuple[Adapter, Any], far: float) -> None:
+    """docs/api.md: a non-finite answer is ``NO_SOLUTION`` with the clamped seed, never NaN
+    (pytorch-kinematics answered NaN before)."""
+    spec, impl = adapter
+    a = model_of(spec, impl, "probot_anno")
+    seed = [0.2, -0.3, 0.4, 0.1, -0.5, 0.0]
+    result = a.inverse_kinematics(((far, 0.0, 0.3), (0.0, 0.0, 0.0, 1.0)), seed)
+    assert result.status == IKStatus.NO_SOLUTION
+    assert all(math.isfinite(v) for v in result.joint_values), result.joint_values
+
+
 def test_ik_is_deterministic_and_in_contract_form(adapter: tuple[Adapter, Any]) -> None:
     spec, impl = adapter
     a, b = model_of(spec, impl, "kinova"), native.RobotModel(robot_path("kinova"))
