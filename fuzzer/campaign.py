@@ -81,6 +81,9 @@ class CampaignOptions:
     """``--seeds-from-bag``: a bag whose messages of the campaign's type become seeds."""
     max_len: int = int(DEFAULT_FLAGS["-max_len"])
     """The ``-max_len`` libFuzzer gets unless given (``libfuzzer_flags.default_max_len``)."""
+    drawn_note: str = ""
+    """What to say of a ``-seed`` drawn for this campaign, once its targets have loaded (not before
+    an error that ends it)."""
 
 
 def libfuzzer_mutate(data: bytes, max_size: int) -> bytes:
@@ -100,6 +103,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     started = time.time()  # crash files since then are this run's (the dry run's included)
     # the targets load before Atheris (for fuzzer.dry_run); ``instrument`` rewrites them in place
     session = Session.open(config)
+    if options.drawn_note:
+        reporting.info(options.drawn_note)
     child = os.environ.get(CHILD_ENV) == "1"
     if child:
         defer_to_next_input()  # a worker's SIGINT, in its start-up too, ends it at an input's start

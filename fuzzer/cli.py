@@ -18,10 +18,12 @@ Arguments starting with a single dash go to libFuzzer unchanged
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactsUnwritable
 from fuzzer.cli_options import (
@@ -46,7 +48,6 @@ about 800 GB, more than the disk holds, with no word until it was stopped."""
 def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     """A campaign (``fuzz_diff.py CORPUS_DIR ...``): ``flags`` are libFuzzer's, ``args`` the
     options ``main`` parsed (``campaign_parser``; one parser, one parse)."""
-    from fuzzer.campaign import CampaignOptions, run
 
     # Files next to libFuzzer flags are libFuzzer's business (-minimize_crash, running single inputs).
     if args.seeds is not None and not 0 <= args.seeds <= MAX_SEEDS:
@@ -70,6 +71,21 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             "(`fuzz_diff.py replay FILE` replays a file, `fuzz_diff.py show FILE` prints it)"
         )
     config, _ = config_from(args)
+    created = [p for p in (*args.corpus, args.artifacts) if not p.exists()]
+    try:
+        return _campaign(flags, args, config)
+    except (UsageError, ConfigError):
+        for path in created:  # a refused campaign leaves no empty folder behind
+            with contextlib.suppress(OSError):
+                path.rmdir()
+        raise
+
+
+def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> int:
+    """The rest of ``campaign_main``, once the run's configuration is known."""
+    from fuzzer.artifacts import travel
+    from fuzzer.campaign import CampaignOptions, run
+
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         merge = any(int_flag(tuple(flags), name, 0) > 0 for name in ("-merge", "-set_cover_merge"))
         folders = travel.prepare_campaign(args.corpus, args.artifacts, merge=merge)
@@ -104,11 +120,12 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             f"--max-steps {args.max_steps}: only a scenario has steps; --op {config.op} ignores it"
         )
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
-    if drawn is not None:
-        reporting.info(
-            f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "
-            f"the same command with -seed={drawn} --seed={seed} repeats its choices"
-        )
+    drawn_note = (
+        f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "
+        f"the same command with -seed={drawn} --seed={seed} repeats its choices"
+        if drawn is not None
+        else ""
+    )
     bag_problem = None if args.seeds_from_bag is None else file_problem(args.seeds_from_bag)
     if bag_problem is not None:
         raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: {bag_problem}")
@@ -140,6 +157,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         verbose=args.verbose,
         seeds_from_bag=args.seeds_from_bag,
         max_len=default_max_len(config.op, config.max_steps),
+        drawn_note=drawn_note,
     )
     try:
         libfuzzer_argv(options)  # a word a -fork parent's shell would split: refused before start-up

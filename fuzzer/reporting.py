@@ -166,6 +166,8 @@ def summary(
         + (
             f"{stats.max_difference:.3g} {stats.max_difference_unit}"
             if stats.max_difference_unit
+            else "not finite (every value divergence had an infinite or NaN difference)"
+            if stats.divergent.get("value")
             else "none (no value divergence)"
         ),
     ]

@@ -110,3 +110,14 @@ def test_the_summary_counts_the_dry_run_apart(capsys: pytest.CaptureFixture[str]
     assert "(ill_conditioned 1, value 2)" in err
     reporting.summary(Stats(), 0, "arts", ["c"], [], dry_run={"processes": 0, "execs": 0})
     assert "dry run" not in capsys.readouterr().err
+
+
+def test_value_divergences_of_no_finite_difference_are_not_said_to_be_none(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    stats = Stats()
+    stats.divergent["value"] = 3  # each of an infinite difference: none became max_difference
+    reporting.summary(stats, 0, "arts", ["c"], [])
+    assert "largest value difference: not finite" in capsys.readouterr().err
+    reporting.summary(Stats(), 0, "arts", ["c"], [])
+    assert "largest value difference: none (no value divergence)" in capsys.readouterr().err

@@ -441,3 +441,30 @@ def test_max_steps_outside_a_scenario_is_said_to_do_nothing(tmp_path: Path) -> N
     run = fuzz(str(tmp_path / "c"), "-runs=1", "--op=move", "--max-steps=5", f"--artifacts={tmp_path / 'a'}")
     assert run.returncode == 0, run.stderr[-2000:]
     assert "--max-steps 5: only a scenario has steps; --op move ignores it" in run.stderr
+
+
+WHITESPACE_NAMES = (
+    '<robot name="r"><link name="base"/><link name="l\n1"/><link name="l2"/>'
+    '<joint name="j\t1" type="revolute"><parent link="base"/><child link="l\n1"/><axis xyz="0 0 1"/>'
+    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+    '<joint name="j2" type="revolute"><parent link="l\n1"/><child link="l2"/><axis xyz="0 0 1"/>'
+    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
+)
+
+
+def test_targets_that_read_different_robots_are_refused_and_leave_no_folder(tmp_path: Path) -> None:
+    """A literal tab or newline in a name: urdfdom keeps it, the twin's expat reads a space. Every
+    input diverged for that alone (493 "status" divergences in 10 s); now refused at start-up,
+    before the drawn -seed is announced, and the folders made for the campaign are removed."""
+    robot = tmp_path / "ws.urdf"
+    robot.write_text(WHITESPACE_NAMES)
+    corpus, artifacts = tmp_path / "c", tmp_path / "a"
+    run = fuzz(str(corpus), "--op=fk", "-runs=10", f"--robot={robot}", f"--artifacts={artifacts}")
+    assert run.returncode == 2, run.stderr[-2000:]
+    assert "the targets read different robots from ws.urdf: joint 0 is 'j\\t1' to native" in run.stderr
+    assert "drawn for this campaign" not in run.stderr
+    assert not corpus.exists() and not artifacts.exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    run = fuzz(str(kept), "--op=fk", "-runs=10", "--robot=nosuchbot", f"--artifacts={artifacts}")
+    assert run.returncode == 2 and kept.is_dir() and not artifacts.exists(), run.stderr[-2000:]

@@ -111,6 +111,20 @@ def test_length_mismatch_and_non_finite_values_are_value_divergences() -> None:
     assert c.kind is Kind.VALUE and c.difference == math.inf
 
 
+def test_the_same_non_finite_values_on_both_sides_agree() -> None:
+    """Two targets that give the same NaN or infinity do not differ (a URDF whose 1e308 m
+    origins overflow): each field is judged on its own, and the one that differs is named."""
+    nan_pose = ok(joint_values=(math.nan, 0.0), position=(math.nan,) * 3, orientation=(math.nan,) * 4)
+    assert compare(nan_pose, nan_pose, TOL).kind is Kind.AGREE
+    far = ok(position=(math.inf, 0.0, 0.0), orientation=(0.0, 0.0, 0.0, 1.0))
+    assert compare(far, far, TOL).kind is Kind.AGREE
+    poisoned = ok(position=(math.inf, 0.0, 0.0), orientation=(math.nan,) * 4)
+    c = compare(far, poisoned, TOL)
+    assert c.kind is Kind.VALUE and c.field == "orientation" and c.difference == math.inf
+    c = compare(ok(position=(math.inf, 0.0, 0.0)), ok(position=(-math.inf, 0.0, 0.0)), TOL)
+    assert c.kind is Kind.VALUE and c.field == "position"
+
+
 @pytest.mark.parametrize(
     ("difference", "expected"),
     [(0.0, -99), (5e-7, -7), (1e-2, -2), (0.05, -2), (3.0, 0), (1e9, 3), (1e-30, -16)],

@@ -64,7 +64,9 @@ def wrap(delta: float) -> float:
 
 
 def _finite_gap(a: float, b: float) -> float:
-    if a == b:
+    """``|a - b|``; 0 for the same value (the same infinity, or NaN on both sides: no difference
+    between the targets, whatever each is worth), inf for a gap that is not finite."""
+    if a == b or (a != a and b != b):
         return 0.0
     gap = abs(a - b)
     return gap if math.isfinite(gap) else math.inf
@@ -154,7 +156,7 @@ def _joint_diff(
 
 
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
-    gap = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
+    gap = math.sqrt(sum(_finite_gap(x, y) ** 2 for x, y in zip(a, b, strict=True)))
     gap = gap if math.isfinite(gap) else math.inf
     flip = any((x < 0) != (y < 0) and abs(x - y) > tol.metres for x, y in zip(a, b, strict=True))
     return _FieldDiff("position", gap, gap, tol.metres, flip, unit="m")
@@ -171,6 +173,8 @@ def rotation_distance(a: tuple[float, ...], b: tuple[float, ...]) -> float:
 
 def _orientation_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
     raw = max((_finite_gap(x, y) for x, y in zip(a, b, strict=True)), default=0.0)
+    if raw == 0.0:  # the same numbers, non-finite ones too: one rotation, whatever it is
+        return _FieldDiff("orientation", 0.0, 0.0, tol.radians, False)
     minus = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
     plus = math.sqrt(sum((x + y) ** 2 for x, y in zip(a, b, strict=True)))
     distance = rotation_distance(a, b)

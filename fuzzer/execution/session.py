@@ -154,6 +154,7 @@ class Session:
                 raise ConfigError(
                     f"target {spec!r}: its RobotModel({urdf.name}) raised {type(exc).__name__}: {exc}"
                 ) from None
+        same_robot(runners[0], runners[1], urdf.name)
         return cls(config, urdf, (runners[0], runners[1]), registry)
 
     @property
@@ -209,6 +210,37 @@ class Session:
 
     def robot_digest(self) -> str:
         return hashlib.sha256(self.urdf.read_bytes()).hexdigest()
+
+
+def same_robot(a: Any, b: Any, name: str) -> None:
+    """Refuse two targets that read different joints or links from one URDF: every input would
+    diverge for that reason alone (docs/api.md, "Known divergences": a tab, newline or carriage
+    return written as such in a name is a space to the twin's expat and kept by urdfdom).
+
+    Raises
+    ------
+    ConfigError
+        Naming the first name that differs, as each target read it.
+    """
+    for what, noun in (("joint_names", "joint"), ("link_names", "link")):
+        first, second = (getattr(getattr(r, "model", None), what, None) for r in (a, b))
+        if first is None or second is None:
+            continue  # a target that does not say (a ROS node's proxy): nothing to compare
+        first, second = list(first), list(second)
+        if first == second:
+            continue
+        at = next(
+            (i for i, (x, y) in enumerate(zip(first, second, strict=False)) if x != y),
+            min(len(first), len(second)),
+        )
+        shown = [repr(names[at]) if at < len(names) else "none" for names in (first, second)]
+        raise ConfigError(
+            f"the targets read different robots from {name}: {noun} {at} is {shown[0]} to {a.name} "
+            f"and {shown[1]} to {b.name} ({len(first)} and {len(second)} {noun}s); every input would "
+            "diverge for that alone (a tab, newline or carriage return written as such in a name is a "
+            "space to an XML parser that normalizes attributes: write it as &#9;, &#10; or &#13;, or "
+            "not at all)"
+        )
 
 
 @functools.cache
