@@ -106,6 +106,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if options.drawn_note:
         reporting.info(options.drawn_note)
     child = os.environ.get(CHILD_ENV) == "1"
+    if not session.reference.dof and not child:
+        reporting.warn(f"{session.urdf.name}: no joint moves its tip link; every input makes the same call")
     if child:
         defer_to_next_input()  # a worker's SIGINT, in its start-up too, ends it at an input's start
         end_with_supervisor()  # a -jobs worker outlived a supervisor killed alone

@@ -63,14 +63,22 @@ class Urdf:
 
 
 def _parse_version(text: str) -> None:
-    pieces = [p for p in text.split(".") if p]
+    # urdfdom's split_string: every piece before a '.', empty ones too, then the rest if any
+    # ("1.0." is two pieces, "1..0" and ".1.0" three)
+    pieces = text.split(".")
+    if pieces[-1] == "":
+        pieces.pop()
     if len(pieces) != 2:
         raise invalid("The version attribute should be in the form 'x.y'")
     numbers = []
     for piece in pieces:
+        if not piece:
+            raise invalid("One of the fields of the version attribute is blank")
         m = _LONG.match(piece)
-        if not m or m.end() != len(piece):
+        if not m:
             raise invalid("Version attribute is not an integer")
+        if m.end() != len(piece):
+            raise invalid("Extra characters after the version number")
         value = int(m.group(1))
         if value < 0:
             raise invalid("Version number must be positive")

@@ -468,3 +468,11 @@ def test_targets_that_read_different_robots_are_refused_and_leave_no_folder(tmp_
     kept.mkdir()
     run = fuzz(str(kept), "--op=fk", "-runs=10", "--robot=nosuchbot", f"--artifacts={artifacts}")
     assert run.returncode == 2 and kept.is_dir() and not artifacts.exists(), run.stderr[-2000:]
+
+
+def test_a_robot_with_no_joint_to_move_is_warned_of(tmp_path: Path) -> None:
+    robot = tmp_path / "one.urdf"
+    robot.write_text('<robot name="r"><link name="a"/></robot>')
+    run = fuzz(str(tmp_path / "c"), "--op=fk", "-runs=5", f"--robot={robot}", f"--artifacts={tmp_path / 'a'}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "one.urdf: no joint moves its tip link; every input makes the same call" in run.stderr

@@ -14,7 +14,7 @@ import pytest
 from fuzzer.artifacts.store import load_sidecar
 from fuzzer.execution.session import RunConfig
 from fuzzer.triage.regressions import PromoteError, promote, suite_files
-from fuzzer.triage.replay import Result, replay_file
+from fuzzer.triage.replay import ROBOT_CHANGED, Result, replay_file
 
 FILES = suite_files()
 ROOT = Path(__file__).resolve().parents[1]  # sidecars name crafted URDFs relative to the repository
@@ -69,3 +69,23 @@ def test_promote_again_in_place_and_a_suite_that_is_a_file_are_named(
     for suite in (a_file, a_file / "sub"):
         with pytest.raises(PromoteError, match="cannot hold the crash file"):
             promote(known, fixed=False, suite=suite, trust=True)
+
+
+def test_a_replay_on_another_robot_file_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The sidecar's ``robot_sha256`` against today's file: a robot edited since the campaign
+    made "now agrees" read as a fix, without a word (the URDF probe)."""
+    import json
+    import shutil
+
+    monkeypatch.chdir(ROOT)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+    same = replay_file(known, RunConfig(), {}, trust=True)
+    assert ROBOT_CHANGED not in same.detail
+    copy = tmp_path / known.name
+    shutil.copyfile(known, copy)
+    sidecar = load_sidecar(known)
+    assert sidecar is not None and sidecar["robot_sha256"]
+    sidecar["robot_sha256"] = "0" * 64
+    (tmp_path / f"{known.name}.json").write_text(json.dumps(sidecar))
+    other = replay_file(copy, RunConfig(), {}, trust=True)
+    assert other.result is same.result and ROBOT_CHANGED in other.detail

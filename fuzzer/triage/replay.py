@@ -177,9 +177,29 @@ def replay_file(
         steps = scenario_lines(case, evaluation, tuple(r.name for r in session.runners))
     if unrecorded:
         detail = "; ".join(filter(None, [detail, f"replayed under {describe(config)}"]))
+    elif robot_changed(session, sidecar):
+        detail = "; ".join(filter(None, [detail, ROBOT_CHANGED]))
     if steps:
         detail = f"{detail}; {steps[0]}"  # the step list follows the verdict line (cli_tools.replay_main)
     return Replay(path, result, evaluation, expected, detail, config, not unrecorded, steps=steps)
+
+
+ROBOT_CHANGED = (
+    "the robot file is not the campaign's (its SHA-256 differs from the sidecar's robot_sha256): "
+    "the verdict is on today's file"
+)
+
+
+def robot_changed(session: Session, sidecar: dict[str, Any] | None) -> bool:
+    """Whether the robot file replayed on is not the one the sidecar's campaign ran on (a verdict
+    of "now agrees" would otherwise read as a fix)."""
+    digest = sidecar.get("robot_sha256") if sidecar is not None else None
+    if not isinstance(digest, str) or not digest:
+        return False
+    try:
+        return session.robot_digest() != digest
+    except OSError:
+        return True  # the file is gone or unreadable now: not the campaign's, as far as we know
 
 
 def scenario_lines(case: TestCase, evaluation: Evaluation, targets: tuple[str, ...]) -> tuple[str, ...]:

@@ -101,7 +101,7 @@ void XMLCALL on_start(void* data, const XML_Char* name, const XML_Char** attrs) 
   }
   if (st->depth == 1) st->root_is_robot = std::strcmp(name, "robot") == 0;
   if (st->depth == 2 && st->root_is_robot && std::strcmp(name, "link") == 0 && ++st->links > kMaxLinks) {
-    st->stop(ErrorCode::kUrdfUnsupported, "more than " + std::to_string(kMaxLinks) + " links");
+    st->stop(ErrorCode::kUrdfUnsupported, "has more than " + std::to_string(kMaxLinks) + " links");
     return;
   }
   int count = 0;
