@@ -30,7 +30,8 @@ HOSTILE = [
     (["--targets=native,python,"], "an empty name between its commas"),
     (["--targets=native,no_such_module_xyz:impl"], "cannot import no_such_module_xyz"),
     (["--targets=native,os:path"], "no callable RobotModel"),
-    (["--targets=native,justaname"], "expected native, python or module:attribute"),
+    (["--targets=native,justaname"], "expected native, python, ros_tf or module:attribute"),
+    (["--targets=native,pinocchio"], "or module:attribute (an adapter: adapters.pinocchio_adapter:api)"),
     (["--targets=native,:x"], "expected module:attribute"),
     (["--targets=native,tests.plugins.faults:nothing"], "has no attribute"),
     (

@@ -30,6 +30,17 @@ def module_of(spec: str) -> str:
     return BUILTIN.get(spec, spec).split(":", 1)[0]
 
 
+def _hint(spec: str) -> str:
+    """For a bare library name with an adapter (``pinocchio``): the spec that names it."""
+    name = spec.replace("-", "_")
+    if not name.isidentifier():
+        return ""
+    shipped = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(__file__))), "adapters")
+    adapter = f"{name}_adapter"
+    found = os.path.isfile(os.path.join(shipped, f"{adapter}.py"))
+    return f" (an adapter: adapters.{adapter}:api)" if found else ""
+
+
 def load_target(spec: str) -> Any:
     """Import a target by spec.
 
@@ -46,7 +57,7 @@ def load_target(spec: str) -> Any:
         if not module_name or not attribute:
             raise TargetError(f"target {spec!r}: expected module:attribute")
     else:
-        raise TargetError(f"target {spec!r}: expected native, python or module:attribute")
+        raise TargetError(f"target {spec!r}: expected {', '.join(BUILTIN)} or module:attribute{_hint(spec)}")
     try:
         module = importlib.import_module(module_name)
     except Exception as exc:  # noqa: BLE001 - any import failure is reported the same way
