@@ -101,7 +101,8 @@ def config_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--targets",
         default=None,
-        help="two targets: native, python or module:attribute (default native,python)",
+        help="two targets: native, python, ros_tf or module:attribute, e.g. "
+        "adapters.pinocchio_adapter:api (default native,python)",
     )
     parser.add_argument(
         "--tolerance",
@@ -134,14 +135,15 @@ def config_options(parser: argparse.ArgumentParser) -> None:
     trust_option(parser)
 
 
-def trust_option(parser: argparse.ArgumentParser) -> None:
+def trust_option(parser: argparse.ArgumentParser, overrides: bool = True) -> None:
+    """``--trust-sidecar``; ``overrides``: the parser has ``--targets``, ``--robot``, ``--msg-path``."""
     parser.add_argument(
         "--trust-sidecar",
         action="store_true",
         help="import the targets a crash file's sidecar (or a corpus manifest) names, even if they are "
         "not the builtins, and read the robot file and message folders it names even outside the "
-        "working directory and the file's folder; without it such a file is refused unless "
-        "--targets (--robot, --msg-path) is given",
+        "working directory and the file's folder; without it such a file is refused"
+        + (" unless --targets (--robot, --msg-path) is given" if overrides else ""),
     )
 
 

@@ -173,7 +173,7 @@ def report_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "-o", "--output", type=given_path, default=None, help="output folder (default DIR/report)"
     )
-    trust_option(parser)
+    trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     if not args.directory.is_dir():
         raise UsageError(f"{args.directory}: not a folder")
@@ -200,7 +200,7 @@ def promote_main(argv: Sequence[str]) -> int:
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
     parser.add_argument("--suite", type=given_path, default=SUITE, help=f"suite folder (default {SUITE})")
-    trust_option(parser)
+    trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     status = 0
     for crash in _inputs(args.crash, folders=False):
@@ -222,7 +222,12 @@ def coverage_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("corpus", nargs="+", type=given_path)
     config_options(parser)
-    parser.add_argument("--html", type=given_path, default=Path("coverage_html"), help="HTML output folder")
+    parser.add_argument(
+        "--html",
+        type=given_path,
+        default=Path("coverage_html"),
+        help="HTML output folder (default coverage_html, replaced if there)",
+    )
     args = parser.parse_args(argv)
     from fuzzer.input.paths import PathError, check_input_file
 

@@ -60,13 +60,19 @@ def outside(spec: str, folders: tuple[Path, ...]) -> bool:
         return True
 
 
+OPTIONS_OF = (
+    "replay, minimize and a campaign take it; report, promote, export-bag and view take --trust-sidecar only"
+)
+"""Where the options a refusal suggests (``--targets``, ``--robot``, ``--msg-path``) exist."""
+
+
 def _refuse_outside(what: str, spec: str, source: Path, folders: tuple[Path, ...], option: str) -> None:
     if outside(spec, folders):
         where = " and ".join(dict.fromkeys(os.path.realpath(f) for f in folders))
         raise SidecarError(
             f"{source}: {what} {spec!r} leads outside {where} (symlinks followed), and a file's "
-            f"settings are never followed elsewhere; pass {option} (the same path if you trust it) "
-            "or --trust-sidecar"
+            f"settings are never followed elsewhere; pass {option} (the same path if you trust it; "
+            f"{OPTIONS_OF}) or --trust-sidecar"
         )
 
 
@@ -89,10 +95,12 @@ def safe_robot(spec: str, source: Path, trust: bool = False, folder: Path | None
     except (OSError, ValueError):
         raise SidecarError(
             f"{source}: robot {spec!r} is neither a shipped robot nor an existing file; "
-            "pass --robot NAME_OR_URDF to choose one"
+            f"pass --robot NAME_OR_URDF to choose one ({OPTIONS_OF})"
         ) from None
     if not stat.S_ISREG(info.st_mode):
-        raise SidecarError(f"{source}: robot {spec!r} is not a regular file; pass --robot NAME_OR_URDF")
+        raise SidecarError(
+            f"{source}: robot {spec!r} is not a regular file; pass --robot NAME_OR_URDF ({OPTIONS_OF})"
+        )
     return spec
 
 
@@ -149,9 +157,9 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
             modules = ", ".join(sorted({t.split(":", 1)[0] for t in foreign}))
             raise SidecarError(
                 f"{source} names target {', '.join(foreign)} (module {modules}); code named by a file "
-                "is never imported on its own. To run it, pass --targets "
-                f"{','.join(targets)} (or --trust-sidecar if you trust where the file came from), "
-                "or --targets native,python to replay it on the builtins"
+                "is never imported on its own. To run it, pass --trust-sidecar if you trust where the "
+                f"file came from, or --targets {','.join(targets)}, or --targets native,python to "
+                f"replay it on the builtins ({OPTIONS_OF})"
             )
     robot = config.get("robot", robots.DEFAULT_ROBOT)
     if "robot" not in given:
@@ -162,7 +170,9 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
             if not trust:
                 _refuse_outside("msg_path", root, source, readable_folders(source), "--msg-path DIR")
             if not Path(root).is_dir():
-                raise SidecarError(f"{source}: msg_path {root!r} is not a folder; pass --msg-path")
+                raise SidecarError(
+                    f"{source}: msg_path {root!r} is not a folder; pass --msg-path ({OPTIONS_OF})"
+                )
     tol = config.get("tolerance", {})
     recorded = RunConfig(
         op=config.get("op", "move"),

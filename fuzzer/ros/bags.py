@@ -346,7 +346,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("crash", type=given_path)
     parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
-    trust_option(parser)
+    trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     if not args.crash.is_file():
         raise BagError(f"{args.crash}: no such file")

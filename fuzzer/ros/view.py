@@ -328,7 +328,7 @@ def view_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "--seconds", type=float, default=60.0, help="with --screenshot: the longest wait for both arms (60)"
     )
-    trust_option(parser)
+    trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     if not args.crash.is_file():
         raise ConfigError(f"{args.crash}: no such file")
