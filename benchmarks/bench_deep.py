@@ -148,6 +148,18 @@ def main(argv: list[str] | None = None) -> list[Run]:
     cli.check_unique(parser, bugs=args.bugs, engines=args.engines)
     # tabulating a file writes a plot only where asked: not over the tables' own deep-<mode>.png
     args.plot = args.from_json is None or args.write_md or args.results is not None
+    elsewhere = args.results is not None and args.results.resolve() != RESULTS.resolve()
+
+    def table_only() -> None:
+        """--write-md replaces the mode's table and links its plot in RESULTS: nothing else may."""
+        if args.write_md and elsewhere:
+            parser.error(f"--write-md links the plot in {RESULTS}: --results must be it or not given")
+        if args.write_md and mode != base and args.from_json is None:
+            parser.error(
+                f"--write-md replaces the {args.mode} table: it takes the mode's bugs, engines, trials "
+                "and budget"
+            )
+
     args.results = args.results or RESULTS
     if args.first_seed < 0:
         parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
@@ -158,6 +170,8 @@ def main(argv: list[str] | None = None) -> list[Run]:
                 "--write-md takes the tables' seeds (from 0); --first-seed's trials get files of their own"
             )
         args.stem += f"-seeds{args.first_seed}-{args.first_seed + mode.trials - 1}"
+    if args.from_json is None or args.from_json.suffix != ".jsonl":  # a journal's own refusal first
+        table_only()
     cli.check_folder(parser, args.results)
     if args.from_json is not None:
         partial = args.from_json.suffix == ".jsonl"
@@ -178,6 +192,19 @@ def main(argv: list[str] | None = None) -> list[Run]:
             parser.error(f"{args.from_json}: not a bench_deep results file ({exc})")
         if mode.engines[0] != "full":
             parser.error(f"{args.from_json}: no runs of the full engine")
+        if args.write_md:
+            same = (set(mode.bugs), set(mode.engines), mode.trials, mode.budget) == (
+                set(base.bugs),
+                set(base.engines),
+                base.trials,
+                base.budget,
+            )
+            if not same or {r.seed for r in runs} != set(range(base.trials)):
+                parser.error(
+                    f"{args.from_json}: not the {args.mode} table's bugs, engines, trials, budget and "
+                    f"seeds (0-{base.trials - 1}), which --write-md replaces: tabulate it without --write-md"
+                )
+            mode = base  # its columns in the table's order
         so_far = (
             f"A sweep in progress: the {len(runs)} trials its journal holds so far (a cell counts its own). "
         )

@@ -354,6 +354,17 @@ def render(parser: argparse.ArgumentParser, path: Path, write_md: bool) -> dict[
         ArithmeticError,
     ) as exc:
         parser.error(f"{path}: not a bench_zoo result or journal ({type(exc).__name__}: {exc})")
+    if write_md:
+        table = MODES.get(str(saved.get("mode")))
+        if table is None or (
+            saved.get("first_seed", FIRST_SEED) != FIRST_SEED
+            or list(saved.get("bugs", ())) != [b for b in table.bugs]
+            or list(saved.get("engines", ())) != list(table.engines)
+        ):
+            parser.error(
+                f"{path}: not a table's bugs, engines and seeds (from {FIRST_SEED}), which --write-md "
+                "replaces: tabulate it without --write-md"
+            )
     print(text)
     if write_md:
         write_markdown(text, mode=str(saved.get("mode", "full")))

@@ -141,9 +141,12 @@ def summary(results: Sequence[SeedResult], uniform_inputs: int) -> str:
         lines.append(f"| {source} | {count} | {held.get(source, 0)} |")
     missed = sum(r.detected_at is None for r in results)
     lines.append(f"| (none: after the first stage) | - | {missed} |")
-    # a miss counts as the first index past what was evaluated (censored, as the tables' budget)
-    stage = [r.detected_at if r.detected_at is not None else r.first_stage for r in results]
-    uniform = [r.uniform_at if r.uniform_at is not None else uniform_inputs for r in results]
+    # a miss is later than any detection of either arm: one censoring index for both (the first
+    # stage's miss counted as its own length, 200, against uniform's 400, made an arm that never
+    # detected look significantly sooner than one that did at 250-259)
+    never = max(first.first_stage, uniform_inputs)
+    stage = [r.detected_at if r.detected_at is not None else never for r in results]
+    uniform = [r.uniform_at if r.uniform_at is not None else never for r in results]
     p = mannwhitneyu(stage, uniform).pvalue if stage != uniform else 1.0
     lines += [
         "",
@@ -154,7 +157,8 @@ def summary(results: Sequence[SeedResult], uniform_inputs: int) -> str:
         f"{sum(r.uniform_at is None for r in results)} (of {uniform_inputs} inputs) |",
         "",
         f"Mann-Whitney U, two-sided, first stage against uniform sampling: p = {p:.3g} (a seed "
-        "without a detection counts as the inputs evaluated).",
+        f"without a detection counts as index {never}, past every detection of either arm; so do "
+        "the medians and means above).",
     ]
     return "\n".join(lines)
 
@@ -188,6 +192,10 @@ def main(argv: Sequence[str] | None = None) -> list[SeedResult]:
         )
     if args.seeds < 1 or args.uniform_inputs < 1:
         parser.error("--seeds and --uniform-inputs must be at least 1")
+    if args.first_seed < 0:  # random.Random(-1) is random.Random(1): the seeds would repeat
+        parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
+    if len(set(args.bugs)) < len(args.bugs):
+        parser.error("--bugs names a bug twice")
     if args.out is not None:
         cli.check_out_file(parser, args.out)  # before the first bug's seeds, not after
         if args.out.exists():  # appended to, as each bug ends: a re-run doubled its records

@@ -141,6 +141,22 @@ WAIT_SLICE = 0.5
 """Seconds the main thread waits on a trial before it looks at the signals caught meanwhile."""
 
 
+class NotStarted(RuntimeError):
+    """A trial whose engine ended before it evaluated an input, with a status that is not a
+    normal end: a refused command line or a broken build, not a miss."""
+
+
+def check_started(run: Run) -> None:
+    """Raise :class:`NotStarted` for a trial that never began its search (no first input logged)
+    and ended with a status other than 0 or the detection's kill (-9): kept, it would count as a
+    miss at the budget, and a broken engine would read as one that never finds the bug."""
+    if run.first_input is None and run.returncode not in (0, -9):
+        raise NotStarted(
+            f"{run.engine} did not start on {run.bug} (seed {run.seed}, exit {run.returncode}): "
+            "run its command by hand to see why; the trial is not kept"
+        )
+
+
 def run_sweep(
     book: Journal,
     jobs: Sequence[Job],
@@ -195,6 +211,7 @@ def run_sweep(
             free.put(cpu)
         if abandoned.is_set():
             return None
+        check_started(run)
         book.add(run)
         return run
 
@@ -322,7 +339,10 @@ def sweep_in_journal(
     if done:
         print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
     compile_tree(root)
-    progress = run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle)
+    try:
+        progress = run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle)
+    except NotStarted as exc:  # the trials ended before it stay in the journal: --resume goes on
+        raise SystemExit(f"{exc}; the trials kept so far are in {path}") from None
     if not progress.complete:
         print(progress.stopped(path, args.stop_after, tabulate))
     if progress.interrupted:

@@ -294,3 +294,14 @@ def test_resume_drops_a_last_line_cut_short_before_the_next_pair_is_appended(tmp
         for arm, run in [("old", _run("wrap_past_pi", 1, 0.2)), ("new", _run("wrap_past_pi", 1, 0.18))]:
             handle.write(json.dumps({"arm": arm, **asdict(run)}) + "\n")
     assert len(ab_table.read(out)[1]) == 4
+
+
+def test_the_paired_verdict_goes_the_way_the_signed_ranks_do() -> None:
+    """21 pairs where b is under 1 ms sooner and 19 where it is 1-19 s later: the Wilcoxon test is
+    significant because b is later (W+ 589 against W- 231), where the share of pairs b wins
+    (0.525) said "faster"."""
+    a = [1.0] * 40
+    b = [1.0 - 0.0005] * 21 + [1.0 + s for s in range(1, 20)]
+    p, _, sooner, verdict = ab_table.paired(a, b)
+    assert p < 0.05 and sooner > 0.5 and verdict == "slower"
+    assert ab_table.paired(b, a)[3] == "faster"

@@ -415,6 +415,11 @@ def test_bench_zoo_keeps_a_journal_too_and_runs_in_a_seeded_random_order(
         with pytest.raises(SystemExit):
             bench_zoo.main(["--render", str(tmp_path / "zoo.jsonl"), *extra])
         assert says in capsys.readouterr().err
+    # a finished result that is not a table's (two bugs of the quick mode's three): refused too,
+    # where it replaced BENCHMARKS.md's table
+    with pytest.raises(SystemExit):
+        bench_zoo.main(["--render", str(tmp_path / "whole" / "zoo.json"), "--write-md"])
+    assert "not a table's bugs, engines and seeds" in capsys.readouterr().err
     kept = (tmp_path / "zoo.jsonl").read_bytes()
     header = json.loads(kept.split(b"\n")[0])
     for name, text, says in (
@@ -716,3 +721,22 @@ def test_compile_tree_compiles_again_a_module_changed_within_the_second(tmp_path
     module.write_text("X = 2\n")  # and back, again within the second
     os.utime(module, ns=(stamp, stamp))
     assert sweeps.stale(module), "the importer would not load this bytecode"
+
+
+def test_a_trial_whose_engine_never_started_stops_the_sweep(tmp_path: Path) -> None:
+    """A refused command line (exit 2, no input evaluated) was kept as a miss at the budget:
+    an engine that could not start read as one that never finds the bug."""
+
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        bug, engine, seed = job
+        status = 2 if engine == "full" and seed == 1 else 0
+        return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, status)
+
+    bug = bench_deep.BUGS["narrow_band"]
+    jobs = [(bug, "full", seed) for seed in range(3)]
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full",), 3, 1.0, "c" * 40)
+    book, _ = journal.open_sweep(tmp_path / "j.jsonl", sweep, tmp_path, resume=False, restart=False)
+    with pytest.raises(sweeps.NotStarted, match="full did not start on narrow_band \\(seed 1, exit 2\\)"):
+        sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    kept = journal.read(tmp_path / "j.jsonl")[1]
+    assert 0 in [r.seed for r in kept] and 1 not in [r.seed for r in kept]

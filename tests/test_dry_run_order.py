@@ -37,3 +37,22 @@ def test_bad_arguments_are_named(argv: list[str], message: str, capsys: pytest.C
     with pytest.raises(SystemExit) as exited:
         dry_run_order.main(argv)
     assert exited.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_a_miss_is_later_than_any_detection_of_either_arm() -> None:
+    """A first stage that never detects (200 inputs) against uniform sampling detecting at
+    250-259 of 400: the first stage's misses counted as 200 made it look significantly sooner."""
+    results = [
+        dry_run_order.SeedResult("b", seed, 200, None, None, {"uniform": 200}, 250 + seed)
+        for seed in range(10)
+    ]
+    table = dry_run_order.summary(results, 400)
+    rows = {line.split("|")[1].strip(): line for line in table.splitlines() if line.startswith("| ")}
+    assert "| 400 |" in rows["first stage"] and "| 254.5 |" in rows["uniform sampling"]
+
+
+def test_a_negative_first_seed_and_a_bug_named_twice_are_refused() -> None:
+    with pytest.raises(SystemExit):
+        dry_run_order.main(["--bugs", "wrap_past_pi", "--first-seed", "-1"])
+    with pytest.raises(SystemExit):
+        dry_run_order.main(["--bugs", "wrap_past_pi", "wrap_past_pi"])

@@ -327,6 +327,22 @@ def test_survival_and_markdown() -> None:
     assert "(1/2)" in row  # a detection after the budget is not one within it
 
 
+def test_the_median_cell_is_over_all_the_trials() -> None:
+    """Detections at 1..7 s and three misses: the median of the ten trials is 5.5 s (the cell
+    said 4.0, the upper middle of the seven detections alone); 1..10 s: 5.5 (it said 6.0)."""
+    mode = deep_stats.Mode(("narrow_band",), 10, 10.0, ("full",))
+
+    def cell(runs: list[Any]) -> str:
+        table = deep_stats.markdown(runs, mode, "cmd").splitlines()
+        return next(ln for ln in table if ln.startswith("| narrow_band")).split("|")[2].strip()
+
+    seven = [_run("full", i, float(i + 1)) for i in range(7)] + [_run("full", 7 + i, None) for i in range(3)]
+    assert cell(seven) == "5.5 (7/10)"
+    assert cell([_run("full", i, float(i + 1)) for i in range(10)]) == "5.5 (10/10)"
+    half = [_run("full", i, 1.0) for i in range(5)] + [_run("full", 5 + i, None) for i in range(5)]
+    assert cell(half) == ">10 (5/10)"
+
+
 def test_a_verdict_stands_corrected_only_below_alpha_over_the_comparisons() -> None:
     """60-88 comparisons per table: at p < 0.05 each, one true tie in 40 comes out "slower" by
     chance. Bonferroni keeps a verdict at p < 0.05 / the table's comparisons."""
@@ -441,14 +457,31 @@ def test_the_full_and_short_tables_have_sections_of_their_own(tmp_path, monkeypa
         written.append(marks)
 
     monkeypatch.setattr(bench_deep, "replace_section", replace_section)
-    source = tmp_path / "runs.json"
-    runs = [_run(e, i, 1.0 + i, "narrow_band", "fk") for e in ("full", "uniform") for i in range(3)]
-    source.write_text(json.dumps([asdict(r) for r in runs]))
+    monkeypatch.setattr(bench_deep, "RESULTS", tmp_path)  # the plot goes there, not into the tree
     for mode in ("full", "short"):
-        bench_deep.main(
-            ["--mode", mode, "--from-json", str(source), "--write-md", *("--results", str(tmp_path))]
-        )
+        table = bench_deep.MODES[mode]
+        source = tmp_path / f"runs-{mode}.json"
+        runs = [
+            Run(bug, engine, seed, table.budget, 1.0 + seed, 1, 100, table.budget, bench_deep.BUGS[bug].op, 0)
+            for bug in table.bugs
+            for engine in table.engines
+            for seed in range(table.trials)
+        ]
+        source.write_text(json.dumps([asdict(r) for r in runs]))
+        bench_deep.main(["--mode", mode, "--from-json", str(source), "--write-md"])
     assert written == [
         ("<!-- bench_deep_full:begin -->", "<!-- bench_deep_full:end -->"),
         ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->"),
     ]
+    # a file that is not the table's (one bug of it, three trials), or a plot elsewhere: refused
+    small = tmp_path / "small.json"
+    small.write_text(
+        json.dumps([asdict(_run(e, i, 1.0, "narrow_band")) for e in ("full", "uniform") for i in range(3)])
+    )
+    with pytest.raises(SystemExit):
+        bench_deep.main(["--mode", "short", "--from-json", str(small), "--write-md"])
+    with pytest.raises(SystemExit):
+        bench_deep.main(
+            ["--mode", "short", "--from-json", str(source), "--write-md", "--results", str(tmp_path / "x")]
+        )
+    assert len(written) == 2
