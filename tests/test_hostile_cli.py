@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from tests.support import fuzz
+from tests.support import ROOT, SCRIPT, fuzz
 
 if TYPE_CHECKING:
     from fuzzer.campaign import CampaignOptions
@@ -477,3 +477,26 @@ def test_a_robot_with_no_joint_to_move_is_warned_of(tmp_path: Path) -> None:
     run = fuzz(str(tmp_path / "c"), "--op=fk", "-runs=5", f"--robot={robot}", f"--artifacts={tmp_path / 'a'}")
     assert run.returncode == 0, run.stderr[-2000:]
     assert "one.urdf: no joint moves its tip link; every input makes the same call" in run.stderr
+
+
+def test_show_into_a_reader_that_leaves_early_ends_with_141(tmp_path: Path) -> None:
+    """``show DIR | head``: the reader took 65,536 of the bytes and left; the program ended with
+    status 0, the rest lost without a word. Now the next write's broken pipe ends it with 141."""
+    import shutil
+    import subprocess
+
+    for source in sorted((ROOT / "corpus-scenario").glob("seed-*"))[:40]:
+        shutil.copy(source, tmp_path / source.name)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    run = subprocess.Popen(
+        [sys.executable, SCRIPT, "show", str(tmp_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    assert run.stdout is not None and run.stderr is not None
+    assert run.stdout.read(10)
+    run.stdout.close()  # the reader leaves, as head does
+    err = run.stderr.read().decode()
+    assert run.wait(timeout=60) == 141, err
+    assert "Traceback" not in err
