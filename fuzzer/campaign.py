@@ -247,6 +247,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         timeout_code=timeout_code,
         interrupted=interrupted,
         dry=dry,
+        leftovers=left,
     )
     once = on_exit(end)
     if dry is not None:

@@ -11,13 +11,14 @@ an exception of a target, Ctrl-C). It answers the status the process should end 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fuzzer import dry_run, reporting
 from fuzzer.artifacts.divlog import worker_totals
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
+from fuzzer.execution import guard
 from fuzzer.processes import ERROR_EXIT, Found, exit_status, failed_job_status, int_flag, new_artifacts
 from fuzzer.signals import INT_EXIT, TERM_EXIT, stop_requested, terminated
 
@@ -62,6 +63,8 @@ class CampaignEnd:
     interrupted: int
     """libFuzzer's ``-interrupted_exitcode``: a worker's status after Ctrl-C."""
     dry: dry_run.Stages | None = None
+    leftovers: list[Path] = field(default_factory=list)
+    """Written-ahead inputs found at the start (``guard.leftovers``), settled by a normal end."""
     in_callback: bool = False
     unwritable: bool = False
 
@@ -95,6 +98,9 @@ class CampaignEnd:
             code = None
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
+        if code in (0, 1) and self.leftovers:  # libFuzzer ran them as seeds, and they did no harm
+            for path in guard.settle(self.leftovers):
+                reporting.info(f"{path}: the input a campaign died on ran as a seed, harmless now; kept")
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
         self._summary(found, totals, code, meaning, dry)
         return code

@@ -13,7 +13,7 @@ import pytest
 
 from fuzzer.execution import guard
 from fuzzer.input.testcase import decode
-from tests.support import fuzz, python
+from tests.support import ROOT, fuzz, python
 
 DATA = b'{"rrosfuzz": 1, "msg_type": "sensor_msgs/JointState", "message": {}}'
 
@@ -161,3 +161,20 @@ def test_off_the_main_thread_the_first_input_is_left_to_the_child(tmp_path: Path
     thread.join()
     assert here == [None] and made == []
     assert guard.leftovers([tmp_path]) == []
+
+
+def test_a_leftover_that_runs_without_harm_is_kept_under_its_sha1(tmp_path: Path) -> None:
+    """A written-ahead input libFuzzer then ran as a seed, the campaign ending normally: renamed
+    to libFuzzer's name for it, so the next campaign neither warns again nor gives up evaluating
+    its first input in process (the file stayed for good; the docs probe)."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    corpus.mkdir()
+    data = next(p for p in sorted((ROOT / "corpus").iterdir()) if p.name.startswith("seed-")).read_bytes()
+    digest = hashlib.sha1(data).hexdigest()
+    (corpus / f"{guard.PENDING}{digest}").write_bytes(data)
+    run = fuzz(str(corpus), "-runs=30", "-seed=3", f"--artifacts={artifacts}", timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "a campaign ended while it evaluated this input" in run.stderr
+    assert guard.leftovers([corpus]) == [] and (corpus / digest).read_bytes() == data
+    again = fuzz(str(corpus), "-runs=30", "-seed=3", f"--artifacts={artifacts}", timeout=300)
+    assert again.returncode == 0 and "a campaign ended while it evaluated" not in again.stderr

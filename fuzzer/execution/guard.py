@@ -12,7 +12,8 @@ input in the campaign's process instead, as libFuzzer evaluates its own seeds, w
   meanwhile (a deadly signal, or the hang guard's last resort), the file stays: a rerun of the
   same command finds it among the seeds (and says so, ``leftovers``), libFuzzer runs it and
   reports it as it reports any crash or timeout, and no input is evaluated in process while
-  such a file is there;
+  such a file is there; a campaign that then ends normally renames it to its SHA-1 (``settle``):
+  it ran as a seed without a crash;
 * **a hang guard**: ``SIGALRM`` after ``budget`` seconds (libFuzzer's ``-timeout``) writes the
   input as ``timeout-<sha1>`` to the artifacts folder, as libFuzzer does, says so, and ends the
   campaign with libFuzzer's timeout exit code; a target that never returns to the interpreter
@@ -53,6 +54,23 @@ def leftovers(folders: Sequence[Path]) -> list[Path]:
         with contextlib.suppress(OSError):
             found += sorted(p for p in folder.iterdir() if p.name.startswith(PENDING) and p.is_file())
     return found
+
+
+def settle(left: Sequence[Path]) -> list[Path]:
+    """Written-ahead inputs a campaign found (``leftovers``) and libFuzzer then ran as seeds, the
+    campaign ending normally (statuses 0 and 1): kept in the corpus under libFuzzer's own name,
+    the SHA-1 of their bytes, so that the next campaign evaluates its first input in process
+    again (a leftover stayed for good, and with it the warning). Returns the files kept."""
+    kept: list[Path] = []
+    for path in left:
+        with contextlib.suppress(OSError):
+            target = path.with_name(path.name.removeprefix(PENDING))
+            if target.exists():
+                path.unlink()
+            else:
+                path.rename(target)
+            kept.append(target)
+    return kept
 
 
 def write_ahead(corpus: Path, data: bytes) -> Path:
