@@ -102,7 +102,10 @@ class CampaignEnd:
             for path in guard.settle(self.leftovers):
                 reporting.info(f"{path}: the input a campaign died on ran as a seed, harmless now; kept")
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
-        self._summary(found, totals, code, meaning, dry)
+        shown = code
+        if code is None and status is None and self.in_callback:
+            shown = error_code  # libFuzzer's status for the exception it reports next (--stop-on-divergence)
+        self._summary(found, totals, shown, meaning, dry)
         return code
 
     def _jobs(self) -> bool:
