@@ -137,6 +137,7 @@ def main(argv: list[str] | None = None) -> dict[str, list[tuple[Run, Run]]]:
     if not args.bugs or args.out is None:
         parser.error("--bugs and --out are needed to run (or --from-json FILE to tabulate)")
     cli.check_sizes(parser, trials=args.trials)
+    cli.check_trials(parser, args.trials, args.first_seed)
     cli.check_campaign_seconds(parser, budget=args.budget)
     cli.check_unique(parser, bugs=args.bugs)
     if args.first_seed < 1:

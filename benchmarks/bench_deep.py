@@ -144,6 +144,7 @@ def main(argv: list[str] | None = None) -> list[Run]:
     if mode.engines[0] != "full":
         parser.error("the first engine must be 'full' (the one compared against the others)")
     cli.check_sizes(parser, trials=args.trials)
+    cli.check_trials(parser, mode.trials, args.first_seed)
     cli.check_campaign_seconds(parser, budget=args.budget)
     cli.check_unique(parser, bugs=args.bugs, engines=args.engines)
     # tabulating a file writes a plot only where asked: not over the tables' own deep-<mode>.png

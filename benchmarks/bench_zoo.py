@@ -417,6 +417,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     sweeps.check_arguments(parser, args)
     cli.check_sizes(parser, seeds=args.seeds)
+    cli.check_trials(parser, args.seeds or MODES[args.mode].seeds, args.first_seed, "seeds")
     cli.check_campaign_seconds(parser, budget=args.budget)
     cli.check_unique(parser, bugs=args.bugs, engines=args.engines)
     if args.render is not None:

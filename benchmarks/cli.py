@@ -26,6 +26,27 @@ def check_folder(parser: argparse.ArgumentParser, folder: Path) -> None:
         parser.error(f"{folder}: cannot hold the results ({exc.strerror or exc})")
 
 
+MAX_SECONDS = 2**31 - 1
+"""The longest campaign libFuzzer's ``-max_total_time`` (a C int) can hold."""
+
+MAX_TRIALS = 10_000
+"""The most trials per (bug, engine) a journal takes (``benchmarks.journal``)."""
+
+MAX_SEED = 2**31
+"""The largest seed a journal takes (``benchmarks.journal``; libFuzzer's ``-seed`` goes to 2**32 - 1)."""
+
+
+def check_trials(parser: argparse.ArgumentParser, trials: int, first_seed: int, name: str = "trials") -> None:
+    """The parser's error for more trials than a journal takes, or seeds past its largest: the
+    sweep would otherwise plan them all (99,999,999 trials: a MemoryError) or write a journal its
+    own ``--render`` then refuses."""
+    if trials > MAX_TRIALS:
+        parser.error(f"--{name} must be at most {MAX_TRIALS}, not {trials}")
+    last = first_seed + trials - 1
+    if last > MAX_SEED:
+        parser.error(f"--first-seed and --{name} reach seed {last}, past {MAX_SEED}")
+
+
 def check_campaign_seconds(parser: argparse.ArgumentParser, **given: float | None) -> None:
     """The parser's error for a campaign's length (given as in :func:`check_sizes`) that libFuzzer
     cannot keep: ``-max_total_time`` counts whole seconds, and 0 means no limit at all, so 0.5 s
@@ -33,6 +54,11 @@ def check_campaign_seconds(parser: argparse.ArgumentParser, **given: float | Non
     baselines 2.5."""
     check_sizes(parser, **given)
     for name, value in given.items():
+        if value is not None and value > MAX_SECONDS:  # 1e308 passed, and a baseline ran for good
+            parser.error(
+                f"--{name.replace('_', '-')} must be at most {MAX_SECONDS} s (libFuzzer's "
+                f"-max_total_time is an int), not {value}"
+            )
         if value is not None and value != int(value):
             parser.error(
                 f"--{name.replace('_', '-')} must be a whole number of seconds (libFuzzer's "

@@ -35,6 +35,8 @@ from dataclasses import MISSING, asdict, dataclass, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from benchmarks import cli
+
 if TYPE_CHECKING:  # bench_zoo imports this module
     from benchmarks.bench_zoo import Run
 
@@ -101,7 +103,7 @@ class Sweep:
         return {"journal": format_of(row.pop("tool")), **row}
 
 
-MAX_TRIALS = 10_000
+MAX_TRIALS = cli.MAX_TRIALS
 """The most trials (or seeds) per cell a journal's header may name: a sweep plans every one of
 them, so a damaged header's 10**7 would fill the memory before anything is read."""
 
@@ -146,7 +148,7 @@ def sweep_of(header: dict[str, Any], tool: str) -> Sweep:
             good = isinstance(value, kinds[name]) and (name == "replay" or not isinstance(value, bool))
         if not good:
             raise JournalError(f"the header's {name} is missing or not what it should be: {value!r}")
-    if not 1 <= values["trials"] <= MAX_TRIALS or not 0 <= values["first_seed"] <= 2**31:
+    if not 1 <= values["trials"] <= MAX_TRIALS or not 0 <= values["first_seed"] <= cli.MAX_SEED:
         raise JournalError(
             f"the header's trials {values['trials']!r} or first_seed {values['first_seed']!r} is out of "
             f"range (trials 1..{MAX_TRIALS})"

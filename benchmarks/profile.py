@@ -163,6 +163,9 @@ def record(op: str, seconds: float, seed: int, rate: int, out: Path) -> None:
         done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
     if not out.is_file() or out.stat().st_size == 0:
         raise SystemExit(f"profile: py-spy wrote no profile (exit {done.returncode}):\n{done.stderr[-2000:]}")
+    if done.returncode not in (0, 1):  # the campaign's own statuses; anything else is no campaign
+        out.unlink(missing_ok=True)
+        raise SystemExit(f"profile: the campaign failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -182,6 +185,8 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     cli.check_sizes(parser, rate=args.rate)
     cli.check_campaign_seconds(parser, seconds=args.seconds)
+    if not 1 <= args.seed <= 2**32 - 1:  # libFuzzer's -seed=0 is the clock's: no profile repeats
+        parser.error(f"--seed must be from 1 to {2**32 - 1}, not {args.seed}")
     if args.source is not None:
         path, title = args.source, args.source.name
     else:

@@ -71,6 +71,13 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_native_cov.main, ["--configs", ","], "unknown configuration(s) (none given)"),
     (bench_native_cov.main, ["--configs", "mimic_ignored"], "unknown configuration(s) mimic_ignored"),
     (bench_engine.main, ["--seeds", "-1"], "--seeds must be 1 or more"),
+    # sizes a sweep could not hold: planned whole (a MemoryError), run for good, or a journal refused
+    (bench_deep.main, ["--mode", "quick", "--trials", "99999999"], "--trials must be at most 10000"),
+    (bench_deep.main, ["--mode", "quick", "--budget", "1e308"], "--budget must be at most 2147483647 s"),
+    (bench_zoo.main, ["--seeds", "10001"], "--seeds must be at most 10000, not 10001"),
+    (profile.main, ["--seed", "0"], "--seed must be from 1 to 4294967295, not 0"),
+    (profile.main, ["--seed", "99999999999"], "--seed must be from 1 to 4294967295"),
+    (bench_deep.main, ["--first-seed", "99999999999"], "reach seed 100000000000, past 2147483648"),
     (bench_engine.main, ["--ops", "nosuch"], "invalid choice: 'nosuch'"),
     (probe_ik_stall.main, ["probot_anno", "--seed", "-1"], "--seed must be 0 or more"),
     (bench_targets.main, ["--robot", "a-file"], "--robot a-file:"),
