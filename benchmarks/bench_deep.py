@@ -250,7 +250,8 @@ def load_runs(path: Path) -> list[Run]:
     """The runs of a deep-<mode>.json, or those of a journal (``.jsonl``) so far (fields this
     version does not know are dropped)."""
     if path.suffix == ".jsonl":
-        runs = journal.read(path)[1]
+        header, held = journal.read(path)
+        runs = journal.planned(header, held)
         if not runs:
             raise ValueError("the journal holds no finished trial yet")
         return runs

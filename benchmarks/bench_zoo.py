@@ -331,6 +331,7 @@ def render(parser: argparse.ArgumentParser, path: Path, write_md: bool) -> dict[
         if path.suffix == ".jsonl":
             header, runs = journal.read(path, "bench_zoo")
             sweep = journal.sweep_of(header, "bench_zoo")
+            runs = journal.planned(header, runs, "bench_zoo")
             unknown = sorted({b for b in [*sweep.bugs, *(r.bug for r in runs)] if b not in BY_NAME})
             if unknown:
                 raise ValueError(f"unknown bugs {unknown}")

@@ -319,6 +319,19 @@ def read(path: Path, tool: str = "bench_deep") -> tuple[dict[str, Any], list[Run
     return header, runs
 
 
+def planned(header: dict[str, Any], runs: list[Run], tool: str = "bench_deep") -> list[Run]:
+    """The trials of ``runs`` that the journal's sweep (``header``) plans, each once (the first
+    line of a trial written twice), as ``--resume`` holds them: a tabulation counted a line
+    repeated, and a trial of a seed outside the sweep's, into its cells."""
+    sweep = sweep_of(header, tool)
+    seeds = range(sweep.first_seed, sweep.first_seed + sweep.trials)
+    held: dict[tuple[str, str, str, int], Run] = {}
+    for run in runs:
+        if run.bug in sweep.bugs and run.engine in sweep.engines and run.seed in seeds:
+            held.setdefault((run.bug, run.engine, run.op, run.seed), run)
+    return list(held.values())
+
+
 def check(path: Path, header: dict[str, Any], sweep: Sweep, root: Path) -> None:
     """Raise a :class:`JournalError` naming what differs when ``header`` is not ``sweep``'s,
     or when ``root`` does not hold the code of the journal's commit (:func:`same_code`)."""

@@ -85,6 +85,8 @@ class Progress:
     total: int
     pace: float
     interrupted: bool = False
+    terminated: bool = False
+    """Stopped by SIGTERM (``kill``, ``timeout``): the trials running killed and not kept."""
 
     @property
     def complete(self) -> bool:
@@ -195,7 +197,7 @@ def run_sweep(
     for cpu in pins:
         free.put(cpu)
 
-    interrupted, abandoned = threading.Event(), threading.Event()
+    interrupted, abandoned, terminated = threading.Event(), threading.Event(), threading.Event()
 
     def one(job: Job) -> Run | None:
         if interrupted.is_set() or (deadline is not None and time.monotonic() >= deadline):
@@ -229,8 +231,19 @@ def run_sweep(
             killed = trials.stop_all()
             print(f"stopped: {killed} trial(s) running killed, not kept", file=sys.stderr, flush=True)
 
+    def sigterm(*_: object) -> None:
+        """As two Ctrl-C: the trials' processes run in sessions of their own, so a SIGTERM that
+        ended this process alone left them running, and their folders, behind."""
+        terminated.set()
+        interrupted.set()
+        if not abandoned.is_set():
+            abandoned.set()
+            killed = trials.stop_all()
+            print(f"terminated: {killed} trial(s) running killed, not kept", file=sys.stderr, flush=True)
+
     trials.allow_starts()
     previous = _handle_sigint(ctrl_c)
+    previous_term = _handle_signal(signal.SIGTERM, sigterm)
     pool = ThreadPoolExecutor(max_workers=max(1, workers))
     futures: list[Future[Run | None]] = []
     try:
@@ -246,22 +259,33 @@ def run_sweep(
         pool.shutdown(wait=True, cancel_futures=True)
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
+        if previous_term is not None:
+            signal.signal(signal.SIGTERM, previous_term)
         book.close()
     ended = [f.result() for f in futures if f.done() and not f.cancelled()]
     new = [run for run in ended if run is not None]
     runs = sorted([*held.values(), *new], key=lambda r: order[run_key(r)])
-    return Progress(runs, len(jobs), (time.monotonic() - began) / max(1, len(new)), interrupted.is_set())
+    pace = (time.monotonic() - began) / max(1, len(new))
+    return Progress(runs, len(jobs), pace, interrupted.is_set(), terminated.is_set())
 
 
 def _handle_sigint(handler: Callable[..., None]) -> Callable[..., object] | int | None:
     """Make ``handler`` SIGINT's and return the handler it replaces; None (nothing set) outside
     the main thread, or where SIGINT is ignored (a shell's background job: Ctrl-C is not ours)."""
+    return _handle_signal(signal.SIGINT, handler)
+
+
+def _handle_signal(
+    number: signal.Signals, handler: Callable[..., None]
+) -> Callable[..., object] | int | None:
+    """Make ``handler`` the signal's and return the handler it replaces; None (nothing set)
+    outside the main thread, or where the signal is ignored."""
     if threading.current_thread() is not threading.main_thread():
         return None
-    previous = signal.getsignal(signal.SIGINT)
+    previous = signal.getsignal(number)
     if previous in (signal.SIG_IGN, None):
         return None
-    signal.signal(signal.SIGINT, handler)
+    signal.signal(number, handler)
     return previous
 
 
@@ -336,8 +360,9 @@ def sweep_in_journal(
         parser.error(str(exc))
     except OSError as exc:
         parser.error(f"{path}: cannot keep the sweep's journal there ({exc.strerror or exc})")
-    if done:
-        print(f"resuming {path}: {len(done)} of {len(jobs)} trials done")
+    if done:  # the plan's trials it holds, each once (a line repeated, or of another plan, is not one)
+        held = len({run_key(r) for r in done} & {key_of(job) for job in jobs})
+        print(f"resuming {path}: {held} of {len(jobs)} trials done")
     compile_tree(root)
     try:
         progress = run_sweep(book, jobs, done, trial, args.jobs, args.stop_after, shuffle)
@@ -345,6 +370,8 @@ def sweep_in_journal(
         raise SystemExit(f"{exc}; the trials kept so far are in {path}") from None
     if not progress.complete:
         print(progress.stopped(path, args.stop_after, tabulate))
+    if progress.terminated:
+        raise SystemExit(143)  # as a shell reports a process that SIGTERM ended
     if progress.interrupted:
         raise SystemExit(130)  # as a shell reports a process that SIGINT ended
     return progress

@@ -740,3 +740,51 @@ def test_a_trial_whose_engine_never_started_stops_the_sweep(tmp_path: Path) -> N
         sweeps.run_sweep(book, jobs, [], trial, workers=1)
     kept = journal.read(tmp_path / "j.jsonl")[1]
     assert 0 in [r.seed for r in kept] and 1 not in [r.seed for r in kept]
+
+
+def test_a_journal_tabulated_so_far_counts_each_planned_trial_once(tmp_path: Path) -> None:
+    """A line written twice and a trial of a seed outside the sweep's were counted into the cells
+    (0.4 (3/3) for two trials); --resume already held each planned trial once."""
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full", "uniform"), 2, 1.0, "c" * 40)
+    path = tmp_path / "deep-quick.jsonl"
+    book, _ = journal.open_sweep(path, sweep, tmp_path, resume=False, restart=False)
+    for engine in ("full", "uniform"):
+        for seed in range(2):
+            book.add(
+                Run("narrow_band", engine, seed, 1.0, 0.4 if engine == "full" else None, 1, 1, 1.0, "fk", 0)
+            )
+    book.close()
+    lines = path.read_text().splitlines()
+    extra = json.loads(lines[1])
+    extra["seed"] = 7
+    path.write_text("\n".join([*lines, lines[1], json.dumps(extra)]) + "\n")
+    runs = bench_deep.load_runs(path)
+    assert sorted((r.engine, r.seed) for r in runs) == [
+        ("full", 0),
+        ("full", 1),
+        ("uniform", 0),
+        ("uniform", 1),
+    ]
+
+
+def test_sigterm_stops_the_sweep_as_two_ctrl_c(tmp_path: Path) -> None:
+    """A plain ``kill`` or ``timeout`` ended the sweep's process alone: its trials, in sessions of
+    their own, ran on with their temporary folders. Now SIGTERM kills them (``trials.stop_all``),
+    keeps none, starts no other, and the sweep says it was terminated (exit 143)."""
+    import signal as signals
+
+    def trial(job: sweeps.Job, cpu: int | None) -> Run:
+        bug, engine, seed = job
+        if seed == 0:
+            os.kill(os.getpid(), signals.SIGTERM)
+            time.sleep(0.2)  # the handler runs in the main thread meanwhile
+        return Run(bug.name, engine, seed, 1.0, None, 0, 1, 1.0, bug.op, 0)
+
+    bug = bench_deep.BUGS["narrow_band"]
+    jobs = [(bug, "full", seed) for seed in range(3)]
+    sweep = journal.Sweep("quick", ("narrow_band",), ("full",), 3, 1.0, "c" * 40)
+    book, _ = journal.open_sweep(tmp_path / "j.jsonl", sweep, tmp_path, resume=False, restart=False)
+    before = signals.getsignal(signals.SIGTERM)
+    progress = sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    assert progress.terminated and progress.interrupted and progress.runs == []
+    assert signals.getsignal(signals.SIGTERM) == before, "the handler it replaced is back"
