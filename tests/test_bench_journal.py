@@ -785,6 +785,9 @@ def test_sigterm_stops_the_sweep_as_two_ctrl_c(tmp_path: Path) -> None:
     sweep = journal.Sweep("quick", ("narrow_band",), ("full",), 3, 1.0, "c" * 40)
     book, _ = journal.open_sweep(tmp_path / "j.jsonl", sweep, tmp_path, resume=False, restart=False)
     before = signals.getsignal(signals.SIGTERM)
-    progress = sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    try:
+        progress = sweeps.run_sweep(book, jobs, [], trial, workers=1)
+    finally:
+        trials.allow_starts()  # stop_all's refusal of new processes ends with the sweep's process
     assert progress.terminated and progress.interrupted and progress.runs == []
     assert signals.getsignal(signals.SIGTERM) == before, "the handler it replaced is back"
