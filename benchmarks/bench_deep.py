@@ -150,17 +150,6 @@ def main(argv: list[str] | None = None) -> list[Run]:
     # tabulating a file writes a plot only where asked: not over the tables' own deep-<mode>.png
     args.plot = args.from_json is None or args.write_md or args.results is not None
     elsewhere = args.results is not None and args.results.resolve() != RESULTS.resolve()
-
-    def table_only() -> None:
-        """--write-md replaces the mode's table and links its plot in RESULTS: nothing else may."""
-        if args.write_md and elsewhere:
-            parser.error(f"--write-md links the plot in {RESULTS}: --results must be it or not given")
-        if args.write_md and mode != base and args.from_json is None:
-            parser.error(
-                f"--write-md replaces the {args.mode} table: it takes the mode's bugs, engines, trials "
-                "and budget"
-            )
-
     args.results = args.results or RESULTS
     if args.first_seed < 0:
         parser.error(f"--first-seed must be 0 or more, not {args.first_seed}")
@@ -171,8 +160,16 @@ def main(argv: list[str] | None = None) -> list[Run]:
                 "--write-md takes the tables' seeds (from 0); --first-seed's trials get files of their own"
             )
         args.stem += f"-seeds{args.first_seed}-{args.first_seed + mode.trials - 1}"
-    if args.from_json is None or args.from_json.suffix != ".jsonl":  # a journal's own refusal first
-        table_only()
+    # --write-md replaces the mode's table and links its plot in RESULTS: nothing else may (a
+    # journal's own refusal comes first)
+    if args.write_md and (args.from_json is None or args.from_json.suffix != ".jsonl"):
+        if elsewhere:
+            parser.error(f"--write-md links the plot in {RESULTS}: --results must be it or not given")
+        if mode != base and args.from_json is None:
+            parser.error(
+                f"--write-md replaces the {args.mode} table: it takes the mode's bugs, engines, trials "
+                "and budget"
+            )
     cli.check_folder(parser, args.results)
     if args.from_json is not None:
         partial = args.from_json.suffix == ".jsonl"

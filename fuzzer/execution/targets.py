@@ -8,6 +8,7 @@ attribute is any object with ``RobotModel`` and ``MoveGroup`` that follow
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import os
 from dataclasses import dataclass
 from typing import Any
@@ -32,12 +33,10 @@ def module_of(spec: str) -> str:
 
 def _hint(spec: str) -> str:
     """For a bare library name with an adapter (``pinocchio``): the spec that names it."""
-    name = spec.replace("-", "_")
-    if not name.isidentifier():
+    adapter = f"{spec.replace('-', '_')}_adapter"
+    if not adapter.isidentifier():
         return ""
-    shipped = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(__file__))), "adapters")
-    adapter = f"{name}_adapter"
-    found = os.path.isfile(os.path.join(shipped, f"{adapter}.py"))
+    found = importlib.util.find_spec(f"adapters.{adapter}") is not None  # found, not imported
     return f" (an adapter: adapters.{adapter}:api)" if found else ""
 
 

@@ -285,16 +285,12 @@ def figures(key: str, view: ScenarioView) -> dict[str, bytes]:
 # -- HTML -------------------------------------------------------------------------------------------------
 
 
-def _e(value: Any) -> str:
-    return esc(value)
-
-
 def _table(view: ScenarioView) -> str:
     steps = view.steps
     a, b = steps.targets
     head = (
         "<table><tr><th class='num'>Step</th><th>Topic</th><th>Arguments</th>"
-        f"<th><span class='a'>a</span> {_e(a)}</th><th><span class='b'>b</span> {_e(b)}</th></tr>"
+        f"<th><span class='a'>a</span> {esc(a)}</th><th><span class='b'>b</span> {esc(b)}</th></tr>"
     )
     rows = []
     for s in steps.steps:
@@ -303,8 +299,8 @@ def _table(view: ScenarioView) -> str:
         css = " class='hot'" if hot else ""
         rows.append(
             f"<tr{css}>"
-            f"<td class='num'>{s.index}{mark}</td><td><code>{_e(s.topic)}</code></td>"
-            f"<td><code>{_e(s.arguments)}</code></td><td>{_e(s.labels[0])}</td><td>{_e(s.labels[1])}</td></tr>"
+            f"<td class='num'>{s.index}{mark}</td><td><code>{esc(s.topic)}</code></td>"
+            f"<td><code>{esc(s.arguments)}</code></td><td>{esc(s.labels[0])}</td><td>{esc(s.labels[1])}</td></tr>"
         )
     return head + "".join(rows) + "</table>"
 
@@ -321,13 +317,13 @@ def _values(view: ScenarioView) -> str:
     a, b = view.steps.targets
     quantity = view.steps.field.split(".", 1)[1] if "." in view.steps.field else ""
     rows = "".join(
-        f"<tr{_hot(n, quantity)}><td><code>{_e(n)}</code></td><td><code>{_e(x)}</code></td>"
-        f"<td><code>{_e(y)}</code></td></tr>"
+        f"<tr{_hot(n, quantity)}><td><code>{esc(n)}</code></td><td><code>{esc(x)}</code></td>"
+        f"<td><code>{esc(y)}</code></td></tr>"
         for n, x, y in view.values
     )
     return (
         f"<h3>Values at step {view.steps.first}</h3><table><tr><th>Quantity</th>"
-        f"<th><span class='a'>a</span> {_e(a)}</th><th><span class='b'>b</span> {_e(b)}</th></tr>"
+        f"<th><span class='a'>a</span> {esc(a)}</th><th><span class='b'>b</span> {esc(b)}</th></tr>"
         f"{rows}</table>"
     )
 
@@ -336,7 +332,7 @@ def _plots(key: str, view: ScenarioView, pngs: Mapping[str, bytes]) -> str:
     parts = []
     for step in view.plots:
         name = file_name(key, step.index)
-        notes = "".join(f"<li>{_e(n)}</li>" for n in step.notes)
+        notes = "".join(f"<li>{esc(n)}</li>" for n in step.notes)
         png = pngs.get(name)
         if png is None:
             parts.append(f"<div class='warn'>Step {step.index}: no trajectory to draw.<ul>{notes}</ul></div>")
@@ -344,10 +340,10 @@ def _plots(key: str, view: ScenarioView, pngs: Mapping[str, bytes]) -> str:
         data = base64.b64encode(png).decode("ascii")
         alt = f"trajectories of both targets at step {step.index}"
         parts.append(
-            f"<figure><img src='data:image/png;base64,{data}' alt='{_e(alt)}'><figcaption>"
-            f"Step {step.index} (<code>{_e(step.topic)}</code>): joint positions (top) and velocities "
+            f"<figure><img src='data:image/png;base64,{data}' alt='{esc(alt)}'><figcaption>"
+            f"Step {step.index} (<code>{esc(step.topic)}</code>): joint positions (top) and velocities "
             "(bottom) over time from start, one column per joint; solid a, dashed b. Also saved as "
-            f"<a href='{_e(name)}'>{_e(name)}</a>.<ul>{notes}</ul></figcaption></figure>"
+            f"<a href='{esc(name)}'>{esc(name)}</a>.<ul>{notes}</ul></figcaption></figure>"
         )
     if view.omitted:
         parts.append(f"<p class='note'>{view.omitted} more step(s) with a trajectory are not drawn.</p>")
@@ -357,7 +353,7 @@ def _plots(key: str, view: ScenarioView, pngs: Mapping[str, bytes]) -> str:
 def section(key: str, view: ScenarioView, pngs: Mapping[str, bytes]) -> str:
     """The HTML of a scenario bucket's steps, values and trajectory figures."""
     steps = view.steps
-    where = f"{_e(steps.headline())}" + (f", on <code>{_e(steps.field)}</code>" if steps.field else "")
+    where = f"{esc(steps.headline())}" + (f", on <code>{esc(steps.field)}</code>" if steps.field else "")
     return (
         f"<h3>Steps <small>({len(steps.steps)}; {where})</small></h3>{_table(view)}"
         "<p class='note'>Each target runs the steps in order on one new MoveGroup; the highlighted row is "
