@@ -89,3 +89,46 @@ def test_a_replay_on_another_robot_file_says_so(tmp_path: Path, monkeypatch: pyt
     (tmp_path / f"{known.name}.json").write_text(json.dumps(sidecar))
     other = replay_file(copy, RunConfig(), {}, trust=True)
     assert other.result is same.result and ROBOT_CHANGED in other.detail
+
+
+def test_promote_keeps_a_robot_file_the_suite_can_replay_elsewhere(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A crash file names its robot file relative to the campaign's working folder, which the
+    suite is not replayed from: promoted as it was, it could not be replayed (the docs probe)."""
+    import json
+    import shutil
+
+    from fuzzer.triage.regressions import SUITE, _suite_name
+
+    known = next(p for p in FILES if p.name.startswith("minimized-481e74c1"))  # ikpy, scaled_axes.urdf
+    campaign = tmp_path / "campaign"
+    (campaign / "robots").mkdir(parents=True)
+    shutil.copyfile(ROOT / "tests/regressions/urdfs/scaled_axes.urdf", campaign / "robots/arm.urdf")
+    sidecar = load_sidecar(known)
+    assert sidecar is not None
+    del sidecar["regression"]
+    sidecar["config"]["robot"] = "robots/arm.urdf"
+    crash = campaign / known.name
+    shutil.copyfile(known, crash)
+    (campaign / f"{known.name}.json").write_text(json.dumps(sidecar))
+    suite = tmp_path / "suite"
+    monkeypatch.chdir(campaign)
+    done = promote(crash, fixed=False, suite=suite, trust=True)
+    kept = list((suite / "urdfs").iterdir())
+    assert len(kept) == 1 and kept[0].read_bytes() == (campaign / "robots/arm.urdf").read_bytes()
+    promoted = load_sidecar(done.path)
+    assert promoted is not None and promoted["config"]["robot"] == str(kept[0].resolve())
+    assert promoted["regression"]["robot_from"] == "robots/arm.urdf"
+    again = promote(done.path, fixed=False, note="again", suite=suite, trust=True)  # in place: no 2nd copy
+    assert list((suite / "urdfs").iterdir()) == kept and again.path == done.path
+    monkeypatch.chdir(ROOT)  # replayed from elsewhere, as the suite is
+    replayed = replay_file(done.path, RunConfig(), {}, trust=True)
+    assert replayed.result is Result.SAME and ROBOT_CHANGED not in replayed.detail
+    # the default suite names its copies from the repository's root, as the shipped ones are
+    assert _suite_name(SUITE / "urdfs" / "x.urdf", SUITE) == "tests/regressions/urdfs/x.urdf"
+    # a robot file edited since the campaign is not kept as if it were the campaign's
+    (campaign / "robots/arm.urdf").write_text((campaign / "robots/arm.urdf").read_text() + "\n")
+    monkeypatch.chdir(campaign)
+    with pytest.raises(PromoteError, match="not the campaign's"):
+        promote(crash, fixed=False, suite=tmp_path / "other", trust=True)

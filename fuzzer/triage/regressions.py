@@ -4,12 +4,22 @@
 it must do from now on: ``diverge`` (a known divergence that must still
 reproduce with the same signature) or ``agree`` (a fixed one that must stay
 fixed). The expectation lives in the sidecar's ``regression`` entry.
+
+A crash file found on a robot *file* (not a shipped robot) names it relative to the campaign's
+working folder, which the suite is not replayed from; so ``promote`` copies the URDF into the
+suite's ``urdfs/`` folder (named by its stem and SHA-256) and the promoted sidecar names the
+copy: relative to the repository for the default suite (``tests/regressions/urdfs/...``, which
+``tests/test_regressions.py`` replays from the repository's root), by its absolute path for a
+``--suite`` elsewhere. The sidecar's first name for it is kept as ``regression.robot_from``.
 """
 
 from __future__ import annotations
 
 import datetime
+import hashlib
 import json
+import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,9 +28,12 @@ from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import atomic_write, load_sidecar, sidecar_path
 from fuzzer.execution.session import ConfigError, RunConfig
 from fuzzer.input.testcase import TestCaseError, read_bytes
-from fuzzer.triage.replay import Result, replay_file
+from fuzzer.triage.replay import ROBOT_CHANGED, Result, replay_file
+from robot_api import robots
+from robot_api.errors import URDFError
 
-SUITE = Path(__file__).resolve().parents[2] / "tests" / "regressions"
+ROOT = Path(__file__).resolve().parents[2]
+SUITE = ROOT / "tests" / "regressions"
 
 
 class PromoteError(ValueError):
@@ -63,9 +76,19 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:
         raise PromoteError(f"{crash}: {result.result}; promote it with --fixed if it is fixed")
+    if ROBOT_CHANGED in result.detail:
+        raise PromoteError(f"{crash}: {ROBOT_CHANGED}; the suite keeps what the campaign ran on")
+    robot = result.config.robot if result.config is not None else robots.DEFAULT_ROBOT
     target = suite / crash.name
     try:
         suite.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise PromoteError(f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})") from None
+    try:
+        kept = None if robot in robots.known_robots() else _keep_robot(robot, suite)
+    except OSError as exc:
+        raise PromoteError(f"{crash}: its robot file cannot be kept in --suite {suite} ({exc})") from None
+    try:
         if not (target.exists() and target.samefile(crash)):  # promoted again (--fixed): in place
             # written whole and renamed over the name: a symlink planted there is replaced, not
             # followed (shutil.copyfile wrote the crash file over whatever it pointed at)
@@ -81,8 +104,48 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
         "note": note,
         "promoted": datetime.date.today().isoformat(),
     }
+    if kept is not None:
+        entry["config"] = {**sidecar["config"], "robot": _suite_name(kept, suite)}
+        entry["robot_path"] = str(kept)
+        entry["regression"]["robot_from"] = robot
     atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
     return Promoted(target, entry["regression"]["expect"])
+
+
+def _keep_robot(robot: str, suite: Path) -> Path:
+    """Copy the robot file a crash file was replayed on into ``suite/urdfs/`` (once per content),
+    and return the copy's path.
+
+    Raises
+    ------
+    OSError
+        The robot file cannot be read again, or the suite cannot hold the copy.
+    """
+    try:
+        path = robots.resolve(robot)
+    except URDFError as exc:  # gone or replaced by a FIFO since the replay
+        raise OSError(f"robot {robot!r}: {exc}") from None
+    if os.path.realpath(path.parent) == os.path.realpath(suite / "urdfs"):
+        return path  # kept already (promoted again, --fixed)
+    data = path.read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    kept = suite / "urdfs" / f"{Path(robot).stem}-{digest[:12]}.urdf"
+    kept.parent.mkdir(exist_ok=True)
+    try:  # a copy there already (a regular file, never a link or FIFO followed) is kept
+        same = stat.S_ISREG(kept.lstat().st_mode) and kept.read_bytes() == data
+    except OSError:
+        same = False
+    if not same:
+        atomic_write(kept, data)
+    return kept
+
+
+def _suite_name(kept: Path, suite: Path) -> str:
+    """How the promoted sidecar names the kept robot: relative to the repository for the default
+    suite (replayed from its root), else the absolute path."""
+    if os.path.realpath(suite) == os.path.realpath(SUITE):
+        return kept.resolve().relative_to(ROOT.resolve()).as_posix()
+    return str(kept.resolve())
 
 
 def suite_files(suite: Path = SUITE) -> list[Path]:
