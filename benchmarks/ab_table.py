@@ -41,10 +41,13 @@ def read(path: Path) -> tuple[dict[str, Any], list[tuple[str, Run]]]:
         names = [arm["name"] for arm in header["arms"]]
         runs = []
         for number, line in enumerate(complete[1:], 2):
-            row = json.loads(line)
-            if not isinstance(row, dict) or row.get("arm") not in names:
-                raise ValueError(f"line {number} is not a trial of one of the arms")
-            runs.append(("a" if row["arm"] == names[0] else "b", journal.run_of(row)))
+            try:
+                row = json.loads(line)
+                if not isinstance(row, dict) or row.get("arm") not in names:
+                    raise ValueError("not a trial of one of the arms")
+                runs.append(("a" if row["arm"] == names[0] else "b", journal.run_of(row)))
+            except (ValueError, TypeError, KeyError, RecursionError) as exc:
+                raise ValueError(f"line {number}: {exc}") from exc
     except (ValueError, TypeError, KeyError, RecursionError) as exc:
         raise ValueError(f"{path}: not a bench_ab file ({exc})") from exc
     return header, runs

@@ -199,6 +199,8 @@ def _open(
 ) -> dict[Any, list[Run]]:
     """The pairs ``out`` already holds, by (bug, seed) (none for a new file); the parser's error
     for a file that exists without ``--resume``, or whose header differs from ``header``."""
+    if out.is_dir():
+        parser.error(f"--out {out} is a folder: name the pairs' file (JSON lines)")
     if not out.exists():
         try:
             out.write_text(json.dumps(header) + "\n", encoding="utf-8")

@@ -123,7 +123,7 @@ def test_files_of_other_tests_are_not_pooled(tmp_path: Path, capsys: pytest.Capt
         ("", "its first line is not a bench_ab header"),
         ('{"format": "other"}\n', "its first line is not a bench_ab header"),
         ('{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}]}\n', "does not name two arms"),
-        (HEAD + '{"arm": "c"}\n', "line 2 is not a trial of one of the arms"),
+        (HEAD + '{"arm": "c"}\n', "line 2: not a trial of one of the arms"),
         (
             '{"format": "rrosfuzz-bench-ab", "arms": [{"name": "a"}, {"name": "b"}]}\n',
             "arm root is not a string",
@@ -137,13 +137,13 @@ def test_files_of_other_tests_are_not_pooled(tmp_path: Path, capsys: pytest.Capt
         (
             HEAD + '{"arm": "a", "bug": "b", "engine": "full", "seed": 1, "budget": 10, "detected_at": -1, '
             '"signatures": 1, "executions": 1, "elapsed": 1, "op": "fk", "returncode": 0}\n',
-            "detected_at: -1 is not a finite number of seconds >= 0",
+            "line 2: detected_at: -1 is not a finite number of seconds >= 0",
         ),
         (
             HEAD + '{"arm": "a", "bug": 3}\n',
-            "bug: 3 is not str",
+            "line 2: bug: 3 is not str",
         ),
-        (HEAD + "[1,\n", "not a bench_ab file"),
+        (HEAD + "[1,\n", "not a bench_ab file (line 2: Expecting"),
     ],
 )
 def test_a_bad_file_is_named(
@@ -226,6 +226,11 @@ def test_a_file_of_another_test_is_not_resumed(tmp_path: Path, capsys: pytest.Ca
     with pytest.raises(SystemExit):
         bench_ab.main([*argv, "--resume"])
     assert "another test (arms:" in capsys.readouterr().err
+    argv[-1] = str(tmp_path)  # a folder: named as one, with or without --resume
+    for extra in ([], ["--resume"]):
+        with pytest.raises(SystemExit):
+            bench_ab.main([*argv, *extra])
+        assert f"--out {tmp_path} is a folder" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("serial", [False, True])
