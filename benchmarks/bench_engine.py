@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 from benchmarks import cli, machine
+from fuzzer.cli_options import MUTATORS
 
 ROOT = Path(__file__).resolve().parents[1]
 SUMMARY = re.compile(r"executions: (\d+) in ([0-9.]+) s")
@@ -106,7 +107,9 @@ def main() -> None:
     parser.add_argument(
         "--ops", nargs="+", default=["fk", "move", "ik"], choices=("fk", "move", "ik", "scenario")
     )
-    parser.add_argument("--mutator", default=None, help="pass --mutator to fuzz_diff.py (e.g. weights)")
+    parser.add_argument(
+        "--mutator", default=None, choices=MUTATORS, help="pass --mutator to fuzz_diff.py (e.g. weights)"
+    )
     parser.add_argument("--sweep", action="store_true", help="measure the batched FK path alone")
     args = parser.parse_args()
     cli.check_sizes(parser, seconds=args.seconds)

@@ -47,6 +47,9 @@ exit status of a campaign:
   any other status is libFuzzer's own
 """
 
+MUTATORS = ("rrosfuzz", "weights", "libfuzzer")
+"""``--mutator``'s choices (the benchmark drivers pass one on)."""
+
 
 def seconds(text: str) -> float:
     """A positive, finite number of seconds (argparse type)."""
@@ -189,7 +192,7 @@ def campaign_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--mutator",
-        choices=("rrosfuzz", "weights", "libfuzzer"),
+        choices=MUTATORS,
         default="rrosfuzz",
         help="rrosfuzz: the structured mutators, chosen by a bandit beside fresh space-filling "
         "inputs, with float comparisons of the Python targets as features (default); weights: "

@@ -79,6 +79,7 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (profile.main, ["--seed", "99999999999"], "--seed must be from 1 to 4294967295"),
     (bench_deep.main, ["--first-seed", "99999999999"], "reach seed 100000000000, past 2147483648"),
     (bench_engine.main, ["--ops", "nosuch"], "invalid choice: 'nosuch'"),
+    (bench_engine.main, ["--mutator", "nope"], "invalid choice: 'nope'"),
     (probe_ik_stall.main, ["probot_anno", "--seed", "-1"], "--seed must be 0 or more"),
     (bench_targets.main, ["--robot", "a-file"], "--robot a-file:"),
     (bench_scenario.main, ["--render", "a-file"], "a-file: not a bench_scenario result (JSONDecodeError"),
