@@ -109,7 +109,10 @@ cached_pose = _impl(_CachedPose)
 
 
 class _CartesianIgnoresScaling(Group):
-    """The Cartesian path is timed at full speed (scaling factors 1.0) whatever was set."""
+    """The Cartesian path is timed at full speed (scaling factors 1.0) whatever was set.
+
+    A bug against the contract, which scales it; MoveIt 1 itself times it so (docs/api.md,
+    "Where the contract departs from MoveIt 1")."""
 
     def compute_cartesian_path(
         self, waypoints: Sequence[PoseLike], eef_step: float, jump_threshold: float = 0.0
@@ -135,6 +138,10 @@ class _AccelerationScalingIgnored(Group):
     long still fails as it should; the trajectory returned is the unscaled one: the
     same end point (``--op move`` sees the same final state) but faster, with
     accelerations above ``ACCELERATION_LIMIT`` x the factor.
+
+    A bug against the contract; on a URDF-only robot (no acceleration limits configured)
+    MoveIt 1's time parameterization ignores the factor too (docs/api.md, "Where the contract
+    departs from MoveIt 1").
     """
 
     def _plan(self) -> RobotTrajectory:
