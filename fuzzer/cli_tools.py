@@ -145,7 +145,12 @@ def minimize_main(argv: Sequence[str]) -> int:
             detail = f"{shrunk.evaluations} evaluations, no file written"
             reporting.verdict(str(path), "already minimal", detail)
             continue
-        data, out = crashfiles.minimized_sidecar(loaded, shrunk)
+        try:
+            data, out = crashfiles.minimized_sidecar(loaded, shrunk)
+        except ValueError as exc:
+            reporting.verdict(str(path), f"not minimized: {exc}")
+            stale += 1
+            continue
         folder = args.output or path.parent
         try:
             minimized = crashfiles.write_minimized(folder, data, out)

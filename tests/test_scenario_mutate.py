@@ -34,6 +34,7 @@ MAX = 12
 MUTATE, CROSSOVER = for_registry(REGISTRY, MAX)
 SEEDS = range(40)
 INTERESTING = (3.1416, -2.0071)
+ZOO_CARTESIAN = "benchmarks.zoo.stateful:cartesian_ignores_scaling"
 
 
 def step(topic: str, **fields: Any) -> dict[str, Any]:
@@ -550,3 +551,37 @@ def test_minimize_of_a_scenario_respects_its_budget(twin: Session) -> None:
     shrunk = Minimizer(twin, budget=3).minimize(case)
     assert shrunk.evaluations <= 3 and not shrunk.complete
     assert evaluator.evaluate(shrunk.case).signature is not None
+
+
+def test_minimize_judges_each_candidate_as_a_replay_does(tmp_path: Path) -> None:
+    """One evaluator for every candidate skipped the ill-conditioning re-runs of a signature it
+    had seen, and ran each candidate on the targets the one before had moved: this script (an
+    acceleration scaling of 5e-324, then a Cartesian path to a pose whose quaternion is 1.5e-9
+    long) shrank to w = 1e-9, which a replay files under another signature (a property, the
+    split explained), and its sidecar claimed the first (the triage probe)."""
+    session = Session.open(RunConfig(op="scenario", targets=("native", ZOO_CARTESIAN)))
+
+    def script(w: float) -> TestCase:
+        zero = {"x": 0.0, "y": 0.0, "z": 0.0}
+        pose = {"position": zero, "orientation": {**zero, "w": w}}
+        steps = [step("/acceleration_scaling", data=5e-324), step("/cartesian_path", poses=[pose])]
+        return TestCase(MSG_TYPE, {"steps": steps})
+
+    first = session.evaluator().evaluate(script(1.5e-9))
+    other = session.evaluator().evaluate(script(1e-9))
+    assert first.signature is not None and other.signature is not None
+    assert first.signature.key != other.signature.key  # the two sides of the test
+    shrunk = Minimizer(session).minimize(script(1.5e-9))
+    replayed = session.evaluator().evaluate(shrunk.case, history=[])
+    assert replayed.signature is not None and replayed.signature.key == first.signature.key
+    # and a minimized input that replays otherwise is never written under the file's signature
+    from fuzzer.artifacts.sidecar_record import build_sidecar
+    from fuzzer.triage import crashfiles
+    from fuzzer.triage.minimize import Shrunk
+
+    data = script(1.5e-9).encode()
+    path = ArtifactStore(tmp_path).write(data, build_sidecar(session, script(1.5e-9), data, first, {}, ""))
+    loaded = crashfiles.load(path, {"targets": session.config.targets}, False, {session.config: session})
+    with pytest.raises(ValueError, match=f"diverges as {other.signature.key[:12]} when replayed, not as"):
+        crashfiles.minimized_sidecar(loaded, Shrunk(script(1e-9), 2, 1, True))
+    assert crashfiles.minimized_sidecar(loaded, Shrunk(script(1.5e-9), 2, 0, True))[0] == data

@@ -37,8 +37,8 @@ class Loaded:
 
     @property
     def history(self) -> Any:
-        """The calls before it, for a state-dependent divergence (None otherwise)."""
-        return history_of(self.sidecar) if "history" in self.sidecar else None
+        """The calls before it, for a state-dependent divergence (``[]`` otherwise: fresh targets)."""
+        return history_of(self.sidecar)
 
 
 def load(path: Path, given: dict[str, Any], trust: bool, sessions: dict[RunConfig, Session]) -> Loaded:
@@ -95,7 +95,14 @@ def minimized_sidecar(loaded: Loaded, shrunk: Shrunk) -> tuple[bytes, dict[str, 
     """(the minimized input's bytes, its sidecar): the original sidecar with the configuration,
     the minimized test case, where it came from, the joints that matter and the shrink's
     counts; and the call, outcomes and comparison of the minimized input, not the original's
-    (a scenario's step list shrinks, and the sidecar's schema checks they match)."""
+    (a scenario's step list shrinks, and the sidecar's schema checks they match).
+
+    Raises
+    ------
+    ValueError
+        The minimized input, replayed on fresh targets, has not the file's signature (a
+        shrink judged otherwise than a replay judges; never written).
+    """
     from fuzzer.artifacts.sidecar_record import build_sidecar
 
     session = loaded.session
@@ -109,11 +116,14 @@ def minimized_sidecar(loaded: Loaded, shrunk: Shrunk) -> tuple[bytes, dict[str, 
         shrink={"evaluations": shrunk.evaluations, "accepted": shrunk.accepted, "complete": shrunk.complete},
     )
     again = session.evaluator().evaluate(shrunk.case, history=loaded.history)
-    if again.signature is not None:
-        versions, digest = loaded.sidecar.get("versions", {}), loaded.sidecar.get("robot_sha256", "")
-        fresh = build_sidecar(session, shrunk.case, data, again, versions, digest)
-        for name in ("sha1", "comparison", "difference", "call", "outcomes", "lineage", "strategy"):
-            out[name] = fresh[name]
+    key = loaded.sidecar["signature"]["key"]
+    if again.signature is None or again.signature.key != key:
+        now = "does not diverge" if again.signature is None else f"diverges as {again.signature.key[:12]}"
+        raise ValueError(f"the minimized input {now} when replayed, not as {key[:12]}: nothing written")
+    versions, digest = loaded.sidecar.get("versions", {}), loaded.sidecar.get("robot_sha256", "")
+    fresh = build_sidecar(session, shrunk.case, data, again, versions, digest)
+    for name in ("sha1", "comparison", "difference", "call", "outcomes", "lineage", "strategy", "written"):
+        out[name] = fresh[name]
     return data, out
 
 

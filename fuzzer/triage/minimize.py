@@ -141,14 +141,18 @@ class Minimizer:
     """Shrinks test cases under one session (targets, robot, op)."""
 
     def __init__(self, session: Session, budget: int = 2000, history: list[Any] | None = None) -> None:
-        self.evaluator = session.evaluator()
+        self.session = session
         self.budget = budget
-        self.history = history
-        """A state_dependent divergence's call history (``fuzzer.execution.evaluate.history_of``): each
-        candidate then runs on fresh targets after those calls."""
+        self.history = list(history or [])
+        """A state_dependent divergence's call history (``fuzzer.execution.evaluate.history_of``):
+        each candidate runs on fresh targets after those calls (none: on fresh targets alone)."""
 
     def _key(self, case: TestCase) -> str | None:
-        ev = self.evaluator.evaluate(case, history=self.history)
+        # Judged as ``replay`` judges a file: a new evaluator on fresh targets. One evaluator for
+        # every candidate ran each on the targets the one before had moved, and skipped the
+        # confirmations and ill-conditioning re-runs of signatures it had seen (a campaign's
+        # shortcuts): it kept scenario candidates that replay filed under another signature.
+        ev = self.session.evaluator().evaluate(case, history=self.history)
         if ev.verdict != Verdict.EVALUATED or ev.signature is None:
             return None
         key: str = ev.signature.key
