@@ -132,3 +132,26 @@ def test_promote_keeps_a_robot_file_the_suite_can_replay_elsewhere(
     monkeypatch.chdir(campaign)
     with pytest.raises(PromoteError, match="not the campaign's"):
         promote(crash, fixed=False, suite=tmp_path / "other", trust=True)
+
+
+def test_promote_of_a_file_that_diverges_differently_points_nowhere_else(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without --fixed it said "promote it with --fixed", with it "promote it without" (the
+    triage probe)."""
+    import json
+    import shutil
+
+    monkeypatch.chdir(ROOT)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+    copy = tmp_path / known.name
+    shutil.copyfile(known, copy)
+    sidecar = load_sidecar(known)
+    assert sidecar is not None
+    del sidecar["regression"]
+    sidecar["signature"]["key"] = "0" * 40
+    (tmp_path / f"{known.name}.json").write_text(json.dumps(sidecar))
+    for fixed in (False, True):
+        with pytest.raises(PromoteError, match="diverges differently") as refused:
+            promote(copy, fixed=fixed, suite=tmp_path / "suite", trust=True)
+        assert "--fixed" not in str(refused.value) and "the file's 000000000000" in str(refused.value)

@@ -72,6 +72,13 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
             f"{crash}: {result.result}; the suite keeps divergences and fixed ones that agree "
             "(test a known limitation beside its rule, in tests/)"
         )
+    if result.result is Result.DIFFERENT:  # neither --fixed nor not: each pointed at the other
+        raise PromoteError(
+            f"{crash}: {result.result} (signature {_short(result)}, the file's {str(result.expected)[:12]}); "
+            "the suite keeps a divergence that reproduces "
+            "its own signature, or a fixed one that agrees: replay it, and promote a crash file of "
+            "the signature it has now"
+        )
     if fixed and result.result is not Result.AGREES:
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:
@@ -110,6 +117,11 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
         entry["regression"]["robot_from"] = robot
     atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
     return Promoted(target, entry["regression"]["expect"])
+
+
+def _short(result: Any) -> str:
+    signature = result.evaluation.signature if result.evaluation is not None else None
+    return signature.key[:12] if signature is not None else "none"
 
 
 def _keep_robot(robot: str, suite: Path) -> Path:
