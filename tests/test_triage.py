@@ -73,6 +73,21 @@ def test_a_minimized_file_becomes_the_representative(tmp_path: Path) -> None:
     assert bucket.key == key and bucket.best == tmp_path / "minimized-bb"
 
 
+def test_a_bucket_says_what_the_file_it_shows_holds(tmp_path: Path) -> None:
+    """Triage printed the minimized file's path under the original's description and step list
+    (16 steps over a file of 2), and of two minimized files the last by name (the triage probe)."""
+    key = fake_crash(tmp_path, "crash-aa", "value", 0.5)
+    sidecar = json.loads((tmp_path / "crash-aa.json").read_text())
+    for name, difference, size in (("minimized-b1", 0.25, 40), ("minimized-b0", 0.125, 80)):
+        (tmp_path / name).write_bytes(b" " * size)
+        (tmp_path / f"{name}.json").write_text(json.dumps({**sidecar, "difference": difference}))
+    [bucket] = triage.collect(tmp_path)
+    assert bucket.key == key and bucket.representative == tmp_path / "crash-aa"
+    assert bucket.best == tmp_path / "minimized-b1"  # the smaller of the two
+    text = "\n".join(triage.table([bucket]))
+    assert "difference 0.25 rad" in text and str(tmp_path / "minimized-b1") in text
+
+
 @pytest.fixture(scope="module")
 def tight() -> Session:
     return Session.open(RunConfig(targets=TIGHT))

@@ -49,6 +49,8 @@ class Bucket:
     count: int
     representative: Path
     sidecar: dict[str, Any] | None
+    """The sidecar of the file the bucket shows first (:attr:`best`): the minimized file's when
+    there is one, so that its description and step list are that file's."""
     minimized: Path | None = None
     note: str = ""
 
@@ -64,7 +66,7 @@ class Bucket:
 
     @property
     def difference(self) -> tuple[float, str]:
-        """The representative's headline difference and its unit (0, 'status' when unknown)."""
+        """The headline difference of the file shown first and its unit (0, 'status' when unknown)."""
         sidecar = self.sidecar or {}
         comparison = sidecar.get("comparison") if isinstance(sidecar.get("comparison"), dict) else {}
         assert isinstance(comparison, dict)
@@ -114,7 +116,7 @@ class Bucket:
 
     @property
     def scenario(self) -> ScenarioSteps | None:
-        """The representative's step list (``--op scenario``), else None."""
+        """The step list of the file shown first (``--op scenario``), else None."""
         return scenario_of(self.sidecar)
 
 
@@ -168,7 +170,7 @@ def collect(directory: Path, files: list[Path] | None = None) -> list[Bucket]:
         r["sig"] for r in read_lines(directory / DIVERGENCES) if isinstance(r.get("sig"), str)
     )
     representatives: dict[str, tuple[Path, dict[str, Any]]] = {}
-    minimized: dict[str, Path] = {}
+    minimized: dict[str, tuple[Path, dict[str, Any]]] = {}
     buckets: list[Bucket] = []
     for path in _artifacts(directory) if files is None else files:
         sidecar, why = _sidecar(directory, path)
@@ -182,27 +184,26 @@ def collect(directory: Path, files: list[Path] | None = None) -> list[Bucket]:
             buckets.append(Bucket(path.name, None, 1, path, None, note=why or "no readable sidecar"))
             continue
         if path.name.startswith("minimized-"):
-            minimized[key] = path
+            if key not in minimized or _smaller(path, minimized[key][0]):
+                minimized[key] = (path, sidecar)
         elif key not in representatives:
             representatives[key] = (path, sidecar)
-    for key, (path, sidecar) in representatives.items():
+    for key in dict.fromkeys([*representatives, *minimized]):
+        # what the bucket says (its description, step list, outcomes) is the file it shows first
+        path, sidecar = representatives.get(key) or minimized[key]
+        best, best_sidecar = minimized.get(key, (None, sidecar))
         signature = Signature.from_json(sidecar["signature"])
-        buckets.append(Bucket(key, signature, max(1, counts.get(key, 0)), path, sidecar, minimized.get(key)))
-    for key, path in minimized.items():
-        if key not in representatives:
-            sidecar = load_sidecar(path)
-            assert sidecar is not None
-            buckets.append(
-                Bucket(
-                    key,
-                    Signature.from_json(sidecar["signature"]),
-                    max(1, counts.get(key, 0)),
-                    path,
-                    sidecar,
-                    path,
-                )
-            )
+        buckets.append(Bucket(key, signature, max(1, counts.get(key, 0)), path, best_sidecar, best))
     return sorted(buckets, key=lambda b: b.severity)
+
+
+def _smaller(path: Path, other: Path) -> bool:
+    """Whether ``path`` is the smaller minimized file (then the first by name): the one a bucket
+    shows when ``minimize`` ran more than once."""
+    try:
+        return (path.stat().st_size, path.name) < (other.stat().st_size, other.name)
+    except OSError:
+        return False
 
 
 def as_json(buckets: list[Bucket]) -> list[dict[str, Any]]:
