@@ -420,6 +420,8 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         stream="stdout",
     ),
     "replay-folder-one-damaged": lambda t: _one_damaged(t),
+    # a -jobs folder's worker logs were listed, each "skipped (not a test case)" with a warning
+    "replay-folder-with-job-logs": lambda t: _with_job_logs(t),
     "replay-sidecar-symlink-loop": lambda t: Row([str(_sidecar_loop(t))], 2, "cannot read the sidecar"),
     "replay-crash-symlink-loop": lambda t: Row(["replay", str(_loop(t / "crash-loop"))], 2, "crash-loop"),
     "minimize-output-is-a-file": lambda t: Row(
@@ -611,6 +613,19 @@ def _one_damaged(tmp: Path) -> Row:
         assert "now agrees" in run.stdout
 
     row.checks.append(good_one_still_replayed)
+    return row
+
+
+def _with_job_logs(tmp: Path) -> Row:
+    folder = copy_crash(tmp).parent
+    for job in (0, 1, 12):
+        (folder / f"fuzz-{job}.log").write_text("INFO: Running with entropic power schedule\n")
+    row = Row(["replay", str(folder)], 0, "now agrees", stream="stdout")
+
+    def logs_not_listed(run: subprocess.CompletedProcess[str]) -> None:
+        assert "fuzz-" not in run.stdout + run.stderr and "skipped" not in run.stdout
+
+    row.checks.append(logs_not_listed)
     return row
 
 

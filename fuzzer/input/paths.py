@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import os
+import re
 import stat
 import tempfile
 from collections.abc import Iterable
@@ -28,6 +29,9 @@ class PathError(ConfigError):
 
 
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
+
+_JOB_LOG = re.compile(r"fuzz-[0-9]+\.log")
+"""The log libFuzzer's ``-jobs`` writes per worker into the artifacts folder."""
 
 
 def given_path(text: str) -> Path:
@@ -108,6 +112,7 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
                 if f.is_file()
                 and not f.name.endswith((".json", ".jsonl"))
                 and not f.name.startswith(".")
+                and not _JOB_LOG.fullmatch(f.name)  # a -jobs worker's log, never a test case
                 and (not f.is_symlink() or contained(path, f))  # a folder's link out of it: not read
             )
         elif not stat.S_ISREG(mode):
