@@ -482,9 +482,11 @@ def test_report_of_a_real_campaign(campaign: tuple[Path, Path]) -> None:
     assert {"status", "representation"} <= kinds, kinds
     for bucket in data.buckets:
         assert bucket.key in text
-        assert f"python fuzz_diff.py {bucket.best.resolve()}" in text
-        assert f"python fuzz_diff.py view {bucket.best.resolve()}" in text
-        assert f"python fuzz_diff.py export-bag {bucket.best.resolve()}" in text
+        # the plugin targets named, as a replay needs them (its command exited 2 without)
+        targets = ",".join(bucket.sidecar["config"]["targets"])  # type: ignore[index]
+        assert f"python fuzz_diff.py {bucket.best.resolve()} --targets {targets}</code>" in text
+        assert f"python fuzz_diff.py view {bucket.best.resolve()}</code>" in text
+        assert f"python fuzz_diff.py export-bag {bucket.best.resolve()}</code>" in text
         arm = page.parent / f"arm-{bucket.key}.png"
         assert arm.read_bytes().startswith(PNG_MAGIC), f"no 3D view for {bucket.key}"
     assert "same signature as recorded" in text

@@ -79,8 +79,9 @@ def _joints(view: BucketView) -> str:
 
 
 def _subcommand(replay: str, command: str) -> str:
-    """The replay command line turned into another subcommand on the same file."""
-    return replay.replace(" fuzz_diff.py ", f" fuzz_diff.py {command} ", 1)
+    """The replay command line turned into another subcommand on the same file (``view`` and
+    ``export-bag`` draw from the sidecar's outcomes and take no ``--targets``)."""
+    return replay.split(" --targets ", 1)[0].replace(" fuzz_diff.py ", f" fuzz_diff.py {command} ", 1)
 
 
 def _bucket(index: int, view: BucketView, arm: ArmView | None, steps: str = "") -> str:

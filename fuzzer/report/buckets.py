@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import shlex
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from fuzzer.report.records import _int, _number
@@ -98,6 +99,19 @@ def compact_json(value: Any, limit: int = MESSAGE_CHARS) -> str:
     return text if len(text) <= limit else text[:limit] + f" ... ({len(text) - limit} more characters)"
 
 
+def replay_command(path: Path, sidecar: dict[str, Any] | None) -> str:
+    """The command that replays ``path``: with ``--targets`` naming a file's non-builtin
+    targets, which a replay never imports on the file's word alone (the reader sees what runs)."""
+    from fuzzer.artifacts.trust import foreign_targets
+
+    command = f"python fuzz_diff.py {shlex.quote(str(path.resolve()))}"
+    config = sidecar.get("config") if isinstance(sidecar, dict) else None
+    targets = config.get("targets") if isinstance(config, dict) else None
+    if isinstance(targets, list) and all(isinstance(t, str) for t in targets) and foreign_targets(targets):
+        command += f" --targets {shlex.quote(','.join(targets))}"
+    return command
+
+
 def bucket_view(bucket: Bucket) -> BucketView:
     path = bucket.best
     try:
@@ -112,7 +126,7 @@ def bucket_view(bucket: Bucket) -> BucketView:
         path=str(path),
         representative=str(bucket.representative),
         minimized=str(bucket.minimized) if bucket.minimized else None,
-        replay=f"python fuzz_diff.py {shlex.quote(str(path.resolve()))}",
+        replay=replay_command(path, bucket.sidecar),
         size=size,
     )
     sidecar = bucket.sidecar
