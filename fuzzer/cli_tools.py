@@ -205,12 +205,19 @@ def promote_main(argv: Sequence[str]) -> int:
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
     parser.add_argument("--suite", type=given_path, default=SUITE, help=f"suite folder (default {SUITE})")
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
+        "another working folder; it must be the campaign's file (SHA-256), and is kept in the suite",
+    )
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     status = 0
     for crash in _inputs(args.crash, folders=False):
         try:
-            done = promote(crash, args.fixed, args.note, args.suite, trust=args.trust_sidecar)
+            trust = args.trust_sidecar
+            done = promote(crash, args.fixed, args.note, args.suite, trust=trust, robot=args.robot)
         except PromoteError as exc:
             reporting.out(f"not promoted: {exc}")
             status = max(status, 1)

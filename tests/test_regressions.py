@@ -104,7 +104,8 @@ def test_promote_keeps_a_robot_file_the_suite_can_replay_elsewhere(
     known = next(p for p in FILES if p.name.startswith("minimized-481e74c1"))  # ikpy, scaled_axes.urdf
     campaign = tmp_path / "campaign"
     (campaign / "robots").mkdir(parents=True)
-    shutil.copyfile(ROOT / "tests/regressions/urdfs/scaled_axes.urdf", campaign / "robots/arm.urdf")
+    arm = campaign / "robots/arm.urdf"
+    shutil.copyfile(ROOT / "tests/regressions/urdfs/scaled_axes.urdf", arm)
     sidecar = load_sidecar(known)
     assert sidecar is not None
     del sidecar["regression"]
@@ -127,6 +128,19 @@ def test_promote_keeps_a_robot_file_the_suite_can_replay_elsewhere(
     assert replayed.result is Result.SAME and ROBOT_CHANGED not in replayed.detail
     # the default suite names its copies from the repository's root, as the shipped ones are
     assert _suite_name(SUITE / "urdfs" / "x.urdf", SUITE) == "tests/regressions/urdfs/x.urdf"
+    # promoted from another folder: the relative path leads nowhere, and --robot names the file
+    with pytest.raises(PromoteError, match="promote takes --robot"):
+        promote(crash, fixed=False, suite=tmp_path / "elsewhere", trust=True)
+    elsewhere = promote(crash, fixed=False, suite=tmp_path / "elsewhere", trust=True, robot=str(arm))
+    assert load_sidecar(elsewhere.path)["regression"]["robot_from"] == str(arm)  # type: ignore[index]
+    with pytest.raises(PromoteError, match="not the campaign's"):  # --robot must be the campaign's file
+        promote(
+            crash,
+            fixed=False,
+            suite=tmp_path / "other",
+            trust=True,
+            robot=str(ROOT / "tests/regressions/urdfs/tilted.urdf"),
+        )
     # a robot file edited since the campaign is not kept as if it were the campaign's
     (campaign / "robots/arm.urdf").write_text((campaign / "robots/arm.urdf").read_text() + "\n")
     monkeypatch.chdir(campaign)

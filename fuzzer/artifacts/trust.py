@@ -61,7 +61,8 @@ def outside(spec: str, folders: tuple[Path, ...]) -> bool:
 
 
 OPTIONS_OF = (
-    "replay, minimize and a campaign take it; report, promote, export-bag and view take --trust-sidecar only"
+    "replay, minimize and a campaign take it; promote takes --robot; report, export-bag and view "
+    "take --trust-sidecar only"
 )
 """Where the options a refusal suggests (``--targets``, ``--robot``, ``--msg-path``) exist."""
 

@@ -46,8 +46,19 @@ class Promoted:
     expect: str
 
 
-def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust: bool = False) -> Promoted:
+def promote(
+    crash: Path,
+    fixed: bool,
+    note: str = "",
+    suite: Path = SUITE,
+    trust: bool = False,
+    robot: str | None = None,
+) -> Promoted:
     """Check the file's current verdict against what is asked, then add it to the suite.
+
+    ``robot`` (``--robot``) replaces the sidecar's robot, for a file whose robot path was
+    relative to another working folder; it must be the campaign's file (its SHA-256), and is
+    kept in the suite as any robot file is.
 
     Raises
     ------
@@ -64,9 +75,11 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
     if sidecar is None:
         raise PromoteError(f"{crash}: no sidecar; only divergence crash files can be promoted")
     try:
-        result = replay_file(crash, RunConfig(), {}, trust=trust)
+        result = replay_file(crash, RunConfig(), {"robot": robot} if robot else {}, trust=trust)
     except ConfigError as exc:
         raise PromoteError(str(exc)) from None
+    if ROBOT_CHANGED in result.detail:  # first: every verdict below is on another robot
+        raise PromoteError(f"{crash}: {ROBOT_CHANGED}; the suite keeps what the campaign ran on")
     if result.result is Result.EXPLAINED:
         raise PromoteError(
             f"{crash}: {result.result}; the suite keeps divergences and fixed ones that agree "
@@ -83,8 +96,6 @@ def promote(crash: Path, fixed: bool, note: str = "", suite: Path = SUITE, trust
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:
         raise PromoteError(f"{crash}: {result.result}; promote it with --fixed if it is fixed")
-    if ROBOT_CHANGED in result.detail:
-        raise PromoteError(f"{crash}: {ROBOT_CHANGED}; the suite keeps what the campaign ran on")
     robot = result.config.robot if result.config is not None else robots.DEFAULT_ROBOT
     target = suite / crash.name
     try:
