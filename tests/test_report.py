@@ -33,6 +33,8 @@ from fuzzer.report.tables import (
     ROW_COORDINATES,
     ROW_CRASH,
     ROW_OTHER,
+    ROW_OTHER_UNITS,
+    ROW_PROPERTY,
     ROW_ROTATIONS,
     ROW_STATUS,
     classify,
@@ -171,6 +173,12 @@ def external_references(page: str) -> list[str]:
         ({"kind": "value", "field": "orientation", "sign_flip": True, "difference": 0.5}, ROW_ROTATIONS),
         ({"kind": "status", "field": "status", "difference": 0.0}, ROW_STATUS),
         ({"kind": "crash", "field": "status"}, ROW_CRASH),
+        (
+            {"kind": "value", "field": "cartesian_path.trajectory.time_from_start", "unit": "s"},
+            ROW_OTHER_UNITS,
+        ),
+        ({"kind": "value", "difference": 0.5, "unit": "rad"}, ROW_ABOVE_1E1),
+        ({"kind": "property", "field": "cartesian_path.acceleration_limits"}, ROW_PROPERTY),
         ({"kind": "flaky"}, ROW_OTHER),
         ({"kind": "ill_conditioned", "field": "status"}, ROW_OTHER),
     ],
@@ -187,7 +195,7 @@ def test_table_iii_counts_and_proportions_over_executions() -> None:
     assert rows[ROW_1E2_1E1].count == 2 and rows[ROW_1E2_1E1].share == pytest.approx(2 / 10)
     assert rows[ROW_ROTATIONS].count == 4 and rows[ROW_COORDINATES].count == 0
     assert rows[ROW_STATUS].count == 1 and rows[ROW_CRASH].count == 0
-    assert ROW_OTHER not in rows, "the catch-all row only appears when something falls in it"
+    assert not {ROW_OTHER, ROW_OTHER_UNITS, ROW_PROPERTY} & set(rows), "rows not the paper's: only when used"
     total = table_iii(lines, 200)[-1]
     assert total.group == "total" and total.count == 10 and total.proportion == pytest.approx(0.05)
     assert sum(r.count for r in table_iii(lines, 200)[:-1]) == total.count, "rows partition the divergences"

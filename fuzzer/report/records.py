@@ -92,6 +92,8 @@ class Divergence:
     t: float | None = None
     pid: int | None = None
     sha1: str = ""
+    unit: str = ""
+    """The difference's unit (m, rad, s, ...; empty in logs from before it was recorded)."""
 
     @classmethod
     def parse(cls, record: Mapping[str, Any]) -> Divergence | None:
@@ -119,6 +121,7 @@ class Divergence:
             t=_time(record.get("t")),
             pid=pid if isinstance(pid, int) and not isinstance(pid, bool) else None,
             sha1=sha1 if isinstance(sha1, str) else "",
+            unit=unit if isinstance(unit := record.get("unit"), str) else "",
         )
 
 

@@ -18,10 +18,12 @@ from fuzzer.report.records import Divergence, Process
 ROW_BELOW_1E2 = "range < 1e-2"
 ROW_1E2_1E1 = "1e-2 .. 1e-1"
 ROW_ABOVE_1E1 = ">= 1e-1"
+ROW_OTHER_UNITS = "in other units (s, rad/s, ...)"
 ROW_COORDINATES = "coordinate values"
 ROW_ROTATIONS = "rotation values"
 ROW_STATUS = "different status or error"
 ROW_CRASH = "crash of a target"
+ROW_PROPERTY = "a target breaks the contract"
 ROW_OTHER = "ill-conditioned, flaky or other"
 
 GROUP_RANGE = "value difference"
@@ -37,7 +39,11 @@ TABLE_III_RULES = (
     "numbers) or a value divergence whose differing numbers have opposite signs. "
     "Field joint_values or position: coordinate values; field orientation: rotation values.",
     "Value difference: the remaining 'value' divergences, by their difference d (metres or "
-    "radians, after canonicalization): d < 1e-2, 1e-2 <= d < 1e-1, d >= 1e-1 (or not finite).",
+    "radians, after canonicalization): d < 1e-2, 1e-2 <= d < 1e-1, d >= 1e-1 (or not finite); "
+    "a scenario's differences in other units (a duration in s, a velocity, a count of points) "
+    "have a row of their own, shown when not empty.",
+    "Property: kind 'property' (one target's answer breaks the contract whatever the other says, "
+    "e.g. accelerations above the limits), shown when not empty.",
     "Ill-conditioned (an IK status flip caused by a singular seed), flaky (non-deterministic) "
     "and anything else: the last row.",
     "Numbers: divergent executions. Proportion: of all executions, as in the paper "
@@ -67,6 +73,8 @@ def classify(line: Divergence) -> str:
         return ROW_CRASH
     if line.kind == "status":
         return ROW_STATUS
+    if line.kind == "property":
+        return ROW_PROPERTY
     if line.kind in ("representation", "value") and (line.kind == "representation" or line.sign_flip):
         field_ = line.field.split(".", 1)[-1]  # a scenario's field is "<step kind>.<quantity>"
         if field_ == "orientation":
@@ -75,6 +83,8 @@ def classify(line: Divergence) -> str:
             return ROW_COORDINATES
         return ROW_OTHER
     if line.kind == "value":
+        if line.unit not in ("", "m", "rad"):
+            return ROW_OTHER_UNITS
         d = line.difference
         if not math.isfinite(d) or d >= 1e-1:
             return ROW_ABOVE_1E1
@@ -86,18 +96,25 @@ TABLE_III_LAYOUT = (
     (GROUP_RANGE, ROW_BELOW_1E2),
     (GROUP_RANGE, ROW_1E2_1E1),
     (GROUP_RANGE, ROW_ABOVE_1E1),
+    (GROUP_RANGE, ROW_OTHER_UNITS),
     (GROUP_SIGN, ROW_COORDINATES),
     (GROUP_SIGN, ROW_ROTATIONS),
     (GROUP_STATUS, ROW_STATUS),
     (GROUP_STATUS, ROW_CRASH),
+    (GROUP_STATUS, ROW_PROPERTY),
     ("", ROW_OTHER),
 )
+
+
+OPTIONAL = (ROW_OTHER_UNITS, ROW_PROPERTY, ROW_OTHER)
+"""Rows the paper's Table III has not: shown only when a divergence falls in them."""
 
 
 def table_iii(lines: Sequence[Divergence], executions: int) -> list[TableRow]:
     """Table III: divergent executions per row, then a total row (group ``total``).
 
-    The last row (ill-conditioned, flaky, other) is left out when empty.
+    The rows that are not the paper's (other units, property, and the last: ill-conditioned,
+    flaky, other) are left out when empty.
     """
     counts = Counter(classify(line) for line in lines)
     total = len(lines)
@@ -106,7 +123,9 @@ def table_iii(lines: Sequence[Divergence], executions: int) -> list[TableRow]:
         return TableRow(group, label, n, n / executions if executions else None, n / total if total else None)
 
     rows = [
-        row(g, label, counts[label]) for g, label in TABLE_III_LAYOUT if label != ROW_OTHER or counts[label]
+        row(g, label, counts[label])
+        for g, label in TABLE_III_LAYOUT
+        if label not in OPTIONAL or counts[label]
     ]
     rows.append(row("total", "all divergent executions", total))
     return rows
