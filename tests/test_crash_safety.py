@@ -149,6 +149,28 @@ def test_a_claim_without_file_or_temporaries_is_released(tmp_path: Path) -> None
     assert assert_every_claim_complete(tmp_path) == 1
 
 
+def test_a_marker_not_of_the_stores_making_is_released(tmp_path: Path) -> None:
+    """A marker naming no crash file held its signature for good: every divergence of it was
+    lost, the campaign exiting 0 (the special-files probe)."""
+    (tmp_path / ".signatures").mkdir()
+    (tmp_path / ".signatures" / "junk").write_text("not a crash file's name\n")
+    store = ArtifactStore(tmp_path)
+    assert not (tmp_path / ".signatures" / "junk").exists()
+    assert store.record("junk", b"data", _sidecar("junk")) is not None
+
+
+def test_a_linked_markers_folder_is_refused(tmp_path: Path) -> None:
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "empty").touch()
+    art = tmp_path / "art"
+    art.mkdir()
+    (art / ".signatures").symlink_to(outside)
+    with pytest.raises(OSError, match="symbolic link"):
+        ArtifactStore(art)
+    assert [p.name for p in outside.iterdir()] == ["empty"]
+
+
 def test_crash_files_are_synced_and_generated_seeds_are_not(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -197,7 +219,7 @@ def test_without_hard_links_claims_still_name_their_file(
     assert assert_every_claim_complete(tmp_path) == 1
 
 
-def test_hostile_markers_and_planted_fifos_are_left_alone(tmp_path: Path) -> None:
+def test_hostile_markers_are_released_and_planted_fifos_left_alone(tmp_path: Path) -> None:
     ArtifactStore(tmp_path)
     (tmp_path / ".signatures" / "evil").write_text("../../etc/passwd")
     (tmp_path / ".signatures" / "nul").write_bytes(b"crash-\x00")
@@ -206,8 +228,13 @@ def test_hostile_markers_and_planted_fifos_are_left_alone(tmp_path: Path) -> Non
     os.mkfifo(tmp_path / ".signatures" / "fifo")
     store = ArtifactStore(tmp_path)  # returns: nothing is opened that could block
     assert not store.recovered
-    assert (tmp_path / ".signatures" / "evil").exists() and (tmp_path / ".signatures" / "nul").exists()
+    # released, their content never followed: a marker naming no crash file of ours held its
+    # signature for good, and every divergence of it was lost (the special-files probe)
+    assert (
+        not (tmp_path / ".signatures" / "evil").exists() and not (tmp_path / ".signatures" / "nul").exists()
+    )
     assert not (tmp_path / ".signatures" / "empty").exists()  # released: can be written again
+    assert (tmp_path / ".signatures" / "fifo").exists()  # never opened (a campaign refuses the folder)
 
 
 def test_clean_up_removes_only_temporaries_of_dead_or_stale_writers(tmp_path: Path) -> None:
@@ -220,14 +247,16 @@ def test_clean_up_removes_only_temporaries_of_dead_or_stale_writers(tmp_path: Pa
         live = tmp_path / f".tmp-crash-a.{sleeper.pid}.00000000"
         dead = tmp_path / f".tmp-crash-b.{dead_pid}.00000000"
         stale = tmp_path / f".tmp-crash-c.{sleeper.pid}.11111111"
-        unnamed = tmp_path / ".tmp-crash-d"
-        for path in (live, dead, stale, unnamed):
+        # names not of the store's making are a user's files (a corpus folder's .tmp-notes.txt
+        # was deleted at every campaign's start: the special-files probe)
+        unnamed, notes = tmp_path / ".tmp-crash-d", tmp_path / ".tmp-notes.txt"
+        for path in (live, dead, stale, unnamed, notes):
             path.write_bytes(b"x")
         old = time.time() - STALE_SECONDS - 60
         os.utime(stale, (old, old))
         removed = set(clean_temporaries(tmp_path))
-        assert removed == {dead, stale, unnamed}
-        assert live.exists()
+        assert removed == {dead, stale}
+        assert live.exists() and unnamed.exists() and notes.exists()
     finally:
         sleeper.kill()
         sleeper.wait()

@@ -45,6 +45,25 @@ def test_writing_ahead_into_a_missing_folder_raises_oserror(tmp_path: Path) -> N
         guard.write_ahead(tmp_path / "missing", DATA)
 
 
+def test_a_link_or_fifo_planted_under_the_predictable_name_is_replaced_not_followed(tmp_path: Path) -> None:
+    """The name is the SHA-1 of a seed a default campaign always draws first: a dangling link
+    there had the campaign create the file it led to, and a FIFO blocked it (the special-files
+    probe)."""
+    import os
+
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    name = guard.PENDING + hashlib.sha1(DATA).hexdigest()
+    victim = tmp_path / "victim"
+    (corpus / name).symlink_to(victim)
+    pending = guard.write_ahead(corpus, DATA)
+    assert not victim.exists() and not pending.is_symlink() and pending.read_bytes() == DATA
+    pending.unlink()
+    os.mkfifo(corpus / name)
+    assert guard.write_ahead(corpus, DATA).read_bytes() == DATA  # replaced, never opened
+    assert sorted(p.name for p in corpus.iterdir()) == [name], "no temporary left"
+
+
 def _program(body: str, corpus: Path, artifacts: Path) -> str:
     return f"""
 import ctypes, signal

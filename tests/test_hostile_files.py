@@ -484,6 +484,25 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "corpus-under-a-file": lambda t: Row(
         [str(_touch(t / "file") / "corpus"), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "is a file"
     ),
+    # entries of the artifacts folder the campaign writes: a FIFO blocked it before its first input
+    # (past SIGTERM), links had it read, write and delete elsewhere (the special-files probe)
+    "artifacts-stats-fifo": lambda t: _artifacts_entry(t, "stats.jsonl", "fifo", r"stats\.jsonl is a FIFO"),
+    "artifacts-log-link": lambda t: _artifacts_entry(
+        t, "divergences.jsonl", "link", r"divergences\.jsonl is a symbolic link"
+    ),
+    "artifacts-job-log-fifo": lambda t: _artifacts_entry(t, "fuzz-0.log", "fifo", r"fuzz-0\.log is a FIFO"),
+    "artifacts-signatures-link": lambda t: _artifacts_entry(
+        t, ".signatures", "folder-link", r"\.signatures is a symbolic link"
+    ),
+    "artifacts-marker-fifo": lambda t: _artifacts_entry(
+        t, ".signatures/8214519f3677", "fifo", r"\.signatures/8214519f3677 is a FIFO"
+    ),
+    "artifacts-inside-corpus": lambda t: Row(
+        [str(_mkdir(t / "c")), *CAMPAIGN, f"--artifacts={t / 'c' / 'art'}"], 2, "inside the corpus folder"
+    ),
+    "artifacts-equal-corpus": lambda t: Row(
+        [str(_mkdir(t / "c")), *CAMPAIGN, f"--artifacts={t / 'c'}"], 2, "inside the corpus folder"
+    ),
     "corpus-is-fifo": lambda t: Row([str(_fifo(t / "fifo")), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "FIFO"),
     "corpus-is-device": lambda t: Row(["/dev/null", *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "device"),
     "artifacts-is-a-file": lambda t: Row(
@@ -613,6 +632,33 @@ def _one_damaged(tmp: Path) -> Row:
         assert "now agrees" in run.stdout
 
     row.checks.append(good_one_still_replayed)
+    return row
+
+
+def _mkdir(path: Path) -> Path:
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _artifacts_entry(tmp: Path, name: str, what: str, says: str) -> Row:
+    art = _mkdir(tmp / "a")
+    entry = art / name
+    entry.parent.mkdir(exist_ok=True)
+    outside = _mkdir(tmp / "outside")
+    kept = outside / "empty-user-file"
+    kept.touch()
+    if what == "fifo":
+        os.mkfifo(entry)
+    elif what == "link":
+        entry.symlink_to(outside / "log.txt")
+    else:
+        entry.symlink_to(outside)
+    row = Row([str(_mkdir(tmp / "c")), *CAMPAIGN, f"--artifacts={art}"], 2, says)
+
+    def nothing_outside_touched(run: subprocess.CompletedProcess[str]) -> None:
+        assert sorted(p.name for p in outside.iterdir()) == ["empty-user-file"]
+
+    row.checks.append(nothing_outside_touched)
     return row
 
 

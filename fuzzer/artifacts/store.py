@@ -19,6 +19,7 @@ temporaries is dropped, so its signature can be written again.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import os
 import re
@@ -117,12 +118,16 @@ def abandoned(tmp: Path, now: float | None = None) -> bool:
         return False  # renamed meanwhile by its writer
 
 
+TEMPORARY = re.compile(re.escape(TMP_PREFIX) + r".+\.[0-9]+\.[0-9a-f]{8}")
+"""The name :func:`_temporary` gives (a user's ``.tmp-notes.txt`` is not one)."""
+
+
 def clean_temporaries(directory: Path) -> list[Path]:
     """Remove leftovers of interrupted writes of dead processes; return what was removed."""
     removed = []
     if directory.is_dir():
         for path in directory.glob(f"{TMP_PREFIX}*"):
-            if abandoned(path):
+            if TEMPORARY.fullmatch(path.name) and abandoned(path):
                 path.unlink(missing_ok=True)
                 removed.append(path)
     return removed
@@ -158,6 +163,8 @@ class ArtifactStore:
     def __init__(self, directory: Path) -> None:
         self.directory = directory
         self.markers = directory / ".signatures"
+        if self.markers.is_symlink():  # its markers read, written and deleted wherever it led
+            raise OSError(errno.ELOOP, "a symbolic link, not the artifacts folder's own", str(self.markers))
         self.markers.mkdir(parents=True, exist_ok=True)
         self.recorded = 0
         self.recovered = self.recover()
@@ -271,8 +278,9 @@ class ArtifactStore:
                     if not any(not abandoned(t) for t in self.directory.glob(f"{TMP_PREFIX}*")):
                         marker.unlink(missing_ok=True)
                     continue
-            if not CRASH_NAME.fullmatch(name):
-                continue  # not written by us: leave it alone
+            if not CRASH_NAME.fullmatch(name):  # not written by us: it held the signature with no
+                marker.unlink(missing_ok=True)  # crash file, whose divergences were then lost
+                continue
             crash = self.directory / name
             if crash.is_file() and sidecar_path(crash).is_file():
                 continue

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import stat
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -187,4 +188,58 @@ def prepare_campaign(corpus: Sequence[Path], artifacts: Path, *, merge: bool = F
         prepare_folder(path, "corpus", writable=not folders)
         folders.append(path)
     prepare_folder(artifacts, "artifacts", writable=True)
+    for folder in folders:
+        real = os.path.realpath(folder)
+        if os.path.realpath(artifacts) == real or os.path.realpath(artifacts).startswith(real + os.sep):
+            raise PathError(
+                f"artifacts {artifacts}: inside the corpus folder {folder} (libFuzzer would read the "
+                "campaign's logs and crash files as inputs); name another --artifacts"
+            )
+    check_artifacts(artifacts)
     return folders
+
+
+def check_artifacts(artifacts: Path) -> None:
+    """Refuse an artifacts folder whose entries a campaign writes are not regular files of its own:
+    a FIFO named ``stats.jsonl`` or ``divergences.jsonl`` blocked the campaign before its first
+    input (past a SIGTERM, which waits for the next input), and a link named ``.signatures`` or
+    ``stats.jsonl`` had it read, write and delete files elsewhere.
+
+    Raises
+    ------
+    fuzzer.input.paths.PathError
+        Naming the entry and what it is.
+    """
+    from fuzzer.artifacts.divlog import DIVERGENCES, STATS
+    from fuzzer.input.paths import JOB_LOG, kind_of
+
+    def refuse(path: Path, mode: int) -> None:
+        raise PathError(
+            f"artifacts {artifacts}: {path.name} is {kind_of(mode)}, where the campaign keeps a "
+            f"regular file of its own; remove it or name another --artifacts"
+        )
+
+    with os.scandir(artifacts) as entries:
+        for entry in entries:
+            if entry.name in (DIVERGENCES, STATS) or JOB_LOG.fullmatch(entry.name):
+                mode = entry.stat(follow_symlinks=False).st_mode
+                if not stat.S_ISREG(mode):
+                    refuse(Path(entry.path), mode)
+    markers = artifacts / ".signatures"
+    try:
+        mode = markers.lstat().st_mode
+    except FileNotFoundError:
+        return
+    if not stat.S_ISDIR(mode):
+        raise PathError(
+            f"artifacts {artifacts}: .signatures is {kind_of(mode)}, where the campaign keeps its "
+            "folder of signature markers; remove it or name another --artifacts"
+        )
+    with os.scandir(markers) as entries:
+        for entry in entries:
+            mode = entry.stat(follow_symlinks=False).st_mode
+            if not stat.S_ISREG(mode):
+                raise PathError(
+                    f"artifacts {artifacts}: .signatures/{entry.name} is {kind_of(mode)}, not a marker "
+                    "the campaign wrote (a divergence of that signature would be lost); remove it"
+                )

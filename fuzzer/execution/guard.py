@@ -28,6 +28,7 @@ started and stopped).
 from __future__ import annotations
 
 import contextlib
+import errno
 import faulthandler
 import hashlib
 import os
@@ -37,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
+from fuzzer.artifacts.store import atomic_write
 
 PENDING = "first-input-"
 """Name prefix of a written-ahead input in a corpus folder."""
@@ -82,8 +84,12 @@ def write_ahead(corpus: Path, data: bytes) -> Path:
     OSError
         It could not be written.
     """
+    if not corpus.is_dir():  # gone (atomic_write would make it again)
+        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(corpus))
     pending = corpus / f"{PENDING}{hashlib.sha1(data).hexdigest()}"
-    pending.write_bytes(data)
+    # written whole and renamed over the name (no fsync: it is made again if lost): a link or
+    # FIFO planted under that predictable name is replaced, never followed or opened
+    atomic_write(pending, data, durable=False)
     return pending
 
 

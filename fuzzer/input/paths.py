@@ -30,7 +30,7 @@ class PathError(ConfigError):
 
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
 
-_JOB_LOG = re.compile(r"fuzz-[0-9]+\.log")
+JOB_LOG = re.compile(r"fuzz-[0-9]+\.log")
 """The log libFuzzer's ``-jobs`` writes per worker into the artifacts folder."""
 
 
@@ -45,7 +45,10 @@ def given_path(text: str) -> Path:
     return Path(text)
 
 
-def _kind(mode: int) -> str:
+def kind_of(mode: int) -> str:
+    """What a file of ``mode`` is, for messages ("a FIFO", "a symbolic link", ...)."""
+    if stat.S_ISLNK(mode):
+        return "a symbolic link"
     if stat.S_ISFIFO(mode):
         return "a FIFO"
     if stat.S_ISSOCK(mode):
@@ -66,7 +69,7 @@ def file_problem(path: Path) -> str | None:
         return "no such file"
     except OSError as exc:
         return str(exc.strerror or exc)
-    return None if stat.S_ISREG(mode) else f"is {_kind(mode)}, not a regular file"
+    return None if stat.S_ISREG(mode) else f"is {kind_of(mode)}, not a regular file"
 
 
 def is_sidecar(path: Path) -> bool:
@@ -112,11 +115,11 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
                 if f.is_file()
                 and not f.name.endswith((".json", ".jsonl"))
                 and not f.name.startswith(".")
-                and not _JOB_LOG.fullmatch(f.name)  # a -jobs worker's log, never a test case
+                and not JOB_LOG.fullmatch(f.name)  # a -jobs worker's log, never a test case
                 and (not f.is_symlink() or contained(path, f))  # a folder's link out of it: not read
             )
         elif not stat.S_ISREG(mode):
-            raise PathError(f"{path}: is {_kind(mode)}, not a regular file")
+            raise PathError(f"{path}: is {kind_of(mode)}, not a regular file")
         elif not _beside_crash_files(path):
             out.append(path)
     if not out:
@@ -146,7 +149,7 @@ def prepare_folder(path: Path, role: str, *, writable: bool) -> None:
     except OSError as exc:
         raise PathError(f"{role} {path}: {exc.strerror or exc}") from None
     if mode is not None and not stat.S_ISDIR(mode):
-        raise PathError(f"{role} {path}: is {_kind(mode)}, not a folder")
+        raise PathError(f"{role} {path}: is {kind_of(mode)}, not a folder")
     if mode is None:
         try:
             path.mkdir(parents=True, exist_ok=True)
@@ -178,7 +181,7 @@ def check_input_file(path: Path) -> None:
     except OSError:
         return
     if not (stat.S_ISDIR(mode) or stat.S_ISREG(mode)):
-        raise PathError(f"corpus {path}: is {_kind(mode)}, not a folder or a regular file")
+        raise PathError(f"corpus {path}: is {kind_of(mode)}, not a folder or a regular file")
 
 
 def contained(directory: Path, path: Path) -> bool:
