@@ -169,3 +169,21 @@ def test_promote_of_a_file_that_diverges_differently_points_nowhere_else(
         with pytest.raises(PromoteError, match="diverges differently") as refused:
             promote(copy, fixed=fixed, suite=tmp_path / "suite", trust=True)
         assert "--fixed" not in str(refused.value) and "the file's 000000000000" in str(refused.value)
+
+
+def test_an_unreadable_crash_file_is_an_error_not_skipped(monkeypatch: pytest.MonkeyPatch) -> None:
+    """It read "skipped (not a test case: Permission denied)" with exit 0, which CI takes for a
+    pass; promote then sent --fixed and its absence at each other (the special-files probe)."""
+    from fuzzer.input.paths import PathError
+    from fuzzer.triage import replay
+
+    def unreadable(path: Path) -> None:
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(replay, "read_case", unreadable)
+    known = FILES[0]
+    with pytest.raises(PathError, match="cannot be read: Permission denied"):
+        replay_file(known, RunConfig(), {}, trust=True)
+    with pytest.raises(PromoteError, match="cannot be read"):
+        promote(known, fixed=False, suite=ROOT / "nowhere", trust=True)

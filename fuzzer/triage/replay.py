@@ -29,7 +29,7 @@ from fuzzer.artifacts.trust import config_from, describe
 from fuzzer.execution.evaluate import Evaluation, Verdict
 from fuzzer.execution.records import UNCOUNTED
 from fuzzer.execution.session import ConfigError, RunConfig, Session
-from fuzzer.input.paths import crash_inputs
+from fuzzer.input.paths import PathError, crash_inputs
 from fuzzer.input.testcase import TestCase, TestCaseError, read_case
 from fuzzer.report.steps import SCENARIO_TYPE, scenario_steps
 
@@ -120,7 +120,9 @@ def replay_file(
     unrecorded = sidecar is None
     try:
         case = read_case(path)
-    except (OSError, TestCaseError) as exc:
+    except OSError as exc:  # unreadable: an error (exit 2), not a file that is no test case (exit 0)
+        raise PathError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+    except TestCaseError as exc:
         return Replay(path, Result.SKIPPED, None, None, f"not a test case: {exc}", config, not unrecorded)
     cache = sessions if sessions is not None else {}
     if config not in cache:
