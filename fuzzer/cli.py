@@ -25,6 +25,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from fuzzer import reporting
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactsUnwritable
 from fuzzer.cli_options import (
     SUBCOMMANDS,
@@ -109,7 +110,6 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
     if seed is None:
         value = flag_value(tuple(flags), "-seed") or "0"  # the last -seed, as libFuzzer takes it
         seed = int(value) if value.lstrip("-").isdigit() else 0
-    from fuzzer import reporting
     from fuzzer.execution.tolerance import below_ik_precision
 
     noise = below_ik_precision(config.op, config.tolerance)
@@ -206,7 +206,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"unrecognized arguments: {' '.join(extra)}")
         return campaign_main(flags, known)
     except (UsageError, ConfigError) as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), lines=True)}\n")
         return 2
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()
@@ -215,7 +215,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return WRITE_FAILED_EXIT
     except OSError as exc:  # a full disk or a read-only folder (a campaign's seeds, a tool's output)
         where = f"{exc.filename}: " if exc.filename else ""
-        sys.stderr.write(f"fuzz_diff.py: error: {where}{exc.strerror or exc}\n")
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(f'{where}{exc.strerror or exc}')}\n")
         _silence_stdout()
         return WRITE_FAILED_EXIT
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM before libFuzzer runs (then Atheris ends it)

@@ -42,7 +42,7 @@ def replay_main(argv: Sequence[str]) -> int:
         diverging += result.diverges
         reporting.verdict(str(path), str(result.result), result.detail)
         for line in result.steps[1:]:
-            reporting.out("    " + line)
+            reporting.out(reporting.shown("    " + line))
     return 2 if errors else (1 if diverging else 0)
 
 
@@ -51,7 +51,7 @@ def _skip_file(exc: ConfigError, files: list[Path]) -> None:
     caller counts it); with a single file, the error is the command's (re-raised)."""
     if len(files) == 1:
         raise exc
-    sys.stderr.write(f"fuzz_diff.py: error: {exc}\n")
+    sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), lines=True)}\n")
 
 
 def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
@@ -191,7 +191,7 @@ def report_main(argv: Sequence[str]) -> int:
 
     prepare_folder(output, "report output", writable=True)
     page = write_report(args.directory, output, trust=args.trust_sidecar)
-    reporting.out(f"report: {page}")
+    reporting.out(reporting.shown(f"report: {page}"))
     return 0
 
 
@@ -219,10 +219,10 @@ def promote_main(argv: Sequence[str]) -> int:
             trust = args.trust_sidecar
             done = promote(crash, args.fixed, args.note, args.suite, trust=trust, robot=args.robot)
         except PromoteError as exc:
-            reporting.out(f"not promoted: {exc}")
+            reporting.out(reporting.shown(f"not promoted: {exc}"))
             status = max(status, 1)
             continue
-        reporting.out(f"promoted {done.path} (expect: {done.expect})")
+        reporting.out(reporting.shown(f"promoted {done.path} (expect: {done.expect})"))
     return status
 
 

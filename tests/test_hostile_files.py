@@ -420,6 +420,12 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         stream="stdout",
     ),
     "replay-folder-one-damaged": lambda t: _one_damaged(t),
+    # a name with line breaks printed fake verdict lines; one with ESC reached the terminal raw
+    "replay-name-with-line-breaks": lambda t: _odd_name(t, "replay"),
+    "triage-name-with-line-breaks": lambda t: _odd_name(t, "triage"),
+    "error-naming-a-name-with-escapes": lambda t: Row(
+        ["replay", str(t / "crash-gone\x1b[2J")], 2, r"crash-gone\\x1b\[2J: no such file"
+    ),
     # a -jobs folder's worker logs were listed, each "skipped (not a test case)" with a warning
     "replay-folder-with-job-logs": lambda t: _with_job_logs(t),
     "replay-sidecar-symlink-loop": lambda t: Row([str(_sidecar_loop(t))], 2, "cannot read the sidecar"),
@@ -632,6 +638,27 @@ def _one_damaged(tmp: Path) -> Row:
         assert "now agrees" in run.stdout
 
     row.checks.append(good_one_still_replayed)
+    return row
+
+
+def _odd_name(tmp: Path, command: str) -> Row:
+    crash = copy_crash(tmp)
+    odd = crash.with_name(crash.name + "\nfake: now agrees\x1b[31m")
+    crash.rename(odd)
+    crash.with_name(crash.name + ".json").rename(odd.with_name(odd.name + ".json"))
+    target = odd.parent if command == "triage" else odd
+    row = Row(
+        [command, str(target)],
+        0,
+        r"\\nfake: now agrees\\x1b\[31m",
+        stream="stdout",
+    )
+
+    def one_line_each(run: subprocess.CompletedProcess[str]) -> None:
+        assert not any(line.startswith("fake") for line in run.stdout.splitlines()), run.stdout
+        assert "\x1b" not in run.stdout + run.stderr
+
+    row.checks.append(one_line_each)
     return row
 
 

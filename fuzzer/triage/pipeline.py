@@ -223,7 +223,10 @@ def as_json(buckets: list[Bucket]) -> list[dict[str, Any]]:
 
 
 def table(buckets: list[Bucket]) -> list[str]:
-    """Plain-text lines listing the buckets (for the terminal)."""
+    """Plain-text lines listing the buckets (for the terminal; unprintable characters of names
+    and sidecar strings escaped, :func:`fuzzer.reporting.shown`)."""
+    from fuzzer.reporting import shown
+
     if not buckets:
         return ["no divergences"]
     total = sum(b.count for b in buckets)
@@ -234,7 +237,7 @@ def table(buckets: list[Bucket]) -> list[str]:
         scenario = b.scenario
         if scenario is not None:
             lines += [f"      {line}" for line in scenario.lines()]
-    return lines
+    return [shown(line) for line in lines]
 
 
 def dumps(buckets: list[Bucket]) -> str:
