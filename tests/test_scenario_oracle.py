@@ -448,6 +448,45 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
         )
     )
     assert judge(off, run(three), run(four), facts).kind is Kind.VALUE
+    # a knife edge explains only what a step count changes: with the same point count and
+    # fraction, a path point 1e-3 off is a value divergence (round waypoints hid such faults)
+    def planar(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        return (q[0], q[1], 0.0), (0.0, 0.0, 0.0, 1.0)  # the home state (0, 0) at the origin
+
+    moved = trajectory([(0.0, 0.0), (0.101, 0.0), (0.2, 0.0), (0.3, 0.0)])
+    planar_facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)
+    assert judge(edge, run(three), run(moved), planar_facts).kind is Kind.VALUE
+    assert judge(edge, run(three), run(four), planar_facts).kind is Kind.KNOWN_LIMITATION
+
+
+def test_a_path_fault_on_round_waypoints_is_found() -> None:
+    """The scenario probe's script on UR10: the second segment is 0.05 m long, d / eef_step =
+    5.000000000000004, and the twin's path points 1 mrad off were filed as the knife edge's
+    known limitation (0.0537 m: found)."""
+    ev = evaluator("scenario", "tests.plugins.scenario_faults:path_points_off", robot="ur10")
+    orientation = {
+        "x": 0.3399085536713776,
+        "y": 0.8694420481444167,
+        "z": 0.33974430758318547,
+        "w": 0.11448364740999402,
+    }
+    found = []
+    for second in (0.05, 0.0537):
+        poses = [
+            {
+                "position": {"x": 0.7908421609665358 + dx, "y": 0.4124368165441151, "z": 0.5034004963311072},
+                "orientation": orientation,
+            }
+            for dx in (0.0, second)
+        ]
+        steps = [
+            live("joint_target", position=[0.3, -1.2, 1.4, -1.0, 1.2, 0.4]),
+            live("go"),
+            live("cartesian_path", header=HEADER, poses=poses),
+        ]
+        c = ev.evaluate(TestCase("rrosfuzz/Scenario", {"steps": steps}), validated=True).comparison
+        found.append((c.kind, c.step, c.field))
+    assert found == [(Kind.VALUE, 2, "cartesian_path.trajectory.positions")] * 2
 
 
 def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:

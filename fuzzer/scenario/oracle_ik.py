@@ -5,8 +5,9 @@ A step solves IK when it is ``go`` or ``plan`` with a pose or position target in
 vector (``fuzzer.execution.oracle`` compares single IK calls by pose only). At such a step a divergence
 (other than of the status) is ``known_limitation`` when
 
-* ``cartesian_path``: a segment is on the knife edge of its step count (``d / eef_step``
-  within ``KNIFE_EDGE`` relative of an integer >= 1: ``floor`` may fall either way);
+* ``cartesian_path``: the two paths' point counts or fractions differ and a segment both
+  began is on the knife edge of its step count (``d / eef_step`` within ``KNIFE_EDGE``
+  relative of an integer >= 1: ``floor`` may fall either way);
 * ``cartesian_path``: the accelerations differ only at points on a switch of the time law's
   phase, each target reporting one of the contract's values there
   (``oracle_timing.phase_knife_edge``);
@@ -206,7 +207,11 @@ def classify(
         return _half_turn(a, b, c, before[0], facts) if ik else c
     gap = max(_gap([(before[0].state or (), before[1].state or ())]), _goal_gap(kind, before, tol))
     if ik:
-        if kind == "cartesian_path" and _knife_edge(call, i, before[0], facts):
+        if (
+            kind == "cartesian_path"
+            and extent_changed(kind, a, b)
+            and _knife_edge(call, i, before[0], facts, a, b)
+        ):
             return replace(c, kind=Kind.KNOWN_LIMITATION)
         switch = kind == "cartesian_path" and c.field.endswith(".trajectory.accelerations")
         if switch and phase_knife_edge(a, b, before, facts, ACCELERATION_TOLERANCE):
@@ -304,13 +309,25 @@ def _half_turn(a: Outcome, b: Outcome, c: Comparison, before: Context, facts: Sc
     return c
 
 
-def _knife_edge(call: ScenarioCall, i: int, before: Context, facts: ScenarioFacts) -> bool:
-    """Whether a segment's ``d / eef_step`` is within rounding of an integer >= 1."""
+def _knife_edge(
+    call: ScenarioCall, i: int, before: Context, facts: ScenarioFacts, a: Outcome, b: Outcome
+) -> bool:
+    """Whether a segment both paths began (each ``fraction`` at least the segment's index over the
+    number of waypoints) has its ``d / eef_step`` within rounding of an integer >= 1.
+
+    Its caller asks it only when the two paths' point counts or fractions differ (what a step
+    count decided either way changes): any segment on the edge, reached or not, explained any
+    divergence of the step, and round waypoints, which the fuzzer makes often, hid a fault of a
+    target's path points (the scenario probe)."""
     if before.state is None or facts.forward is None or not before.eef_step > 0.0:
         return False
     try:
+        poses = call.steps[i].message["poses"]
+        began = min(float(as_array(o.values.get("fraction", (0.0,))).min()) for o in (a, b))
         previous = facts.forward(before.state, None)[0]
-        for pose in call.steps[i].message["poses"]:
+        for j, pose in enumerate(poses):
+            if j / len(poses) > began + 1e-12:  # one path never began this segment
+                return False
             point = tuple(float(pose["position"][k]) for k in "xyz")
             ratio = math.dist(previous, point) / before.eef_step
             nearest = round(ratio) if math.isfinite(ratio) else 0

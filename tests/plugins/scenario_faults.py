@@ -16,6 +16,8 @@ Each is the Python twin with one behaviour changed, exposed as an object with
 * ``short_path_from_far_joints``: a Cartesian path from a state with a joint beyond 3 rad
   reports half the fraction it achieved (a fault a state split by 2pi would otherwise hide:
   ``fuzzer.scenario.common_start``).
+* ``path_points_off``: every point of a Cartesian path after its start is 1 mrad off in the
+  first joint (a fault that round waypoints, on the knife edge of a step count, once hid).
 """
 
 from __future__ import annotations
@@ -114,9 +116,22 @@ class _ShortPathGroup(python_impl.MoveGroup):
         return trajectory, fraction / 2.0 if far else fraction
 
 
+class _PathPointsOffGroup(python_impl.MoveGroup):
+    """Every Cartesian path point after the start 1e-3 rad off in the first joint (the fault)."""
+
+    def compute_cartesian_path(
+        self, waypoints: Any, eef_step: float, jump_threshold: float = 0.0
+    ) -> tuple[RobotTrajectory, float]:
+        trajectory, fraction = super().compute_cartesian_path(waypoints, eef_step, jump_threshold)
+        positions = np.array(trajectory.positions, dtype=float)
+        positions[1:, 0] += 1e-3
+        return dataclasses.replace(trajectory, positions=positions), fraction
+
+
 stale_second_go = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_StaleGroup)
 seed_parity_ik = SimpleNamespace(RobotModel=_ParityModel, MoveGroup=python_impl.MoveGroup)
 no_pose_goal = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_NoPoseGoalGroup)
 left_side_at_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_LeftSideGroup)
 early_switch = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_EarlySwitchGroup)
 short_path_from_far_joints = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_ShortPathGroup)
+path_points_off = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_PathPointsOffGroup)
