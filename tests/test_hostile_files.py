@@ -423,6 +423,17 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     # a name with line breaks printed fake verdict lines; one with ESC reached the terminal raw
     "replay-name-with-line-breaks": lambda t: _odd_name(t, "replay"),
     "triage-name-with-line-breaks": lambda t: _odd_name(t, "triage"),
+    # view wrote its screenshot over the crash file's sidecar (exit 0), and blocked on a FIFO
+    "view-screenshot-over-the-sidecar": lambda t: _view_shot(t, "sidecar", "the crash file's own data"),
+    "view-screenshot-fifo": lambda t: _view_shot(t, "fifo", "--screenshot .* is a FIFO, not a regular file"),
+    "view-screenshot-folder": lambda t: _view_shot(t, "folder", "--screenshot .* is a folder"),
+    "view-screenshot-missing-folder": lambda t: _view_shot(t, "missing", "its folder .* does not exist"),
+    "view-fifo-crash": lambda t: Row(
+        ["view", str(_fifo(t / "crash-fifo"))], 2, "is a FIFO, not a regular file"
+    ),
+    "export-bag-fifo-crash": lambda t: Row(
+        ["export-bag", str(_fifo(t / "crash-fifo"))], 2, "is a FIFO, not a regular file"
+    ),
     "error-naming-a-name-with-escapes": lambda t: Row(
         ["replay", str(t / "crash-gone\x1b[2J")], 2, r"crash-gone\\x1b\[2J: no such file"
     ),
@@ -638,6 +649,25 @@ def _one_damaged(tmp: Path) -> Row:
         assert "now agrees" in run.stdout
 
     row.checks.append(good_one_still_replayed)
+    return row
+
+
+def _view_shot(tmp: Path, what: str, says: str) -> Row:
+    crash = copy_crash(tmp)
+    side = crash.with_name(crash.name + ".json")
+    before = side.read_bytes()
+    shot = {
+        "sidecar": side,
+        "fifo": _fifo(tmp / "shot.ppm") if what == "fifo" else tmp / "shot.ppm",
+        "folder": tmp,
+        "missing": tmp / "no" / "shot.ppm",
+    }[what]
+    row = Row(["view", str(crash), "--screenshot", str(shot)], 2, says)
+
+    def sidecar_kept(run: subprocess.CompletedProcess[str]) -> None:
+        assert side.read_bytes() == before
+
+    row.checks.append(sidecar_kept)
     return row
 
 

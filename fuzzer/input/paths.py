@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import stat
@@ -166,6 +167,33 @@ def prepare_folder(path: Path, role: str, *, writable: bool) -> None:
             raise PathError(f"{role} {path}: cannot write into the folder: {exc.strerror or exc}") from None
         os.close(fd)
         os.unlink(probe)
+
+
+def check_output_file(output: Path, crash: Path, option: str) -> None:
+    """Refuse an output file a crash file's command may not write: a folder, a FIFO or device
+    (opening it blocked or wrote into it), a missing folder, or the crash file or its sidecar
+    themselves (``view --screenshot CRASH.json`` wrote the screen over the sidecar).
+
+    Raises
+    ------
+    PathError
+        Naming ``option`` and the problem.
+    """
+    try:
+        mode = output.stat().st_mode
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise PathError(f"{option} {output}: {exc.strerror or exc}") from None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise PathError(f"{option} {output}: is {kind_of(mode)}, not a regular file")
+    if not output.parent.is_dir():
+        raise PathError(f"{option} {output}: its folder {output.parent} does not exist")
+    if mode is not None:
+        for own in (crash, crash.with_name(crash.name + ".json")):
+            with contextlib.suppress(OSError):
+                if own.exists() and os.path.samefile(output, own):
+                    raise PathError(f"{option} {output}: the crash file's own data; name another file")
 
 
 def check_input_file(path: Path) -> None:

@@ -25,7 +25,7 @@ from typing import Any
 from fuzzer import reporting
 from fuzzer.cli_options import trust_option
 from fuzzer.execution.session import ConfigError
-from fuzzer.input.paths import given_path
+from fuzzer.input.paths import PathError, check_output_file, file_problem, given_path
 from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
 
@@ -323,19 +323,11 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
 
 
 def _check_output(output: Path, crash: Path) -> None:
-    """Raise BagError when ``output`` may not receive the bag: a folder, a device or FIFO, a
-    folder that does not exist, or the crash file or its sidecar themselves."""
-    from fuzzer.artifacts.store import sidecar_path
-
-    if output.is_dir():
-        raise BagError(f"{output}: a folder; -o names the bag file")
-    if output.exists() and not output.is_symlink() and not output.is_file():
-        raise BagError(f"{output}: not a regular file; -o names the bag file")
-    if not output.parent.is_dir():
-        raise BagError(f"{output}: its folder {output.parent} does not exist")
-    for own in (crash, sidecar_path(crash)):
-        if output.exists() and own.exists() and output.resolve() == own.resolve():
-            raise BagError(f"{output}: the crash file's own data; -o names another file")
+    """Raise BagError when ``output`` may not receive the bag (``paths.check_output_file``)."""
+    try:
+        check_output_file(output, crash, "-o")
+    except PathError as exc:
+        raise BagError(str(exc)) from None
 
 
 def export_bag_main(argv: Sequence[str]) -> int:
@@ -348,8 +340,9 @@ def export_bag_main(argv: Sequence[str]) -> int:
     parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
-    if not args.crash.is_file():
-        raise BagError(f"{args.crash}: no such file")
+    problem = file_problem(args.crash)
+    if problem is not None:  # a FIFO said "no such file"
+        raise BagError(f"{args.crash}: {problem}")
     try:
         env.require()
     except env.RosUnavailableError as exc:

@@ -35,9 +35,10 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from fuzzer import reporting
+from fuzzer.artifacts.store import atomic_write
 from fuzzer.cli_options import trust_option
 from fuzzer.execution.session import ConfigError
-from fuzzer.input.paths import given_path
+from fuzzer.input.paths import check_output_file, file_problem, given_path
 from fuzzer.ros import env, processes
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -140,7 +141,7 @@ def screenshot_ppm(display: str, path: Path) -> np.ndarray:
         timeout=60,
         check=True,
     ).stdout
-    path.write_bytes(data)
+    atomic_write(path, data, durable=False)  # written whole and renamed: a link there is replaced
     header: list[bytes] = []
     pos = 0
     while len(header) < 4:  # P6 width height maxval, whitespace separated, '#' comments
@@ -330,8 +331,11 @@ def view_main(argv: Sequence[str]) -> int:
     )
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
-    if not args.crash.is_file():
-        raise ConfigError(f"{args.crash}: no such file")
+    problem = file_problem(args.crash)
+    if problem is not None:  # a FIFO said "no such file"
+        raise ConfigError(f"{args.crash}: {problem}")
     if not (math.isfinite(args.seconds) and 0 < args.seconds <= 600):
         raise ConfigError("--seconds must be in (0, 600]")
+    if args.screenshot is not None:  # before RViz starts, not after (a FIFO there blocked it)
+        check_output_file(args.screenshot, args.crash, "--screenshot")
     return run_view(args.crash, args.screenshot, args.seconds, args.trust_sidecar)
