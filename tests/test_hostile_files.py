@@ -574,6 +574,12 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     ),
     "corpus-manifest-import-refused": lambda t: _manifest_foreign(t),
     # a .rrosfuzz (or manifest.json) symlink made a campaign read and write a manifest outside
+    # prescan said "skipping" a link out of the corpus, and libFuzzer read it as an input
+    "corpus-file-link-out": lambda t: Row(
+        [str(_corpus_link_out(t)), *CAMPAIGN, f"--artifacts={t / 'a'}"],
+        2,
+        "a link to a file outside the corpus",
+    ),
     "corpus-manifest-folder-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz"),
     "corpus-manifest-file-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz/manifest.json"),
     "coverage-manifest-link-out": lambda t: _manifest_link_out(t, ".rrosfuzz", "coverage"),
@@ -650,6 +656,14 @@ def _one_damaged(tmp: Path) -> Row:
 
     row.checks.append(good_one_still_replayed)
     return row
+
+
+def _corpus_link_out(tmp: Path) -> Path:
+    corpus = _mkdir(tmp / "c")
+    secret = tmp / "secret.json"
+    secret.write_text('{"rrosfuzz": 1, "msg_type": "sensor_msgs/JointState", "message": {}}')
+    (corpus / "seed").symlink_to(secret)
+    return corpus
 
 
 def _view_shot(tmp: Path, what: str, says: str) -> Row:

@@ -360,15 +360,24 @@ def prescan(session: Session, corpus: tuple[Path, ...]) -> tuple[int, list[TestC
 
     libFuzzer still feeds them in; they are skipped as malformed. Returns
     (number of usable files, the generated seeds found among them).
+
+    Raises
+    ------
+    ConfigError
+        A corpus file is a link to a file outside its folder (libFuzzer would read it).
     """
     usable, seeds = 0, []
     msg_type = session.config.message_type
     for directory in corpus:
         clean_temporaries(directory)
         for path in sorted(p for p in directory.iterdir() if p.is_file() and not p.name.startswith(".")):
+            if path.is_symlink() and not contained(directory, path):
+                # said "skipping" while libFuzzer, which reads every file of the folder, ran it
+                raise ConfigError(
+                    f"corpus file {path} is a link to a file outside the corpus folder, which "
+                    "libFuzzer would read as an input; remove the link or copy the file in"
+                )
             try:
-                if path.is_symlink() and not contained(directory, path):  # a link out of the folder: not read
-                    raise TestCaseError("a link to a file outside the corpus folder")
                 if path.stat().st_size > MAX_BYTES:  # read whole, a 3 GB file filled the memory
                     raise TestCaseError(f"larger than a test case may be ({MAX_BYTES} bytes)")
                 case = read_case(path)
