@@ -39,6 +39,9 @@ JOB_FAILED = "a job failed: its fuzz-N.log in the artifacts folder says why"
 (``processes.failed_job_status``: libFuzzer's 1 for a job that ended with a non-zero status)."""
 
 
+CORPUS_GONE = "a corpus folder is gone: the inputs libFuzzer added to it were lost"
+
+
 @dataclass
 class CampaignEnd:
     """The state a campaign's end reads, and the call that ends it.
@@ -67,6 +70,13 @@ class CampaignEnd:
     """Written-ahead inputs found at the start (``guard.leftovers``), settled by a normal end."""
     in_callback: bool = False
     unwritable: bool = False
+    corpus: tuple[Path, ...] = field(init=False)
+    """The corpus folders, resolved when the campaign's end is set up (before a ``-jobs``
+    supervisor changes its working folder): one gone at the end (removed or renamed meanwhile)
+    took the inputs libFuzzer added with it, its writes failing without a word."""
+
+    def __post_init__(self) -> None:
+        self.corpus = tuple(p.resolve() for p in self.options.corpus if p.is_dir())
 
     def __call__(self, status: int | None) -> int | None:
         """End the campaign: the last snapshot, the dry run's children, the summary; returns the
@@ -98,10 +108,20 @@ class CampaignEnd:
             code = None
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
+        for folder in self.corpus:
+            if not folder.is_dir():
+                reporting.error(
+                    f"corpus folder {folder} is gone (removed or renamed during the campaign): the "
+                    "inputs libFuzzer added to it this run are lost"
+                )
+                if code in (0, 1):
+                    code = WRITE_FAILED_EXIT
         if code in (0, 1) and self.leftovers:  # libFuzzer ran them as seeds, and they did no harm
             for path in guard.settle(self.leftovers):
                 reporting.info(f"{path}: the input a campaign died on ran as a seed, harmless now; kept")
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
+        if code == WRITE_FAILED_EXIT and not self.unwritable and meaning is None:
+            meaning = CORPUS_GONE
         shown = code
         if code is None and status is None and self.in_callback:
             shown = error_code  # libFuzzer's status for the exception it reports next (--stop-on-divergence)

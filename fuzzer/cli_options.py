@@ -37,8 +37,9 @@ exit status of a campaign:
   2   usage error, or libFuzzer's own error (the summary says so)
   70  a timeout (libFuzzer's -timeout_exitcode; also when a -fork/-jobs worker timed out)
   71  out of memory (libFuzzer's -rss_limit_mb, -malloc_limit_mb)
-  74  a folder could not be written (a full disk, a read-only mount), with a message
-      naming it and any divergent input it could not save
+  74  a folder could not be written (a full disk, a read-only mount, a corpus folder
+      removed during the campaign), with a message naming it and any divergent input it
+      could not save
   77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
       (libFuzzer's -error_exitcode)
   130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary

@@ -692,3 +692,31 @@ def test_a_fork_campaign_that_ignored_its_crashes_still_says_so(tmp_path: Path) 
     assert run.returncode == 77, run.stderr[-3000:]
     assert "exit status 77 (a target died" in run.stderr
     assert [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
+
+
+def test_a_corpus_folder_removed_during_the_campaign_is_said(tmp_path: Path) -> None:
+    """libFuzzer's writes into a corpus folder that is gone fail without a word: the campaign
+    ended with a normal summary and exit 0, its new inputs lost (the special-files probe)."""
+    from tests.support import ROOT, SCRIPT
+
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    process = subprocess.Popen(
+        [sys.executable, SCRIPT, str(corpus), "-max_total_time=6", "-seed=3", f"--artifacts={artifacts}"],
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+    )
+    assert process.stderr is not None
+    lines = []
+    for line in process.stderr:  # libFuzzer has read the corpus once it says "seed corpus"
+        lines.append(line)
+        if "seed corpus:" in line:
+            shutil.rmtree(corpus)
+            break
+    text = "".join(lines) + process.stderr.read()
+    process.wait(timeout=120)
+    assert not corpus.exists() and "Traceback" not in text
+    assert f"corpus folder {corpus} is gone" in text, (process.returncode, text[-2000:])
+    assert process.returncode == 74, text[-2000:]
+    assert "exit status 74 (a corpus folder is gone" in text
