@@ -447,6 +447,8 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "report-output-is-a-file": lambda t: Row(
         ["report", str(copy_crash(t).parent), "-o", str(_touch(t / "file"))], 2, "is a file"
     ),
+    # coverage.py opened a FIFO under a page's name (a hang) and wrote through a link there
+    "coverage-html-with-fifo-and-link": lambda t: _coverage_into_planted(t),
     "coverage-html-is-a-file": lambda t: Row(
         ["coverage", str(copy_crash(t)), "--html", str(_touch(t / "file"))], 2, "--html .*is a file"
     ),
@@ -655,6 +657,22 @@ def _one_damaged(tmp: Path) -> Row:
         assert "now agrees" in run.stdout
 
     row.checks.append(good_one_still_replayed)
+    return row
+
+
+def _coverage_into_planted(tmp: Path) -> Row:
+    html = _mkdir(tmp / "html")
+    os.mkfifo(html / "index.html")
+    victim = tmp / "victim.txt"
+    victim.write_text("keep")
+    (html / "class_index.html").symlink_to(victim)
+    row = Row(["coverage", str(copy_crash(tmp)), "--html", str(html)], 0, "HTML: ", stream="stdout")
+
+    def pages_written_in_place(run: subprocess.CompletedProcess[str]) -> None:
+        assert victim.read_text() == "keep" and (html / "index.html").is_file()
+        assert not (html / "class_index.html").is_symlink() and not list(html.glob(".tmp-*"))
+
+    row.checks.append(pages_written_in_place)
     return row
 
 

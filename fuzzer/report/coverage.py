@@ -8,6 +8,8 @@ of the twin the corpus never reached.
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -82,7 +84,16 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
     finally:
         cov.stop()
     html.mkdir(parents=True, exist_ok=True)
-    cov.html_report(directory=str(html))
+    staging = Path(tempfile.mkdtemp(prefix=".tmp-coverage-", dir=html))
+    try:  # written aside, then each page renamed into place: a FIFO there blocked coverage.py,
+        cov.html_report(directory=str(staging))  # and a link there was written through
+        for page in sorted(staging.iterdir()):
+            try:
+                os.replace(page, html / page.name)
+            except OSError as exc:  # a folder under a page's name
+                raise ConfigError(f"--html {html}: cannot hold {page.name}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "coverage.json"
         cov.json_report(outfile=str(out))
