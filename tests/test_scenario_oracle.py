@@ -448,6 +448,7 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
         )
     )
     assert judge(off, run(three), run(four), facts).kind is Kind.VALUE
+
     # a knife edge explains only what a step count changes: with the same point count and
     # fraction, a path point 1e-3 off is a value divergence (round waypoints hid such faults)
     def planar(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
