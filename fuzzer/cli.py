@@ -76,7 +76,12 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     try:
         return _campaign(flags, args, config)
     except (UsageError, ConfigError):
-        for path in created:  # a refused campaign leaves no empty folder behind
+        from fuzzer.artifacts.travel import CONFIGURATION
+
+        for path in created:  # a refused campaign leaves no empty folder behind (nor its own records)
+            with contextlib.suppress(OSError):
+                (path / CONFIGURATION).unlink(missing_ok=True)
+                (path / ".signatures").rmdir()
             with contextlib.suppress(OSError):
                 path.rmdir()
         raise
@@ -91,6 +96,7 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
         merge = any(int_flag(tuple(flags), name, 0) > 0 for name in ("-merge", "-set_cover_merge"))
         folders = travel.prepare_campaign(args.corpus, args.artifacts, merge=merge)
         travel.check_manifests(folders, config)
+        travel.note_configuration(args.artifacts, config)
     from fuzzer.input.libfuzzer_flags import (
         check_dictionary,
         check_int_flags,

@@ -500,3 +500,21 @@ def test_show_into_a_reader_that_leaves_early_ends_with_141(tmp_path: Path) -> N
     err = run.stderr.read().decode()
     assert run.wait(timeout=60) == 141, err
     assert "Traceback" not in err
+
+
+def test_an_artifacts_folder_shared_by_two_configurations_is_said(tmp_path: Path) -> None:
+    """A signature names a symptom: a campaign on another robot or targets, writing into an
+    artifacts folder of another one, got no crash file for a symptom on file there, and its
+    divergences went into the other's bucket, without a word (the triage probe)."""
+    from fuzzer.artifacts.travel import CONFIGURATION, note_configuration
+    from fuzzer.execution.session import RunConfig
+
+    note_configuration(tmp_path, RunConfig(robot="probot_anno"))
+    first = (tmp_path / CONFIGURATION).read_text()
+    assert first.startswith("robot probot_anno (") and "targets native,python" in first
+    run = fuzz(str(tmp_path / "c"), "-runs=1", "--robot=ur5", f"--artifacts={tmp_path}", "--no-progress")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "holds crash files of a campaign on another configuration (robot probot_anno" in run.stderr
+    assert (tmp_path / CONFIGURATION).read_text() == first  # the first one's, kept
+    again = fuzz(str(tmp_path / "c2"), "-runs=1", f"--artifacts={tmp_path}", "--no-progress")
+    assert again.returncode == 0 and "another configuration" not in again.stderr, again.stderr[-2000:]

@@ -19,6 +19,7 @@ Options given on the command line always win.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import stat
 from collections.abc import Sequence
@@ -243,3 +244,40 @@ def check_artifacts(artifacts: Path) -> None:
                     f"artifacts {artifacts}: .signatures/{entry.name} is {kind_of(mode)}, not a marker "
                     "the campaign wrote (a divergence of that signature would be lost); remove it"
                 )
+
+
+CONFIGURATION = ".rrosfuzz-configuration"
+"""The artifacts folder's record of the first campaign's robot and targets (one line)."""
+
+
+def note_configuration(artifacts: Path, config: RunConfig) -> None:
+    """Warn when the artifacts folder holds crash files of a campaign on another robot or pair of
+    targets. A signature names a symptom, not the configuration: a symptom already on file there
+    gets no crash file of this campaign, and its divergences go into the other's bucket (two zoo
+    bugs on two robots made one bucket with the first one's file; the triage probe). The first
+    campaign's line is written once and kept."""
+    digest = (manifest.robot_digest(config.robot) or "")[:12]
+    line = f"robot {config.robot} ({digest}), tip link {config.tip_link}, targets {','.join(config.targets)}"
+    path = artifacts / CONFIGURATION
+    try:
+        info = path.lstat()
+    except FileNotFoundError:
+        from fuzzer.artifacts.store import atomic_write
+
+        with contextlib.suppress(OSError):  # a folder that cannot be written says so later
+            atomic_write(path, (line + "\n").encode(), durable=False)
+        return
+    except OSError:
+        return
+    if not stat.S_ISREG(info.st_mode) or info.st_size > 4096:
+        return  # not of our making: nothing to compare with
+    try:
+        first = path.read_bytes().decode("utf-8", "backslashreplace").strip()
+    except OSError:
+        return
+    if first != line:
+        reporting.warn(
+            f"artifacts {artifacts} holds crash files of a campaign on another configuration "
+            f"({first}); this one is {line}. A divergence whose symptom is on file there already "
+            "gets no crash file of this campaign: name another --artifacts to keep them apart"
+        )
