@@ -85,6 +85,7 @@ class Harness(MutationStep):
     """Ended by a signal (a ``-jobs``/``-fork`` worker): said in its last snapshot."""
     pool: Pool = field(default_factory=Pool)
     _last: tuple[bytes, TestCase] | None = None
+    _credit: bytes | None = None
     _decoded: OrderedDict[bytes, TestCase] = field(default_factory=OrderedDict)
     _next_snapshot: float = 0.0
 
@@ -100,7 +101,10 @@ class Harness(MutationStep):
         seen, signatures = len(self.features.seen), len(self.stats.signatures)
         first = self.stats.first_input is None
         self._execute(case, data, trusted)
-        if self.sources is not None and case.origin == "mutation":
+        if self.sources is not None and self._credit is not None and self._credit == data:
+            # only what the last step made: a corpus file a campaign resumes on names the arms
+            # that made it in another run, and was credited again (83% "paid", every feature new)
+            self._credit = None
             paid = len(self.features.seen) > seen or len(self.stats.signatures) > signatures
             self.sources.reward(case.strategy, paid)
         compared = self.float_tracer.compared if self.float_tracer is not None else None

@@ -73,14 +73,16 @@ def _forced_source(tmp_path: Path, arm: str) -> Sources:
     aligned = fresh_inputs("move", joint_state, stream, facts.joint_names, name=ALIGNED)
     source = Bandit((MUTATE, SPACEFILL, ALIGNED), {arm: 1e9}, floor=0.0)
     h.sources = Sources(source, Bandit(tuple(mutators.WEIGHTS), mutators.WEIGHTS), fresh, aligned)
-    children = [decode(h.mutate(h.seeds[0].encode(), 4096, s)) for s in range(30)]
+    children = []
+    for s in range(30):  # each run as libFuzzer runs it, right after the step that made it
+        made = h.mutate(h.seeds[0].encode(), 4096, s)
+        children.append(decode(made))
+        h.test_one_input(made)
     assert {c.strategy for c in children} == {arm}
     choices = Aligned(facts.lower, facts.upper).choices
     for child in children:
         values = child.message["position"]
         assert all(v in c for v, c in zip(values, choices, strict=True)) == (arm == ALIGNED)
-    for child in children:
-        h.test_one_input(child.encode())
     return h.sources
 
 

@@ -61,6 +61,36 @@ def test_sources_are_deterministic_and_rewarded(tmp_path: Path) -> None:
     assert set(a.sources.to_json()) == {"source", "mutators"}
 
 
+def test_only_what_the_last_step_made_credits_the_arms(tmp_path: Path) -> None:
+    """A corpus file made by a mutator in another run (a campaign resumed on its corpus) was
+    credited again when libFuzzer read it: a run with no mutation at all had 404 pulls, 334 of
+    them "paid" (the determinism probe). A parent emitted in place of a child too large for
+    ``max_size`` credited the parent's strategy."""
+    h, _ = _with_sources(tmp_path)
+    assert h.sources is not None
+
+    def pulls() -> int:
+        assert h.sources is not None
+        return sum(arm.pulls for arm in h.sources.source.arms.values())
+
+    data = h.seeds[2].encode()
+    made = [h.mutate(data, 4096, s) for s in range(5)]  # the last step's child is the last one
+    for old in made[:4]:  # as from the corpus: made by a mutator, but not by the last step
+        assert decode(old).origin == "mutation"
+        h.test_one_input(old)
+    assert pulls() == 0
+    h.test_one_input(made[4])
+    assert pulls() == 1
+    h.test_one_input(made[4])  # run again: credited once
+    assert pulls() == 1
+    parent = h.seeds[2]
+    child = parent.child(parent.message, "comb1")  # a longer lineage: larger than the parent
+    emitted = h._emit(child, parent, len(parent.encode()), data)
+    assert emitted == parent.encode() and h._credit is None  # the parent in the child's place
+    h.test_one_input(emitted)
+    assert pulls() == 1
+
+
 def test_a_scenario_gets_its_configuration_in_a_joint_target() -> None:
     rng = random.Random(4)
     js = {"header": {}, "name": [], "position": [0.0], "velocity": [], "effort": []}

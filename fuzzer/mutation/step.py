@@ -61,6 +61,9 @@ class MutationStep:
     i2s: I2SQueue | None
     pool: Pool
     _last: tuple[bytes, TestCase] | None
+    _credit: bytes | None
+    """The child the last step made (not a parent emitted in its place): the only input whose
+    run credits the bandit's arms (``Harness.test_one_input``)."""
 
     if TYPE_CHECKING:
 
@@ -79,6 +82,7 @@ class MutationStep:
     def _step(self, data: bytes, partner: bytes | None, max_size: int, seed: int) -> bytes:
         """One input made from ``data`` (and ``partner``, libFuzzer's second parent in a crossover):
         a space-filling one, or the bandit's mutator, or libFuzzer's choice without a bandit."""
+        self._credit = None
         try:
             rng = random.Random(seed)
             taken = self.i2s.take(rng) if self.i2s is not None and partner is None else None
@@ -153,5 +157,6 @@ class MutationStep:
             out = candidate.encode()
             if len(out) <= max_size:
                 self._last = (out, candidate)
+                self._credit = out if candidate is case else None  # the parent made nothing new
                 return out
         return fallback[:max_size]
