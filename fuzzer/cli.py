@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
-from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactsUnwritable
+from fuzzer.artifacts.store import MARKERS, WRITE_FAILED_EXIT, ArtifactsUnwritable
 from fuzzer.cli_options import (
     SUBCOMMANDS,
     UsageError,
@@ -81,7 +81,7 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
         for path in created:  # a refused campaign leaves no empty folder behind (nor its own records)
             with contextlib.suppress(OSError):
                 (path / CONFIGURATION).unlink(missing_ok=True)
-                (path / ".signatures").rmdir()
+                (path / MARKERS).rmdir()
             with contextlib.suppress(OSError):
                 path.rmdir()
         raise
@@ -212,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"unrecognized arguments: {' '.join(extra)}")
         return campaign_main(flags, known)
     except (UsageError, ConfigError) as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), lines=True)}\n")
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
         return 2
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()

@@ -51,7 +51,7 @@ def _skip_file(exc: ConfigError, files: list[Path]) -> None:
     caller counts it); with a single file, the error is the command's (re-raised)."""
     if len(files) == 1:
         raise exc
-    sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), lines=True)}\n")
+    sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
 
 
 def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:

@@ -17,6 +17,8 @@ if TYPE_CHECKING:
     from fuzzer.selection.state import Stats
 
 PREFIX = "[rrosfuzz]"
+LINES = "\n"
+"""``shown``'s ``keep`` for a message whose line breaks are its own (a ROS log's last lines)."""
 
 
 def info(text: str, stream: TextIO | None = None) -> None:
@@ -25,13 +27,13 @@ def info(text: str, stream: TextIO | None = None) -> None:
 
 
 def warn(text: str) -> None:
-    sys.stderr.write(f"{PREFIX} warning: {shown(text, lines=True)}\n")
+    sys.stderr.write(f"{PREFIX} warning: {shown(text, LINES)}\n")
     sys.stderr.flush()
 
 
 def error(text: str) -> None:
     """An error that ends the run (the caller sets the status)."""
-    sys.stderr.write(f"{PREFIX} error: {shown(text, lines=True)}\n")
+    sys.stderr.write(f"{PREFIX} error: {shown(text, LINES)}\n")
     sys.stderr.flush()
 
 
@@ -248,14 +250,14 @@ def _totals_lines(totals: dict[str, Any], elapsed: float) -> list[str]:
     ]
 
 
-def shown(text: str, lines: bool = False) -> str:
-    """One line as printed: its unprintable characters (line breaks, ESC, bidi overrides) as
-    Python escapes, so that a file named ``crash-x<newline>y: now agrees`` prints no verdict
-    of its own and a name holding terminal escapes reaches the terminal as text. ``lines``:
-    line breaks kept (an error message that ends with a log's last lines)."""
+def shown(text: str, keep: str = "") -> str:
+    """``text`` with its unprintable characters (line breaks, ESC, bidi overrides) as Python
+    escapes, but those in ``keep``: a file named ``crash-x<newline>y: now agrees`` prints no
+    verdict of its own, and a name holding terminal escapes reaches the terminal as text.
+    ``keep=LINES``: an error message that ends with a log's last lines; the report's strings
+    keep tabs too (:func:`fuzzer.report.markup.visible`)."""
     if text.isprintable():
         return text
-    keep = "\n" if lines else ""
     return "".join(c if c.isprintable() or c in keep else repr(c)[1:-1] for c in text)
 
 

@@ -33,6 +33,8 @@ from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES, encode_sidecar
 from fuzzer.input import untrusted_json
 
 TMP_PREFIX = ".tmp-"
+MARKERS = ".signatures"
+"""The artifacts folder's sub-folder of signature markers (one file per claimed signature)."""
 CRASH_NAME = re.compile(r"crash-[0-9a-f]{40}")
 STALE_SECONDS = 600.0
 """A temporary this old is abandoned even if a process with its pid is alive (pid reuse)."""
@@ -162,7 +164,7 @@ class ArtifactStore:
 
     def __init__(self, directory: Path) -> None:
         self.directory = directory
-        self.markers = directory / ".signatures"
+        self.markers = directory / MARKERS
         if self.markers.is_symlink():  # its markers read, written and deleted wherever it led
             raise OSError(errno.ELOOP, "a symbolic link, not the artifacts folder's own", str(self.markers))
         self.markers.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from fuzzer import reporting
 from fuzzer.artifacts import manifest
-from fuzzer.artifacts.store import sidecar_path
+from fuzzer.artifacts.store import MARKERS, sidecar_path
 from fuzzer.execution.session import RunConfig
 from fuzzer.input.paths import PathError, check_input_file, prepare_folder
 
@@ -226,7 +226,7 @@ def check_artifacts(artifacts: Path) -> None:
                 mode = entry.stat(follow_symlinks=False).st_mode
                 if not stat.S_ISREG(mode):
                     refuse(Path(entry.path), mode)
-    markers = artifacts / ".signatures"
+    markers = artifacts / MARKERS
     try:
         mode = markers.lstat().st_mode
     except FileNotFoundError:

@@ -13,13 +13,13 @@ import time
 from html import escape
 from typing import Any
 
+from fuzzer.reporting import shown
+
 
 def visible(text: str) -> str:
     """``text`` with its unprintable characters but line breaks and tabs as Python escapes
     (``\\x1b``, ``\\u202e``), so that a sidecar's string shows what it holds."""
-    if text.isprintable():
-        return text
-    return "".join(c if c.isprintable() or c in "\n\t" else repr(c)[1:-1] for c in text)
+    return shown(text, "\n\t")
 
 
 def esc(value: Any) -> str:

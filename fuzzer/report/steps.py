@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fuzzer.execution.records import Outcome
+from fuzzer.reporting import shown
 
 SCENARIO_TYPE = "rrosfuzz/Scenario"
 ARGUMENT_CHARS = 72
@@ -118,7 +119,7 @@ def shown_steps(count: int, first: int | None, limit: int = LISTED_STEPS) -> lis
 
 def clean(text: str, limit: int = ARGUMENT_CHARS) -> str:
     """``text`` with control and other unprintable characters escaped, cut at ``limit``."""
-    out = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    out = shown(text)
     return out if len(out) <= limit else out[: limit - 3] + "..."
 
 

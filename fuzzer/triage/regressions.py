@@ -28,7 +28,7 @@ from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import atomic_write, load_sidecar, sidecar_path
 from fuzzer.execution.session import ConfigError, RunConfig
 from fuzzer.input.testcase import TestCaseError, read_bytes
-from fuzzer.triage.replay import ROBOT_CHANGED, Result, replay_file
+from fuzzer.triage.replay import ROBOT_CHANGED, Replay, Result, replay_file
 from robot_api import robots
 from robot_api.errors import URDFError
 
@@ -88,9 +88,8 @@ def promote(
     if result.result is Result.DIFFERENT:  # neither --fixed nor not: each pointed at the other
         raise PromoteError(
             f"{crash}: {result.result} (signature {_short(result)}, the file's {str(result.expected)[:12]}); "
-            "the suite keeps a divergence that reproduces "
-            "its own signature, or a fixed one that agrees: replay it, and promote a crash file of "
-            "the signature it has now"
+            "the suite keeps a divergence that reproduces its own signature, or a fixed one that "
+            "agrees: replay it, and promote a crash file of the signature it has now"
         )
     if fixed and result.result is not Result.AGREES:
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
@@ -130,7 +129,8 @@ def promote(
     return Promoted(target, entry["regression"]["expect"])
 
 
-def _short(result: Any) -> str:
+def _short(result: Replay) -> str:
+    """The first 12 hex digits of the signature a replay found ("none" when it agrees)."""
     signature = result.evaluation.signature if result.evaluation is not None else None
     return signature.key[:12] if signature is not None else "none"
 
