@@ -8,7 +8,7 @@ worker's start-up (where it escaped ``atheris.Fuzz``, and the worker died in lib
 worker, from its start), a SIGINT or SIGTERM is therefore kept for the start of the next input
 (``defer_to_next_input``, ``stop_requested``), where a campaign of one process ends as after
 Ctrl-C, and a worker with libFuzzer's ``-interrupted_exitcode`` (``INTERRUPTED_EXIT``), on which
-a ``-fork`` parent stops its other jobs; a second Ctrl-C acts at once.
+a ``-fork`` parent stops its other jobs; a second Ctrl-C, or a second SIGTERM, acts at once.
 
 A ``-jobs``/``-fork`` supervisor runs its jobs through ``system()``, which ignores SIGINT in
 the caller while a job runs: only a Ctrl-C to the whole process group (a terminal's, or
@@ -40,13 +40,14 @@ _DEFERRING: list[bool] = []
 def on_signal(signum: int, _frame: object) -> None:
     """The handler of SIGTERM in a campaign of one process (``processes.one_campaign``), and of
     SIGINT once libFuzzer is about to run. Before that, a ``KeyboardInterrupt`` where Python
-    runs next; after, kept for the next input (``stop_requested``), but a second SIGINT acts at
-    once (a target that does not return). A SIGTERM makes the status ``TERM_EXIT``
+    runs next; after, kept for the next input (``stop_requested``), but a second SIGINT, or a
+    second SIGTERM (a service manager's stop, repeated), acts at once (a target that does not
+    return). A SIGTERM makes the status ``TERM_EXIT``
     (``terminated``): libFuzzer's own handler (``-handle_term``) ended it with ``_Exit(72)``,
     no summary, no last snapshot."""
     if signum == signal.SIGTERM:
         _TERMINATED.append(True)
-    if _DEFERRING and not (signum == signal.SIGINT and signal.SIGINT in _PENDING):
+    if _DEFERRING and signum not in _PENDING:  # the second of a kind: at once
         _PENDING.append(signum)
         return
     raise KeyboardInterrupt  # Atheris ends the campaign as after Ctrl-C (any other class: a crash)

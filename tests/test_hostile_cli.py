@@ -240,7 +240,8 @@ def test_jobs_are_execd_by_libfuzzers_shell(monkeypatch: pytest.MonkeyPatch) -> 
 def test_a_signal_is_kept_for_the_next_input_once_libfuzzer_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     """Before libFuzzer, a KeyboardInterrupt where Python runs next; after, the signal waits for
     the next input (a KeyboardInterrupt in Hypothesis' gc callback was lost), and a second
-    Ctrl-C acts at once (a target that never returns). A SIGTERM marks the run terminated."""
+    Ctrl-C or SIGTERM acts at once (a target that never returns). A SIGTERM marks the run
+    terminated."""
     import signal as signals_
 
     from fuzzer import signals
@@ -260,6 +261,8 @@ def test_a_signal_is_kept_for_the_next_input_once_libfuzzer_runs(monkeypatch: py
     signals.on_signal(signals_.SIGINT, None)  # the first Ctrl-C waits
     with pytest.raises(KeyboardInterrupt):
         signals.on_signal(signals_.SIGINT, None)  # the second does not
+    with pytest.raises(KeyboardInterrupt):
+        signals.on_signal(signals_.SIGTERM, None)  # nor does a second SIGTERM
 
 
 def test_a_supervisor_counts_its_interrupted_jobs(tmp_path: Path) -> None:
