@@ -22,6 +22,7 @@ import contextlib
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +36,7 @@ from fuzzer.cli_options import (
     forwarded_options,
     split_flags,
 )
-from fuzzer.execution.session import ConfigError
+from fuzzer.execution.session import ConfigError, unread_msg_path
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE
 from fuzzer.processes import CHILD_ENV, int_flag
 from fuzzer.signals import INT_EXIT, INTERRUPTED_EXIT, TERM_EXIT, terminated
@@ -92,6 +93,12 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
     from fuzzer.artifacts import travel
     from fuzzer.campaign import CampaignOptions, run
 
+    unread = unread_msg_path(config.op, config.msg_type, config.msg_path)
+    if unread is not None:  # recorded as typed, a relative folder broke the crash files' replay elsewhere
+        if not travel.is_child():
+            reporting.warn(unread)
+        config = replace(config, msg_path=())
+        args.msg_path = []  # nor handed to libFuzzer's jobs
     if not travel.is_child():  # bad paths: exit 2 with a message; a corpus of another robot/op: refused
         merge = any(int_flag(tuple(flags), name, 0) > 0 for name in ("-merge", "-set_cover_merge"))
         folders = travel.prepare_campaign(args.corpus, args.artifacts, merge=merge)

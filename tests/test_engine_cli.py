@@ -378,19 +378,29 @@ def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
     assert not list(artifacts.glob(".tmp-*"))
 
 
-def test_real_ros_definitions_from_msg_path(tmp_path: Path) -> None:
-    if not Path("/usr/share/std_msgs/msg/Float64MultiArray.msg").is_file():
-        pytest.skip("Debian's ros-std-msgs is not installed")
+def test_a_msg_path_that_cannot_matter_is_said_and_not_recorded(tmp_path: Path) -> None:
+    """Every type an op reads is a definition the project ships, searched first, so a --msg-path
+    folder is never read: said once, and not recorded (a relative one, recorded as typed, made
+    crash files unusable from another working directory)."""
+    folder = tmp_path / "msgs" / "std_msgs" / "msg"
+    folder.mkdir(parents=True)
+    (folder / "Float64MultiArray.msg").write_text("this is not a definition, and it is never read\n")
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "a"
     run = fuzz(
-        str(tmp_path / "corpus"),
-        "-runs=500",
+        str(corpus),
+        "-runs=300",
         "-seed=1",
-        "--msg-path=/usr/share",
+        f"--msg-path={tmp_path / 'msgs'}",
         "--msg-type=std_msgs/Float64MultiArray",
-        f"--artifacts={tmp_path / 'a'}",
+        f"--artifacts={artifacts}",
+        "--tolerance=1e-17",  # rounding differences diverge: crash files are written
     )
-    assert run.returncode == 0, run.stderr[-2000:]
-    assert "std_msgs/Float64MultiArray" in run.stderr and "divergences: 0" in run.stderr
+    assert run.returncode == 1, run.stderr[-2000:]
+    assert run.stderr.count("msgs: not read: std_msgs/Float64MultiArray and every type it uses") == 1
+    manifest = json.loads((corpus / ".rrosfuzz" / "manifest.json").read_text())
+    assert manifest["config"]["msg_path"] == []
+    written = sidecars(artifacts)
+    assert written and all(data["config"]["msg_path"] == [] for data in written)
 
 
 def test_fork_mode_reexecutes_the_script(tmp_path: Path) -> None:

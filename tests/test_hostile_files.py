@@ -112,6 +112,14 @@ def _drop(path: str) -> Callable[[dict[str, Any]], None]:
     return edit
 
 
+def _both(*edits: Callable[[dict[str, Any]], None]) -> Callable[[dict[str, Any]], None]:
+    def edit(sidecar: dict[str, Any]) -> None:
+        for one in edits:
+            one(sidecar)
+
+    return edit
+
+
 def sidecar_row(edit: Callable[[dict[str, Any]], Any], message: str) -> Callable[[Path], Row]:
     def build(tmp: Path) -> Row:
         return Row([str(copy_crash(tmp, edit=edit))], 2, message)
@@ -326,7 +334,19 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "sidecar-robot-fifo": lambda t: Row(
         [str(copy_crash(t, edit=_set("config.robot", str(_fifo(t / "robot.urdf")))))], 2, "not a regular file"
     ),
-    "sidecar-msg-path-missing": sidecar_row(_set("config.msg_path", ["nonexistent/msgs"]), "is not a folder"),
+    # (message folders can matter only for a type the project does not ship: one here)
+    "sidecar-msg-path-missing": sidecar_row(
+        _both(_set("config.msg_path", ["nonexistent/msgs"]), _set("config.msg_type", "my_msgs/Goal")),
+        "is not a folder",
+    ),
+    # a shipped type: no folder could be read, and one the sidecar names is not looked at (a
+    # relative one, recorded as typed, made the file unusable from another working directory)
+    "sidecar-msg-path-of-a-shipped-type": lambda t: Row(
+        [str(copy_crash(t, edit=_set("config.msg_path", ["nonexistent/msgs", "/usr/share"])))],
+        0,
+        "agree",
+        stream="stdout",
+    ),
     # -- nothing is read outside the working directory and the file's folder -----------------------
     "sidecar-robot-device": sidecar_row(_set("config.robot", "/dev/zero"), "'/dev/zero' leads outside"),
     "sidecar-robot-outside": sidecar_row(_set("config.robot", str(ROOT / "README.md")), "leads outside"),
@@ -340,7 +360,8 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         "r.urdf' leads outside .* \\(symlinks followed\\)",
     ),
     "sidecar-msg-path-outside": sidecar_row(
-        _set("config.msg_path", ["/usr/share"]), "msg_path '/usr/share' leads"
+        _both(_set("config.msg_path", ["/usr/share"]), _set("config.msg_type", "my_msgs/Goal")),
+        "msg_path '/usr/share' leads",
     ),
     "sidecar-robot-outside-trusted": lambda t: Row(
         [str(copy_crash(t, edit=_set("config.robot", str(ROOT / "README.md")))), "--trust-sidecar"],

@@ -122,18 +122,41 @@ def test_parse_msg_names_the_source_and_line() -> None:
         parse_msg(f"int8 a\nint16 C=+{BIG}\n", "p/A")
 
 
-@pytest.mark.parametrize("kind", ["fifo", "dev_zero", "directory"])
-def test_non_regular_definition_files_are_not_opened(tmp_path: Path, kind: str) -> None:
-    """A FIFO (which would block), /dev/zero (endless) or a folder named A.msg is not a definition."""
-    folder = tmp_path / "p" / "msg"
+@pytest.mark.parametrize(
+    ("kind", "says"),
+    [
+        ("fifo", "is a FIFO, not a regular file"),
+        ("dev_zero", "is a device, not a regular file"),
+        ("directory", "is a folder, not a regular file"),
+        ("dangling", "cannot read message definition: No such file"),
+        ("link_out", "a link out of its message folder"),
+    ],
+)
+def test_non_regular_definition_files_are_not_opened(tmp_path: Path, kind: str, says: str) -> None:
+    """A FIFO (which would block), /dev/zero (endless) or a folder named A.msg is not a definition,
+    and the error says what it is (it said "unknown message type"); a link out of the folder is
+    not followed (a link to /etc/passwd echoed its first line in the parse error)."""
+    root = tmp_path / "root"
+    folder = root / "p" / "msg"
     folder.mkdir(parents=True)
     target = folder / "A.msg"
+    outside = tmp_path / "secret.txt"
+    outside.write_text("root:x:0:0:root:/root:/bin/bash\n")
     if kind == "fifo":
         os.mkfifo(target)
     elif kind == "dev_zero":
         target.symlink_to("/dev/zero")
+    elif kind == "dangling":
+        target.symlink_to(tmp_path / "nothing.msg")
+    elif kind == "link_out":
+        target.symlink_to(outside)
     else:
         target.mkdir()
-    with pytest.raises(MsgError, match="unknown message type 'p/A'"):
-        MessageRegistry([tmp_path]).get("p/A")
-    assert "p/A" not in MessageRegistry([tmp_path]).known()
+    with pytest.raises(MsgError, match=says) as raised:
+        MessageRegistry([root]).get("p/A")
+    assert "root:x" not in str(raised.value)
+    assert "p/A" not in MessageRegistry([root]).known() or kind == "link_out"
+    inside = folder / "B.msg"
+    (folder / "real.txt").write_text("int8 x\n")
+    inside.symlink_to(folder / "real.txt")  # a link inside the folder is read
+    assert MessageRegistry([root]).get("p/B").fields[0].name == "x"

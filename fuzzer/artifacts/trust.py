@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts.sidecar import BUILTIN_TARGETS, SidecarError
-from fuzzer.execution.session import RunConfig
+from fuzzer.execution.session import RunConfig, unread_msg_path
 from fuzzer.execution.tolerance import Tolerance
 from robot_api import robots
 
@@ -166,6 +166,8 @@ def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust
     if "robot" not in given:
         robot = safe_robot(robot, source, trust)
     msg_path = tuple(config.get("msg_path", ()))
+    if unread_msg_path(str(config.get("op", "move")), str(config.get("msg_type", "")), msg_path):
+        msg_path = ()  # no folder it names could be read (a relative one broke replay elsewhere)
     if "msg_path" not in given:
         for root in msg_path:
             if not trust:

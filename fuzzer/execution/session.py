@@ -81,6 +81,37 @@ class RunConfig:
         )
 
 
+def message_types(op: str, msg_type: str) -> list[str]:
+    """The message types a configuration reads: the op's input type, or for a scenario its
+    topics' types (a scenario is not a registry type)."""
+    if op == "scenario":
+        return sorted({t.msg_type for t in scenario_steps.TOPICS.values()})
+    return [msg_type or DEFAULT_MSG_TYPE.get(op, "")]
+
+
+def unread_msg_path(op: str, msg_type: str, msg_path: tuple[str, ...]) -> str | None:
+    """Why the message folders ``msg_path`` cannot matter to a configuration, or None when
+    they may: every type it reads, and every type those use, is a definition the project ships
+    (``fuzzer/msgs``), which is searched first. So a folder is never read there, and a crash
+    file need not name it (a relative one, recorded as typed, broke replay elsewhere)."""
+    from fuzzer.input.msgdef import MsgError
+
+    if not msg_path:
+        return None
+    types = message_types(op, msg_type)
+    shipped = MessageRegistry(())
+    try:
+        for name in types:
+            shipped.get(name)
+    except (MsgError, ValueError):
+        return None
+    what = f"{types[0]} and every type it uses" if len(types) == 1 else "every type a scenario uses"
+    return (
+        f"--msg-path {', '.join(msg_path)}: not read: {what} are definitions the project ships "
+        "(fuzzer/msgs), which are searched first; the folder is not recorded in crash files"
+    )
+
+
 def max_steps_of(value: Any) -> int:
     """A recorded or given ``max_steps``, checked.
 
@@ -121,9 +152,7 @@ class Session:
         try:
             mapping_for(config.op, config.message_type)
             registry = MessageRegistry(config.msg_path)
-            # a scenario is not a registry type: its topics' types are
-            topics = scenario_steps.TOPICS.values()
-            for msg_type in [t.msg_type for t in topics] if scenario else [config.message_type]:
+            for msg_type in message_types(config.op, config.message_type):
                 registry.get(msg_type)
         except (ValueError, MsgError) as exc:
             raise ConfigError(f"--msg-type: {exc}") from None

@@ -145,11 +145,31 @@ class MessageRegistry:
         return spec
 
     def _find(self, name: str) -> Path | None:
+        """The first root's definition of ``name``.
+
+        Raises
+        ------
+        MsgError
+            That name is taken by something other than a regular file (a FIFO, a folder, a
+            dangling link), or by a link out of its root: a root is the folder the user
+            pointed at, and nothing outside it is read (a link to /etc/passwd echoed its
+            first line in the parse error)."""
+        from fuzzer.input.paths import contained, kind_of  # (paths imports the session, which imports this)
+
         package, type_name = name.split("/")
         for root in self.roots:
             path = root / package / "msg" / f"{type_name}.msg"
-            if path.is_file():
-                return path
+            if not (path.is_symlink() or path.exists()):
+                continue
+            try:
+                mode = path.stat().st_mode
+            except OSError as exc:  # a dangling link, a loop
+                raise MsgError(f"{path}: cannot read message definition: {exc.strerror or exc}") from None
+            if not stat.S_ISREG(mode):
+                raise MsgError(f"{path}: is {kind_of(mode)}, not a regular file")
+            if path.is_symlink() and not contained(root, path):
+                raise MsgError(f"{path}: a link out of its message folder {root}; not read")
+            return path
         return None
 
     def _load(self, name: str, referrer: str) -> MessageSpec:
