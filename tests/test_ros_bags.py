@@ -322,3 +322,104 @@ def test_the_bounded_decompressors_give_what_the_whole_ones_give(ros: Any) -> No
     assert bounded_lz4(roslz4, packed, 10**7) == roslz4.decompress(packed) == data * 20
     with pytest.raises(ChunkTooLargeError):
         bounded_lz4(roslz4, packed, 10**5)
+
+
+def _scenario_crash(tmp_path: Path) -> tuple[Path, list[dict[str, Any]], list[list[float]]]:
+    """A scenario crash file (joint target, go, velocity scaling, plan, execute) and its sidecar,
+    whose two targets report a state after the first two steps."""
+    from fuzzer.scenario.steps import MSG_TYPE
+
+    header = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+    steps = [
+        {"topic": "/joint_target", "msg": {"header": header, "name": [], "position": [0.1] * 6,
+                                           "velocity": [], "effort": []}},
+        {"topic": "/go", "msg": {}},
+        {"topic": "/velocity_scaling", "msg": {"data": 0.5}},
+        {"topic": "/plan", "msg": {}},
+        {"topic": "/execute", "msg": {}},
+    ]  # fmt: skip
+    crash = tmp_path / "crash-0123456789abcdef0123456789abcdef01234567"
+    crash.write_bytes(TestCase(MSG_TYPE, {"steps": steps}).encode())
+    q = [[0.1] * 6, [0.1, 0.1, 0.1, 0.1, 0.1, 0.2]]
+    outcomes = [
+        {"target": t, "status": "ok", "steps": [
+            {"status": "ok", "values": {"joint_target": [0.1] * 6, "joint_values": [0.0] * 6}},
+            {"status": "ok", "values": {"joint_values": v, "position": [0.1, 0.2, 0.3 + k],
+                                        "orientation": [0.0, 0.0, 0.0, 1.0]}},
+            {"status": "rejected", "values": {}},
+        ]}
+        for k, (t, v) in enumerate(zip(("native", "python"), q, strict=True))
+    ]  # fmt: skip
+    sidecar = {"config": {"op": "scenario", "robot": "probot_anno", "targets": ["native", "python"]},
+               "signature": {"key": "k"}, "outcomes": outcomes}  # fmt: skip
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    return crash, steps, q
+
+
+def test_a_scenario_exports_as_its_steps_and_reads_back_as_that_scenario(ros: Any, tmp_path: Path) -> None:
+    """export-bag said "nothing to export" for a scenario (the main job's crash files), and
+    --seeds-from-bag refused --op scenario; now a scenario goes to a bag step by step, one
+    second apart, with each target's state after each step, and comes back as the same script."""
+    rosbag, _sensor_msgs, _std_msgs = ros
+    crash, steps, q = _scenario_crash(tmp_path)
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    out = crash.with_name(crash.name + ".bag")
+    with rosbag.Bag(str(out)) as bag:
+        got = [(topic, msg, t.to_sec()) for topic, msg, t in bag.read_messages()]
+    step_topics = [(topic, t) for topic, _msg, t in got if topic.startswith("/rrosfuzz/scenario/")]
+    assert step_topics == [("/rrosfuzz/scenario" + s["topic"], 1.0 + i) for i, s in enumerate(steps)]
+    speed = next(msg for topic, msg, _t in got if topic == "/rrosfuzz/scenario/velocity_scaling")
+    assert speed.data == 0.5
+    for k in (0, 1):
+        where = f"/rrosfuzz/target_{k}"
+        states = [(list(m.position), t) for topic, m, t in got if topic == f"{where}/joint_states"]
+        assert states == [([0.0] * 6, 1.0), (q[k], 2.0)]  # the third step reported none
+        poses = [(m.pose.position.z, t) for topic, m, t in got if topic == f"{where}/pose"]
+        assert poses == [(0.3 + k, 2.0)]
+    corpus = tmp_path / "corpus"
+    run = _fuzz(str(corpus), "--op", "scenario", "--seeds-from-bag", str(out), "--artifacts",
+                str(tmp_path / "art"), "-runs=5", "-seed=1", "--no-progress", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert f"wrote 1 seeds from {out}" in run.stderr
+    cases = [decode(p.read_bytes()) for p in corpus.iterdir() if p.is_file()]
+    seeds = [c for c in cases if c.origin == "rosbag"]
+    assert [c.message["steps"] for c in seeds] == [steps]
+
+
+def test_a_recording_becomes_successive_moves_in_scripts(ros: Any, tmp_path: Path) -> None:
+    """A bag of recorded states (no scenario topics): each JointState or PoseStamped a move (a
+    target and go), packed into scripts of at most --max-steps steps; a JointState naming the
+    chain's joints in another order (as some drivers publish) is put in the chain's order, a
+    gripper's joint left out, the robot's velocities and efforts dropped."""
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.ros import scenario_bags
+
+    rosbag, sensor_msgs, std_msgs = ros
+    import geometry_msgs.msg
+
+    path = tmp_path / "recorded.bag"
+    joints = [f"joint_{i}" for i in range(1, 7)]
+    with rosbag.Bag(str(path), "w") as bag:
+        for k in range(9):
+            state = _state(sensor_msgs, [0.01 * k + 0.1 * i for i in range(6)], 10 + k)
+            if k == 4:  # alphabetical, with a gripper joint, and the robot's own velocities
+                state.name = ["gripper", *reversed(joints)]
+                state.position = [0.5, *reversed(state.position)]
+                state.velocity = [0.0] * 7
+            bag.write("/joint_states", state)
+        bag.write("/chatter", std_msgs.String("not a state"))
+        pose = geometry_msgs.msg.PoseStamped()
+        pose.pose.position.x, pose.pose.orientation.w = 0.2, 1.0
+        bag.write("/tool_pose", pose)
+    session = Session.open(RunConfig(op="scenario", max_steps=4))
+    scenarios = scenario_bags.read_scenarios(path, session.validate, 4, joints)
+    kinds = [[s["topic"] for s in sc["steps"]] for sc in scenarios]
+    assert kinds == [["/joint_target", "/go"] * 2] * 4 + [["/joint_target", "/go", "/pose_target", "/go"]]
+    moved = [sc["steps"][i]["msg"] for sc in scenarios for i in (0, 2)]
+    assert moved[4]["name"] == joints
+    assert moved[4]["position"] == pytest.approx([0.04 + 0.1 * i for i in range(6)])
+    assert moved[4]["velocity"] == [] and moved[4]["effort"] == []
+    assert moved[9]["pose"]["position"]["x"] == 0.2  # the pose, last in the bag
+    with pytest.raises(ValueError, match="no valid scenario step"):
+        scenario_bags.read_scenarios(path, session.validate, 1, joints)  # a move takes two steps

@@ -338,11 +338,13 @@ def reach_cases(session: Session, seed: int, first: int = 0) -> list[TestCase]:
 def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
     """The messages of the campaign's type in a ROS bag, as seeds (``fuzzer.ros.bags``)."""
     from fuzzer.ros.bags import read_seeds
+    from fuzzer.ros.scenario_bags import read_scenarios
 
-    msg_type = session.config.message_type
+    msg_type, joints = session.config.message_type, session.reference.joint_names
     if session.config.op == "scenario":
-        raise ConfigError("--seeds-from-bag with --op scenario is not supported yet")
-    messages = read_seeds(bag, msg_type, session.validate)
+        messages = read_scenarios(bag, session.validate, session.config.max_steps, joints)
+    else:
+        messages = read_seeds(bag, msg_type, session.validate, joints)
     return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
 
 

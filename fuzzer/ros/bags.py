@@ -29,8 +29,12 @@ from fuzzer.input.paths import PathError, check_output_file, file_problem, given
 from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
 
+JOINT_STATE = "sensor_msgs/JointState"
+SCENARIO_TYPE = "rrosfuzz/Scenario"
+"""``fuzzer.scenario.steps.MSG_TYPE`` (a scenario's steps go to ``fuzzer.ros.scenario_bags``)."""
+
 TOPICS = {
-    "sensor_msgs/JointState": "/joint_states",
+    JOINT_STATE: "/joint_states",
     "geometry_msgs/PoseStamped": "/rrosfuzz/pose_target",
     "geometry_msgs/Pose": "/rrosfuzz/pose_target",
     "std_msgs/Float64MultiArray": "/rrosfuzz/joint_values",
@@ -117,17 +121,20 @@ class UncompiledTypeError(Exception):
 
 
 @contextlib.contextmanager
-def known_types_only(rosbag: Any, cls: Any) -> Iterator[None]:
+def known_types_only(rosbag: Any, classes: Sequence[Any]) -> Iterator[None]:
     """While reading: rosbag's ``_get_message_type`` (a module global its readers look up for
-    every message record) answers ``cls`` for connections of its type and MD5 sum, and raises
-    :class:`UncompiledTypeError` for any other instead of compiling the bag's definition
-    (``genpy.dynamic``). The connection filter alone did not stop it: a record may name another
-    connection than the index says (a helper's hostile bag ran its definition's Python)."""
+    every message record) answers the one of ``classes`` of a connection's type and MD5 sum,
+    and raises :class:`UncompiledTypeError` for any other instead of compiling the bag's
+    definition (``genpy.dynamic``). The connection filter alone did not stop it: a record may
+    name another connection than the index says (a helper's hostile bag ran its definition's
+    Python)."""
     module = rosbag.bag
     saved = module._get_message_type
+    by_type = {(cls._type, cls._md5sum): cls for cls in classes}
 
     def known(info: Any) -> Any:
-        if info.datatype == cls._type and info.md5sum == cls._md5sum:
+        cls = by_type.get((info.datatype, info.md5sum))
+        if cls is not None:
             return cls
         raise UncompiledTypeError(f"{info.datatype} (MD5 sum {info.md5sum})")
 
@@ -181,45 +188,40 @@ def from_data(cls: Any, data: Any) -> Any:
     return message
 
 
-def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]:
-    """The ``msg_type`` messages of a bag (any topic), as seeds; the invalid ones are skipped.
+def iter_messages(path: Path, msg_types: Sequence[str], held: list[str]) -> Iterator[tuple[str, str, Any]]:
+    """(topic, type, plain data) of each message of one of ``msg_types`` in a bag, in the bag's
+    order, read with Debian's compiled classes only; ``held`` gets what the bag holds
+    ("type on topic"), for messages. Messages larger than a test case may be are skipped unread.
 
     Raises
     ------
     BagError
-        The file is not a readable bag, or holds no valid message of that type.
+        The file is not a readable bag (or a chunk or record of it is refused).
     """
     rosbag = env.import_module("rosbag")
-    cls = message_class(msg_type)
-    rosbag.bag._message_types[cls._md5sum] = cls  # never compile the bag's own definition
+    classes = [message_class(name) for name in msg_types]
+    for cls in classes:
+        rosbag.bag._message_types[cls._md5sum] = cls  # never compile the bag's own definition
+    wanted_types = {(cls._type, cls._md5sum) for cls in classes}
 
     def wanted(topic: str, datatype: str, md5sum: str, msg_def: str, header: Any) -> bool:
-        return bool(datatype == msg_type and md5sum == cls._md5sum)
+        return (datatype, md5sum) in wanted_types
 
-    out: list[dict[str, Any]] = []
-    held: set[str] = set()
     try:
-        with bounded_chunks(rosbag), known_types_only(rosbag, cls), rosbag.Bag(str(path), "r") as bag:
-            held = {f"{c.datatype} on {c.topic}" for c in bag._connections.values()}
+        with bounded_chunks(rosbag), known_types_only(rosbag, classes), rosbag.Bag(str(path), "r") as bag:
+            held.extend(sorted({f"{c.datatype} on {c.topic}" for c in bag._connections.values()}))
             largest = max((h.uncompressed_size for h in bag._chunk_headers.values()), default=0)
             if largest > MAX_CHUNK_BYTES:  # as declared (one that lies stops in bounded_chunks)
                 raise BagError(
                     f"--seeds-from-bag {path}: a chunk of {largest} bytes uncompressed "
                     f"(at most {MAX_CHUNK_BYTES} are read)"
                 )
-            for _topic, raw, _t in bag.read_messages(connection_filter=wanted, raw=True):
+            for topic, raw, _t in bag.read_messages(connection_filter=wanted, raw=True):
                 if len(raw[1]) > MAX_BYTES:  # its test case could not be larger than this
                     continue  # 3 x 10**7 joint positions made seeds of 120 MB each
-                message = cls()
+                message = raw[4]()  # the class known_types_only answered for the record
                 message.deserialize(raw[1])
-                data = to_data(message)
-                try:
-                    validate(data)
-                except ValueError:
-                    continue
-                out.append(data)
-                if len(out) >= MAX_SEEDS:
-                    break
+                yield topic, message._type, to_data(message)
     except BagError:
         raise
     except UncompiledTypeError as exc:
@@ -234,13 +236,55 @@ def read_seeds(path: Path, msg_type: str, validate: Any) -> list[dict[str, Any]]
         ) from None
     except Exception as exc:  # noqa: BLE001 - rosbag, genpy, struct, bz2/lz4: all mean "not readable"
         raise BagError(f"--seeds-from-bag {path}: not a readable bag: {type(exc).__name__}: {exc}") from None
+
+
+def read_seeds(
+    path: Path, msg_type: str, validate: Any, joints: Sequence[str] | None = None
+) -> list[dict[str, Any]]:
+    """The ``msg_type`` messages of a bag (any topic), as seeds; the invalid ones are skipped.
+    With ``joints`` (the chain's), a ``sensor_msgs/JointState`` is taken as a recorded state
+    (:func:`recorded_state`).
+
+    Raises
+    ------
+    BagError
+        The file is not a readable bag, or holds no valid message of that type.
+    """
+    out: list[dict[str, Any]] = []
+    held: list[str] = []
+    for _topic, _type, data in iter_messages(path, [msg_type], held):
+        if joints is not None and msg_type == JOINT_STATE:
+            data = recorded_state(data, joints)
+        try:
+            validate(data)
+        except ValueError:
+            continue
+        out.append(data)
+        if len(out) >= MAX_SEEDS:
+            break
     if not out:
-        holds = ", ".join(sorted(held)) or "no messages"
+        holds = ", ".join(held) or "no messages"
         raise BagError(f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {holds})")
     return out
 
 
-def _pose_stamped(values: dict[str, Any], frame: str) -> Any:
+def recorded_state(data: dict[str, Any], joints: Sequence[str]) -> dict[str, Any]:
+    """A recorded ``sensor_msgs/JointState`` as the configuration the robot was in: when its
+    names hold every joint of the chain, its positions in the chain's order under the chain's
+    names (other joints, a gripper's, left out); without the velocities and efforts a robot
+    publishes (a ``move`` would take their first values as scaling factors, most often 0, and
+    test only its rejection). Its positions stay as they are when it names no joint (already
+    in the chain's order) or not every one (a state both targets must refuse alike)."""
+    out = {**data, "velocity": [], "effort": []}
+    names, positions = data.get("name", []), data.get("position", [])
+    if names and len(names) == len(positions) and set(joints) <= set(names) and len(set(names)) == len(names):
+        where = {name: i for i, name in enumerate(names)}
+        out["name"] = list(joints)
+        out["position"] = [positions[where[joint]] for joint in joints]
+    return out
+
+
+def pose_stamped(values: dict[str, Any], frame: str) -> Any:
     geometry_msgs = env.import_module("geometry_msgs.msg")
     pose = geometry_msgs.PoseStamped()
     pose.header.frame_id = frame
@@ -257,7 +301,9 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     per target ``k`` (0, 1), when its outcome has them,
     ``/rrosfuzz/target_k/joint_states`` (``sensor_msgs/JointState``) and
     ``/rrosfuzz/target_k/pose`` (``geometry_msgs/PoseStamped`` in the root link's
-    frame). Returns the topics written.
+    frame). A scenario: its steps on ``/rrosfuzz/scenario/<step>``, one second apart, and
+    each target's state after each step at the step's time (``fuzzer.ros.scenario_bags``).
+    Returns the topics written.
 
     Raises
     ------
@@ -281,26 +327,31 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     stamp = case.message.get("header", {}).get("stamp", {})
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
-    records: list[tuple[str, Any]] = []
-    if case.msg_type in TOPICS:
+    records: list[tuple[str, Any, Any]] = []
+    if case.msg_type == SCENARIO_TYPE:
+        from fuzzer.ros.scenario_bags import export_records
+
+        records = export_records(crash, case.message, sidecar, model, start)
+    elif case.msg_type in TOPICS:
         try:
-            records.append((TOPICS[case.msg_type], from_data(message_class(case.msg_type), case.message)))
+            message = from_data(message_class(case.msg_type), case.message)
         except (LookupError, TypeError, ValueError, AttributeError) as exc:
             raise BagError(
                 f"{crash}: its message is not a {case.msg_type}: {type(exc).__name__}: {exc}"
             ) from None
-    for k, outcome in enumerate(sidecar.get("outcomes", [])[:2]):
+        records.append((TOPICS[case.msg_type], message, start))
+    for k, outcome in enumerate(sidecar.get("outcomes", [])[:2] if case.msg_type != SCENARIO_TYPE else []):
         values = outcome.get("values", {}) if isinstance(outcome, dict) else {}
         joints = values.get("joint_values")
         if isinstance(joints, list) and len(joints) == model.dof:
             state = sensor_msgs.JointState()
             state.header.stamp = start
             state.name, state.position = list(model.joint_names), [float(v) for v in joints]
-            records.append((f"/rrosfuzz/target_{k}/joint_states", state))
+            records.append((f"/rrosfuzz/target_{k}/joint_states", state, start))
         if len(values.get("position", [])) == 3 and len(values.get("orientation", [])) == 4:
-            pose = _pose_stamped(values, model.root_link)
+            pose = pose_stamped(values, model.root_link)
             pose.header.stamp = start
-            records.append((f"/rrosfuzz/target_{k}/pose", pose))
+            records.append((f"/rrosfuzz/target_{k}/pose", pose, start))
     if not records:
         raise BagError(f"{crash}: nothing to export ({case.msg_type}, no outcome values in its sidecar)")
     _check_output(output, crash)
@@ -313,13 +364,13 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     os.close(handle)
     try:
         with rosbag.Bag(name, "w") as bag:
-            for topic, message in records:
-                bag.write(topic, message, start)
+            for topic, message, when in records:
+                bag.write(topic, message, when)
         os.replace(name, output)
     except Exception as exc:  # noqa: BLE001 - genpy's serialization errors name the field
         Path(name).unlink(missing_ok=True)
         raise BagError(f"{output}: cannot write the bag: {type(exc).__name__}: {exc}") from None
-    return [topic for topic, _ in records]
+    return list(dict.fromkeys(topic for topic, _, _ in records))
 
 
 def _check_output(output: Path, crash: Path) -> None:
