@@ -18,11 +18,13 @@ import json
 import os
 import queue
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fuzzer.execution.dead_zone import twin_with_kdl_dead_zone
 from fuzzer.execution.records import Outcome, Status
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import CallError, call_from_json
@@ -89,7 +91,8 @@ def handle(runner: Runner, text: str) -> tuple[int, dict[str, Any]] | None:
             outcome = Outcome(Status.OK)
         else:
             call, seed = call_from_json(request.get("call"))
-            outcome = runner.run(call, seed)
+            with twin_with_kdl_dead_zone() if request.get("kdl_dead_zone") is True else nullcontext():
+                outcome = runner.run(call, seed)
     except CallError as exc:
         outcome = Outcome(Status.CRASHED, "BadRequest", None, str(exc)[:500])
     except Exception as exc:  # noqa: BLE001 - the target's failure, reported as its outcome

@@ -147,6 +147,72 @@ def test_campaign_over_ros_saves_crashes_that_replay_in_process(transport, tmp_p
     assert "still diverges (same signature)" in replay.stdout + replay.stderr, replay.stderr[-2000:]
 
 
+def test_an_ik_status_split_gets_the_same_verdict_over_ros(transport, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The IK status check replays Newton-Raphson iterates on a twin model of the targets' robot
+    file (``Evaluator.replay``); a ROS runner had no ``urdf``, so over ROS that check was skipped
+    and this split, explained in process (an iterate meets a half turn), was a counted finding
+    between the correct targets (a helper's ``--op ik --transport ros`` campaign)."""
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "pose": {"position": {"x": 0.2799999999985158, "y": 0.0, "z": 0.4908553499954169},
+                 "orientation": {"x": -0.7071067811758143, "y": 1.2986795316207019e-06,
+                                 "z": 0.707106781185355, "w": 3.896027768872955e-06}},
+    }  # fmt: skip
+    case = tmp_path / "split"
+    case.write_bytes(TestCase("geometry_msgs/PoseStamped", message).encode())
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+    environment["ROS_LOG_DIR"] = str(tmp_path)
+    verdicts = []
+    for where in ("inprocess", "ros"):
+        run = subprocess.run(
+            [sys.executable, str(ROOT / "fuzz_diff.py"), str(case), "--op", "ik", "--tolerance", "1e-5",
+             "--transport", where],
+            capture_output=True, text=True, timeout=300, env=environment, cwd=ROOT, check=False,
+        )  # fmt: skip
+        assert "(signature " in run.stdout, run.stderr[-2000:]  # replayed, whatever the verdict
+        verdicts.append(run.stdout.split("(signature ", 1)[-1].split(";")[0])
+    assert verdicts[0] == verdicts[1] and "known_limitation on status" in verdicts[0], verdicts
+    runner = transport.RosRunner.__new__(transport.RosRunner)
+    runner.node = transport.TargetNode("python", "robot.urdf", "link_6")
+    assert (runner.urdf, runner.tip_link) == ("robot.urdf", "link_6")
+
+
+def test_the_rospy_node_runs_its_twin_with_kdl_s_dead_zone_when_asked(transport) -> None:  # type: ignore[no-untyped-def]
+    """Inside the oracle's KDL dead-zone re-run, a request asks the node for the same swap in
+    its own process (the swap in the engine's process did not reach a twin in a ROS node)."""
+    from python_impl import kinematics
+
+    sys.path.insert(0, str(ROOT / "ros"))
+    try:
+        import target_node
+    finally:
+        sys.path.remove(str(ROOT / "ros"))
+    from fuzzer.execution import dead_zone
+
+    seen: list[str] = []
+
+    class Recorder:
+        def run(self, call, seed):  # type: ignore[no-untyped-def]
+            seen.append(kinematics.error_twist.__name__)
+            return Local.run(call, seed)
+
+    Local = Runner.create("python", robots.resolve(robots.DEFAULT_ROBOT), None)
+    call = {"id": 1, "op": "run", "call": {"kind": "FkCall", "joint_values": [0.1] * 6, "link": None}}
+    for flag in (False, True):
+        request = {**call, "kdl_dead_zone": True} if flag else call
+        ident, answer = target_node.handle(Recorder(), transport.encode(1, request))
+        assert ident == 1 and answer["outcome"]["status"] == "ok", answer
+    assert seen == ["error_twist", "with_dead_zone"]
+    assert kinematics.error_twist.__name__ == "error_twist"
+    sent: list[dict] = []  # type: ignore[type-arg]
+    runner = transport.RosRunner.__new__(transport.RosRunner)
+    runner.node = type("Node", (), {"request": lambda self, payload: sent.append(payload)})()
+    runner.run(FkCall((0.1,) * 6))
+    with dead_zone.twin_with_kdl_dead_zone():
+        runner.run(FkCall((0.1,) * 6))
+    assert ["kdl_dead_zone" in p for p in sent] == [False, True]
+
+
 def test_transport_option_is_checked(tmp_path: Path) -> None:
     run = subprocess.run(
         [sys.executable, str(ROOT / "fuzz_diff.py"), str(tmp_path), "--transport", "carrier-pigeon"],

@@ -13,7 +13,10 @@ on the other. Both follow the documented algorithm; only the dead zone parts the
 
 :func:`twin_with_kdl_dead_zone` makes the twin's IK use KDL's rule for the duration of a
 ``with`` block (in this process: an in-process twin, or a target built on it such as the
-zoo's variants; a plugin or a ROS node is unaffected, so the divergence stands). The twin's
+zoo's variants; a plugin is unaffected, so the divergence stands). A target in a ROS node is
+asked to do the same in its own process for the calls made inside the block (:func:`active`;
+``fuzzer.ros.transport``: the rospy node swaps its twin; the C++ node has none): before, over
+ROS the swap changed nothing, and a divergence explained in process was counted there. The twin's
 own code is untouched: the oracle swaps the one function that computes the error twist
 (``python_impl.kinematics.error_twist``), as this module is the oracle's model of KDL, not
 part of the twin.
@@ -43,6 +46,15 @@ def within_dead_zone(relative: Any) -> bool:
     return bool(symmetric < 10 * KDL_EPSILON and abs(np.trace(r) - 3.0) < 10 * KDL_EPSILON)
 
 
+_ACTIVE: list[bool] = []
+
+
+def active() -> bool:
+    """Whether a :func:`twin_with_kdl_dead_zone` block is running (its calls to a target in a
+    ROS node ask the node for the same swap)."""
+    return bool(_ACTIVE)
+
+
 @contextlib.contextmanager
 def twin_with_kdl_dead_zone() -> Iterator[bool]:
     """While active, the twin's error twist has no rotation part when KDL would report none.
@@ -62,7 +74,9 @@ def twin_with_kdl_dead_zone() -> Iterator[bool]:
         return twist
 
     kinematics.error_twist = with_dead_zone
+    _ACTIVE.append(True)
     try:
         yield True
     finally:
+        _ACTIVE.pop()
         kinematics.error_twist = exact

@@ -10,7 +10,9 @@ node ``/rrosfuzz/<name>``:
   model is built (``error`` non-empty: the constructor failed; the node exits);
 * ``/rrosfuzz/<name>/request`` (``std_msgs/String``): the engine publishes one
   request per test case, ``"<n>\n<JSON>"`` with the JSON ``{"id": n, "op": "run",
-  "call": call_to_json(call, ik_seed)}``, or ``{"id": n, "op": "fresh"}`` (rebuild
+  "call": call_to_json(call, ik_seed)}`` (with ``"kdl_dead_zone": true`` inside the oracle's
+  KDL dead-zone re-run: the rospy node runs its twin with that dead zone, as the engine does
+  in process; ``fuzzer.execution.dead_zone``), or ``{"id": n, "op": "fresh"}`` (rebuild
   the model), or ``{"id": n, "op": "ping"}`` (answered with an ``ok`` outcome: the
   engine's handshake after the ready message, repeated until answered);
 * ``/rrosfuzz/<name>/response`` (``std_msgs/String``): the node answers
@@ -52,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 import python_impl
+from fuzzer.execution import dead_zone
 from fuzzer.execution.records import Outcome, Status
 from fuzzer.input.mapping import Call, call_to_json
 from fuzzer.ros import env, node, processes
@@ -322,9 +325,25 @@ class RosRunner:
     def home(self) -> tuple[float, ...]:
         return tuple(self.model.home_values)
 
+    @property
+    def urdf(self) -> str:
+        """The robot file the node runs on (as ``Runner.urdf``: the oracle's IK status check
+        replays iterates on a twin model of it; without it, over ROS that check was skipped and
+        a status split explained in process was counted)."""
+        return self.node.urdf
+
+    @property
+    def tip_link(self) -> str | None:
+        return self.node.tip_link
+
     def run(self, call: Call, ik_seed: tuple[float, ...] | None = None) -> Outcome:
-        """Execute ``call`` in the node; never raises (failures become the outcome)."""
-        return self.node.request({"op": "run", "call": call_to_json(call, ik_seed)})
+        """Execute ``call`` in the node; never raises (failures become the outcome). Inside the
+        oracle's KDL dead-zone re-run (``dead_zone.active``) the request asks the node to run
+        its twin with that dead zone too (``kdl_dead_zone``)."""
+        payload: dict[str, Any] = {"op": "run", "call": call_to_json(call, ik_seed)}
+        if dead_zone.active():
+            payload["kdl_dead_zone"] = True
+        return self.node.request(payload)
 
     def fresh(self) -> RosRunner:
         """The node rebuilds its model (no state from earlier calls)."""
