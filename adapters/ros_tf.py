@@ -268,5 +268,6 @@ class RobotModel(LibraryModel):
 
 
 api = make_api(RobotModel, __name__)
+api.OPS = ("fk",)  # what it answers (fuzzer.execution.session.answered_ops): IK is unsupported
 """The implementation object for ``--targets adapters.ros_tf:api`` (alias ``ros_tf``)."""
 MoveGroup = api.MoveGroup

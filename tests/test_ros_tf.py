@@ -81,6 +81,16 @@ def test_ros_missing_names_the_install_command(monkeypatch: pytest.MonkeyPatch, 
         env.require()
 
 
+@pytest.mark.parametrize("op", ["ik", "move", "scenario"])
+def test_ros_tf_is_refused_for_an_op_it_does_not_answer(op: str) -> None:
+    """FK only: every ik input (and every scenario step that solves IK) against it was a counted
+    finding, 26,111 in 20 s (a helper's campaign); now a usage error before any node starts."""
+    from fuzzer.execution.session import ConfigError, RunConfig, Session
+
+    with pytest.raises(ConfigError, match=f"'ros_tf' answers --op fk only, not --op {op}"):
+        Session.open(RunConfig(op=op, targets=("native", "ros_tf")))
+
+
 def _processes_with(marker: str) -> list[int]:
     """Live processes whose environment contains ``marker`` (our ROS_LOG_DIR)."""
     found = []

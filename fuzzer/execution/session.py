@@ -112,6 +112,25 @@ def unread_msg_path(op: str, msg_type: str, msg_path: tuple[str, ...]) -> str | 
     )
 
 
+def answered_ops(spec: str, op: str) -> None:
+    """Refuse a target that declares the ops it answers (an ``OPS`` tuple beside its
+    ``RobotModel``) when ``op`` is not one of them: ``ros_tf`` answers FK only, and each ``ik``
+    input (or scenario step that solves IK) against it was a counted finding (26,111 in 20 s).
+
+    Raises
+    ------
+    ConfigError
+        Naming the target and the ops it answers.
+    TargetError
+        The target cannot be imported (``targets.load_target``).
+    """
+    from fuzzer.execution.targets import load_target
+
+    ops = getattr(load_target(spec), "OPS", None)
+    if isinstance(ops, tuple) and op not in ops:
+        raise ConfigError(f"--targets: {spec!r} answers --op {', '.join(map(str, ops))} only, not --op {op}")
+
+
 def max_steps_of(value: Any) -> int:
     """A recorded or given ``max_steps``, checked.
 
@@ -166,7 +185,10 @@ class Session:
             create, ros_failure = RosRunner.create, (ros_env.RosUnavailableError, NodeStartError)
         for spec in config.targets:
             try:
+                answered_ops(spec, config.op)
                 runners.append(create(spec, urdf, config.tip_link))
+            except ConfigError:
+                raise
             except TargetError as exc:
                 raise ConfigError(f"--targets: {exc}") from None
             except RuntimeError as exc:
