@@ -67,6 +67,17 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
 
         args.max_steps = recorded_max_steps(args.corpus, args.op)
     files = [p for p in args.corpus if p.is_file()]
+    minimizing = (
+        int_flag(tuple(flags), "-minimize_crash", 0) > 0 or int_flag(tuple(flags), "-cleanse_crash", 0) > 0
+    )
+    if minimizing and (len(files) != 1 or len(args.corpus) != 1) and not travel.is_child():
+        # given a folder, libFuzzer ran it as an input: a traceback ending in std::bad_alloc, an
+        # empty crash file and exit 77 ("a target died")
+        raise UsageError(
+            "-minimize_crash=1 and -cleanse_crash=1 take one crash file, not "
+            + (f"the folder {args.corpus[0]}" if len(args.corpus) == 1 else f"{len(args.corpus)} paths")
+            + " (`fuzz_diff.py minimize CRASH` minimizes with the oracle's signature)"
+        )
     if files and len(files) < len(args.corpus) and not travel.is_child():  # libFuzzer: "Not a directory"
         raise UsageError(
             f"{files[0]}: a file among corpus folders; a campaign takes folders "

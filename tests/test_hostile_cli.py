@@ -69,6 +69,9 @@ HOSTILE = [
     (["--op=ik", "--msg-type=sensor_msgs/JointState"], "supported: geometry_msgs/PoseStamped"),
     (["--msg-path=/nonexistent/msgs"], "--msg-path /nonexistent/msgs: not a folder"),
     (["-dict=/nonexistent.dict"], "-dict=/nonexistent.dict: no such file"),
+    # given a corpus folder, libFuzzer ran the folder as an input: std::bad_alloc, exit 77
+    (["-minimize_crash=1"], "-minimize_crash=1 and -cleanse_crash=1 take one crash file, not the folder"),
+    (["-cleanse_crash=1"], "take one crash file"),
     # libFuzzer's integer flags: Atheris' stoul raised (then the interpreter crashed, exit 139,
     # under a summary saying "exit status 0"); -jobs=-1 started jobs without end
     (["-seed=abc"], "-seed=abc: libFuzzer's -seed takes an integer from 0 to 4294967295"),
