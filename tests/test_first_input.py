@@ -40,6 +40,25 @@ def test_an_evaluation_that_raises_removes_the_written_input(tmp_path: Path) -> 
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
 
 
+def test_leftovers_are_absolute_so_they_settle_from_another_working_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A -jobs supervisor changes into the artifacts folder before it settles the leftovers:
+    with a relative corpus path (``fuzz_diff.py corpus/ -jobs=2``) the file was never renamed,
+    and every later campaign warned of it again."""
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    left = corpus / f"{guard.PENDING}{'a' * 40}"
+    left.write_bytes(b"{}")
+    monkeypatch.chdir(tmp_path)
+    found = guard.leftovers([Path("corpus")])
+    assert found == [left] and found[0].is_absolute()
+    (tmp_path / "art").mkdir()
+    monkeypatch.chdir(tmp_path / "art")
+    assert guard.settle(found) == [corpus / ("a" * 40)]
+    assert not left.exists() and (corpus / ("a" * 40)).read_bytes() == b"{}"
+
+
 def test_writing_ahead_into_a_missing_folder_raises_oserror(tmp_path: Path) -> None:
     with pytest.raises(OSError):
         guard.write_ahead(tmp_path / "missing", DATA)

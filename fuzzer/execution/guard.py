@@ -50,11 +50,14 @@ GRACE = 1.0
 
 def leftovers(folders: Sequence[Path]) -> list[Path]:
     """Written-ahead inputs (``PENDING``) left in ``folders`` by a campaign that died while it
-    evaluated them."""
+    evaluated them, as absolute paths: a ``-jobs`` supervisor changes into the artifacts folder
+    before ``settle``, where a relative corpus path led nowhere and the file was never renamed."""
     found: list[Path] = []
     for folder in folders:
         with contextlib.suppress(OSError):
-            found += sorted(p for p in folder.iterdir() if p.name.startswith(PENDING) and p.is_file())
+            found += sorted(
+                p.absolute() for p in folder.iterdir() if p.name.startswith(PENDING) and p.is_file()
+            )
     return found
 
 
