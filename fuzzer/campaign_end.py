@@ -11,6 +11,7 @@ an exception of a target, Ctrl-C). It answers the status the process should end 
 from __future__ import annotations
 
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,6 +41,9 @@ JOB_FAILED = "a job failed: its fuzz-N.log in the artifacts folder says why"
 
 
 CORPUS_GONE = "a corpus folder is gone: the inputs libFuzzer added to it were lost"
+
+PROBE_BYTES = 4096
+"""What a supervisor writes (and removes) to see whether its artifacts folder still takes files."""
 
 
 @dataclass
@@ -108,25 +112,50 @@ class CampaignEnd:
             code = None
         if self.child:
             return None  # a worker's status is libFuzzer's business (its parent reads it)
+        gone = False
         for folder in self.corpus:
             if not folder.is_dir():
                 reporting.error(
                     f"corpus folder {folder} is gone (removed or renamed during the campaign): the "
                     "inputs libFuzzer added to it this run are lost"
                 )
+                gone = True
                 if code in (0, 1):
                     code = WRITE_FAILED_EXIT
+        full = None
+        if self.supervisor and code in (1, WRITE_FAILED_EXIT) and not self.unwritable:
+            full = self._artifacts_problem()  # a job's write failed there: the supervisor said "1"
+            if full is not None:
+                code = WRITE_FAILED_EXIT
         if code in (0, 1) and self.leftovers:  # libFuzzer ran them as seeds, and they did no harm
             for path in guard.settle(self.leftovers):
                 reporting.info(f"{path}: the input a campaign died on ran as a seed, harmless now; kept")
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
-        if code == WRITE_FAILED_EXIT and not self.unwritable and meaning is None:
-            meaning = CORPUS_GONE
+        if full is not None:
+            meaning = (
+                f"the artifacts folder {self.options.artifacts} cannot be written ({full}): a job's "
+                "divergences may be lost (its log says which)"
+            )
+        elif code == WRITE_FAILED_EXIT and not self.unwritable and (meaning is None or job_failed):
+            meaning = CORPUS_GONE if gone else "a folder could not be written, in a job: its log says which"
         shown = code
         if code is None and status is None and self.in_callback:
             shown = error_code  # libFuzzer's status for the exception it reports next (--stop-on-divergence)
         self._summary(found, totals, shown, meaning, dry)
         return code
+
+    def _artifacts_problem(self) -> str | None:
+        """Why the artifacts folder takes no file now (a full disk, a read-only mount), or None:
+        what a supervisor, which learns only that a job ended non-zero, can see of a job's
+        failed write (a full disk ended both -jobs jobs with 74, and the campaign with 1)."""
+        try:
+            with tempfile.NamedTemporaryFile(dir=self.artifacts, prefix=".tmp-probe-") as handle:
+                handle.write(bytes(PROBE_BYTES))
+                handle.flush()
+                os.fsync(handle.fileno())
+        except OSError as exc:
+            return exc.strerror or str(exc)
+        return None
 
     def _jobs(self) -> bool:
         """Whether this process is a ``-jobs`` supervisor."""
@@ -143,8 +172,11 @@ class CampaignEnd:
 
     def _found(self) -> Found:
         """This run's crash, timeout and divergence files, the dry run's and recovered ones included."""
-        if self.dry is not None:  # its crash files are this run's, even one it died writing
+        if self.dry is not None:
             self.dry.wait()
+        if self.dry is not None or self.supervisor:
+            # the dry run's crash files are this run's, even one it died writing; so are those of
+            # a -jobs worker killed in its write window (its signature's marker hid the finding)
             self.store.recovered = [*self.store.recovered, *self.store.recover()]
         found = new_artifacts(self.artifacts, self.started)
         if self.store.recovered:  # completed for a killed run that never reported them: new to the user

@@ -394,3 +394,18 @@ def test_fork_mode_reports_timeouts_of_a_target_that_always_hangs(tmp_path: Path
     assert run.returncode == 70, run.stderr[-3000:]
     assert "timeouts: " in run.stderr and list(artifacts.glob("timeout-*"))
     assert "exit status 70 (timeouts)" in run.stderr
+
+
+def test_a_jobs_worker_killed_in_its_write_window_is_recovered_by_the_supervisor(tmp_path: Path) -> None:
+    """A -jobs worker killed between its claim and its rename (the OOM killer; here the hook)
+    left the signature's marker and two temporaries: the summary said "0 new" and triage missed
+    the finding until the next campaign recovered it. The supervisor now recovers at its end."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
+    env = {KILL_HOOK: "claim:1", dry_run.ENV: "0"}
+    run = fuzz(str(corpus), f"--artifacts={artifacts}", f"--targets=native,{TIGHT}", "-jobs=2",
+               "-max_total_time=8", "-seed=3", env=env, timeout=180)  # fmt: skip
+    assert "a job failed" in run.stderr, run.stderr[-3000:]  # a worker was killed
+    assert not list(artifacts.glob(".tmp-*")), sorted(p.name for p in artifacts.iterdir())
+    count = assert_every_claim_complete(artifacts)
+    assert count >= 1
+    assert "crash files (0 new this run)" not in run.stderr, run.stderr[-3000:]

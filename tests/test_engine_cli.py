@@ -460,6 +460,34 @@ def test_a_chain_hypothesis_cannot_draw_for_stops_everything_it_started(tmp_path
     assert not (corpus / ".rrosfuzz").exists(), "a configuration that never ran was recorded"
 
 
+def test_a_jobs_campaign_on_a_full_artifacts_folder_exits_74_saying_so(tmp_path: Path) -> None:
+    """A -jobs supervisor learns only that a job ended non-zero: a full disk that ended both
+    jobs with 74 ended the campaign with 1, "new divergences found; a job failed". It now sees
+    the folder take no file and says so (a file size limit stands in for the full disk)."""
+    import resource
+
+    from tests.support import fuzz as fuzz_with
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (3072, 3072))
+
+    run = fuzz_with(
+        str(tmp_path / "corpus"),
+        "-jobs=2",
+        "-max_total_time=6",
+        "-seed=1",
+        f"--artifacts={tmp_path / 'artifacts'}",
+        f"--targets=native,{TIGHT}",
+        "--no-progress",
+        "-handle_xfsz=0",
+        preexec_fn=small_files,
+        timeout=180,
+    )
+    assert run.returncode == 74, run.stderr[-3000:]
+    assert "cannot be written (File too large): a job's divergences may be lost" in run.stderr
+    assert "Traceback" not in run.stderr
+
+
 def test_a_full_artifacts_folder_stops_the_campaign_and_loses_no_divergence(tmp_path: Path) -> None:
     # A full disk, made by a file size limit (RLIMIT_FSIZE: writes past 3 KB fail with EFBIG, as
     # ENOSPC would; a sidecar is larger). Before: Atheris' "Uncaught Python exception", exit 77
