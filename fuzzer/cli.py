@@ -38,6 +38,7 @@ from fuzzer.cli_options import (
 )
 from fuzzer.execution.session import ConfigError, unread_msg_path
 from fuzzer.input.mapping import DEFAULT_MSG_TYPE
+from fuzzer.input.paths import FolderUnwritable
 from fuzzer.processes import CHILD_ENV, int_flag
 from fuzzer.signals import INT_EXIT, INTERRUPTED_EXIT, TERM_EXIT, terminated
 
@@ -229,6 +230,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if extra:  # as parse_args says it
             parser.error(f"unrecognized arguments: {' '.join(extra)}")
         return campaign_main(flags, known)
+    except FolderUnwritable as exc:
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
+        return WRITE_FAILED_EXIT
     except (UsageError, ConfigError) as exc:
         sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
         return 2

@@ -38,6 +38,7 @@ from fuzzer.report.tables import (
     ROW_ROTATIONS,
     ROW_STATUS,
     classify,
+    differences,
     strategies,
     table_iii,
 )
@@ -171,6 +172,13 @@ def external_references(page: str) -> list[str]:
         ({"kind": "value", "field": "position", "sign_flip": True, "difference": 5e-3}, ROW_COORDINATES),
         ({"kind": "representation", "field": "orientation", "sign_flip": True}, ROW_ROTATIONS),
         ({"kind": "value", "field": "orientation", "sign_flip": True, "difference": 0.5}, ROW_ROTATIONS),
+        # opposite signs on another field are sized as the other values (they went to the last row)
+        ({"kind": "value", "field": "go.named", "sign_flip": True, "difference": 0.5}, ROW_ABOVE_1E1),
+        (
+            {"kind": "value", "field": "plan.trajectory.positions", "sign_flip": True, "difference": 5e-3},
+            ROW_BELOW_1E2,
+        ),
+        ({"kind": "representation", "field": "go.named", "difference": 6.28}, ROW_OTHER),
         ({"kind": "status", "field": "status", "difference": 0.0}, ROW_STATUS),
         ({"kind": "crash", "field": "status"}, ROW_CRASH),
         (
@@ -185,6 +193,57 @@ def external_references(page: str) -> list[str]:
 )
 def test_table_iii_rule_of_each_kind(fields: dict[str, Any], row: str) -> None:
     assert classify(line(**fields)) == row
+
+
+def test_a_report_written_again_keeps_no_figure_of_the_earlier_one(tmp_path: Path) -> None:
+    """Re-run on a folder emptied since, the page said "Nothing to show" beside the figures and
+    3D views of buckets that no longer exist."""
+    from fuzzer.report.build import write_report
+
+    out = tmp_path / "report"
+    out.mkdir()
+    old = ["fig6-strategies.png", "over-time.png", "arm-abc123.png", "trajectory-abc123-step0.png"]
+    for name in [*old, "mine.png", "arm-notes.txt"]:
+        (out / name).write_bytes(PNG_MAGIC)
+    page = write_report(tmp_path, out)
+    assert "Nothing to show" in page.read_text()
+    assert sorted(p.name for p in out.iterdir()) == ["arm-notes.txt", "mine.png", "report.html"]
+
+
+def test_a_report_output_folder_that_cannot_be_written_exits_74(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """As every tool whose output cannot be written (docs/engine.md: a read-only mount, a full
+    disk); report said 2, a usage error."""
+    import errno
+
+    from fuzzer import cli
+
+    def read_only(self: Path, *args: Any, **kwargs: Any) -> None:
+        raise OSError(errno.EROFS, "Read-only file system", str(self))
+
+    monkeypatch.setattr(Path, "mkdir", read_only)
+    assert cli.main(["report", str(tmp_path), "-o", str(tmp_path / "out")]) == 74
+    said = capsys.readouterr().err
+    assert f"report output {tmp_path / 'out'}: cannot create the folder: Read-only file system" in said
+
+
+def test_fig_6_rate_labels_read_as_percentages() -> None:
+    from fuzzer.report.figures import rate_label
+
+    assert rate_label(1.0, 1818) == "100% of 1,818"  # it printed "1e+02% of 1,818"
+    assert rate_label(0.999, 1000) == "99.9% of 1,000" and rate_label(0.0123, 1000) == "1.2% of 1,000"
+    assert rate_label(0.0, 0) == rate_label(None, None) == "n/a (no executions recorded)"  # "0% of 0"
+
+
+def test_fig_8_draws_only_metres_and_radians() -> None:
+    """A scenario's durations (40.8 s) were drawn on Fig. 8's axis of "m or rad", past Table III's
+    1e-1 limit, while Table III put them in a row of their own."""
+    lines = [line(difference=2e-3), line(kind="representation", field="orientation", difference=6.28)]
+    lines += [line(field="cartesian_path.trajectory.time_from_start", unit="s", difference=40.8)] * 3
+    drawn = differences(lines)
+    assert drawn.values == (2e-3,) and drawn.representations == (6.28,) and drawn.other_units == 3
+    assert not differences([line(unit="s", difference=1.0)]).empty
 
 
 def test_table_iii_counts_and_proportions_over_executions() -> None:
@@ -352,6 +411,46 @@ def test_logs_without_crash_files(tmp_path: Path) -> None:
     assert "0.25%" in page, "1 of 400 executions in the 1e-2 .. 1e-1 row"
     for name in ("fig6-strategies.png", "fig7-near-zero.png", "fig8-differences.png", "over-time.png"):
         assert (tmp_path / "report" / name).read_bytes().startswith(PNG_MAGIC)
+
+
+def test_every_process_of_a_one_configuration_folder_is_labelled_with_it(tmp_path: Path) -> None:
+    """A process is known by a divergence line that is a crash file's input; the dry run's
+    children write those, so a campaign's main process (31,343 of 31,540 executions) was drawn as
+    "configuration not recorded" in a folder of one configuration. Its folder's first campaign
+    on another configuration, or two configurations on file, keep the honest label."""
+    from fuzzer.report.data import UNKNOWN_CONFIG, config_label, gather
+
+    first = config(targets=("native", "python"))
+    place_crash(tmp_path, "crash-aaa", b"{}", sidecar(signature_fields("position"), first, "sha-a"))
+    key = Signature(**signature_fields("position")).key
+    write_lines(tmp_path / STATS, [snap(1, 50.0, 5.0, 40), snap(2, 50.0, 5.0, 4000)])
+    write_lines(
+        tmp_path / DIVERGENCES, [div(sig=key, pid=1, sha1="sha-a"), div(sig=key, pid=2, sha1="other")]
+    )
+
+    def labels() -> set[str]:
+        return {band.label for run in gather(tmp_path).runs for band in run.bands}
+
+    assert labels() == {config_label(first)}
+    marker = tmp_path / ".rrosfuzz-configuration"
+    marker.write_text("robot probot_anno (e1c799e10ae1), tip link None, targets native,python\n")
+    assert labels() == {config_label(first)}
+    marker.write_text("robot ur5 (cede880fc2a9), tip link None, targets native,python\n")
+    assert labels() == {config_label(first), UNKNOWN_CONFIG}
+    marker.unlink()
+    place_crash(tmp_path, "crash-bbb", b"{}", sidecar(signature_fields("orientation"), config("ur5"), "s-b"))
+    assert labels() == {config_label(first), UNKNOWN_CONFIG}
+
+
+def test_a_folder_without_crash_files_names_its_first_campaign_s_configuration(tmp_path: Path) -> None:
+    from fuzzer.report.data import gather
+
+    write_lines(tmp_path / STATS, [snap(7, 50.0, 5.0, 400)])
+    (tmp_path / ".rrosfuzz-configuration").write_text(
+        "robot ur5 (cede880fc2a9), tip link None, targets native,python\n"
+    )
+    notes = gather(tmp_path).notes
+    assert any("first campaign ran on: robot ur5 (cede880fc2a9)" in n for n in notes), notes
 
 
 def test_strings_from_files_are_escaped_and_a_missing_robot_gives_a_note(tmp_path: Path) -> None:

@@ -29,6 +29,12 @@ class PathError(ConfigError):
     """A path that cannot be used; the message names it and the problem."""
 
 
+class FolderUnwritable(PathError):
+    """A folder that cannot be created or written into (a read-only mount, a full disk): the
+    command exits 74, as for any write that fails (docs/engine.md, "Progress, summary and exit
+    status"); ``report`` said 2."""
+
+
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
 
 JOB_LOG = re.compile(r"fuzz-[0-9]+\.log")
@@ -155,7 +161,9 @@ def prepare_folder(path: Path, role: str, *, writable: bool) -> None:
         try:
             path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise PathError(f"{role} {path}: cannot create the folder: {exc.strerror or exc}") from None
+            raise FolderUnwritable(
+                f"{role} {path}: cannot create the folder: {exc.strerror or exc}"
+            ) from None
     try:
         os.listdir(path)
     except OSError as exc:
@@ -164,7 +172,9 @@ def prepare_folder(path: Path, role: str, *, writable: bool) -> None:
         try:
             fd, probe = tempfile.mkstemp(prefix=".tmp-probe-", dir=path)
         except OSError as exc:
-            raise PathError(f"{role} {path}: cannot write into the folder: {exc.strerror or exc}") from None
+            raise FolderUnwritable(
+                f"{role} {path}: cannot write into the folder: {exc.strerror or exc}"
+            ) from None
         os.close(fd)
         os.unlink(probe)
 

@@ -13,6 +13,7 @@ the paper's tables and figures of them, :mod:`~fuzzer.report.buckets` the bucket
 
 from __future__ import annotations
 
+import contextlib
 import re
 import time
 from pathlib import Path
@@ -49,6 +50,13 @@ FILE_NAMES = {
     "fig8": "fig8-differences.png",
     "timeline": "over-time.png",
 }
+
+
+OWN_FIGURE = re.compile(
+    "|".join(re.escape(name) for name in FILE_NAMES.values()) + r"|(?:arm|trajectory)-[A-Za-z0-9_-]+\.png"
+)
+"""The names of the figures a report writes: those of an earlier report on the same folder that
+the new page no longer shows are removed (they stayed, beside a page saying "Nothing to show")."""
 
 
 PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}
@@ -90,14 +98,18 @@ def write_report(directory: Path, out: Path | None = None, trust: bool = False) 
             key: (view, scenario.figures(key, view)) for key, view in views.items() if view is not None
         }
     # each file whole or not at all (a full disk cut the page and the figures of the report before)
-    for name, png in pictures.items():
-        atomic_write(out / FILE_NAMES[name], png, durable=False)
+    written = {FILE_NAMES[name]: png for name, png in pictures.items()}
     for _, trajectories in scenarios.values():
-        for name, png in trajectories.items():
-            atomic_write(out / name, png, durable=False)
+        written.update(trajectories)
     for key, view in arms.items():
         if view.png is not None:
-            atomic_write(out / f"arm-{re.sub(r'[^A-Za-z0-9_-]', '_', key)}.png", view.png, durable=False)
+            written[f"arm-{re.sub(r'[^A-Za-z0-9_-]', '_', key)}.png"] = view.png
+    for name, png in written.items():
+        atomic_write(out / name, png, durable=False)
+    for stale in out.iterdir():  # a figure of an earlier report that this page no longer shows
+        if OWN_FIGURE.fullmatch(stale.name) and stale.name not in written and stale.is_file():
+            with contextlib.suppress(OSError):
+                stale.unlink()
     generated = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     page = out / "report.html"
     sections = {key: scenario.section(key, view, pngs) for key, (view, pngs) in scenarios.items()}

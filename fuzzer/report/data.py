@@ -17,15 +17,18 @@ back, or the workers of ``-fork``/``-jobs``), plotted on its own time axis.
 
 from __future__ import annotations
 
+import json
+import stat
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from fuzzer.artifacts.divlog import DIVERGENCES, STATS
+from fuzzer.artifacts.travel import CONFIGURATION
 from fuzzer.input import untrusted_json
 from fuzzer.report.buckets import BucketView, bucket_view
 from fuzzer.report.records import Divergence, Process, Snapshot, processes, read_records
@@ -80,9 +83,14 @@ class ConfigIndex:
 
     by_pid: Mapping[int, Mapping[str, Any]]
     by_sig: Mapping[str, Mapping[str, Any]]
+    only: Mapping[str, Any] | None = None
+    """The one configuration every sidecar records, if they agree: that of every process (most
+    processes write no crash file, the dry run's children write the first ones, and 31,343 of a
+    campaign's 31,540 executions were drawn as "configuration not recorded")."""
 
     def for_pid(self, pid: int | None) -> Mapping[str, Any] | None:
-        return self.by_pid.get(pid) if pid is not None else None
+        found = self.by_pid.get(pid) if pid is not None else None
+        return found if found is not None else self.only
 
     def for_line(self, line: Divergence) -> Mapping[str, Any] | None:
         return self.for_pid(line.pid) or self.by_sig.get(line.sig)
@@ -92,10 +100,12 @@ def config_index(sidecars: Iterable[Mapping[str, Any]], lines: Sequence[Divergen
     """Map processes and signatures to the configurations recorded in sidecars."""
     by_sha: dict[tuple[str, str], Mapping[str, Any]] = {}
     by_sig: dict[str, Mapping[str, Any]] = {}
+    distinct: dict[str, Mapping[str, Any]] = {}
     for sidecar in sidecars:
         config, signature = sidecar.get("config"), sidecar.get("signature")
         if not isinstance(config, dict) or not isinstance(signature, dict):
             continue
+        distinct.setdefault(json.dumps(config, sort_keys=True, default=str), config)
         key = str(signature.get("key", ""))
         by_sig.setdefault(key, config)
         by_sha[(str(sidecar.get("sha1", "")), key)] = config
@@ -108,7 +118,8 @@ def config_index(sidecars: Iterable[Mapping[str, Any]], lines: Sequence[Divergen
         if line.pid in by_pid and by_pid[line.pid] != config:
             conflicts.add(line.pid)  # a recycled pid ran two configurations: trust neither
         by_pid.setdefault(line.pid, config)
-    return ConfigIndex({p: c for p, c in by_pid.items() if p not in conflicts}, by_sig)
+    only = next(iter(distinct.values())) if len(distinct) == 1 else None
+    return ConfigIndex({p: c for p, c in by_pid.items() if p not in conflicts}, by_sig, only)
 
 
 # -- over time -------------------------------------------------------------------------------------------
@@ -305,6 +316,27 @@ def _sidecars(directory: Path) -> list[dict[str, Any]]:
     return out
 
 
+def first_configuration(directory: Path) -> str | None:
+    """The line ``travel.note_configuration`` wrote for the folder's first campaign (robot, tip
+    link, targets), or None (no such file, or not one of ours)."""
+    path = directory / CONFIGURATION
+    try:
+        info = path.lstat()
+        if not stat.S_ISREG(info.st_mode) or info.st_size > 4096:
+            return None
+        text = path.read_bytes().decode("utf-8", "backslashreplace").strip()
+    except OSError:
+        return None
+    return text if text.startswith("robot ") and "\n" not in text else None
+
+
+def _agrees(first: str, config: Mapping[str, Any]) -> bool:
+    """Whether the first campaign's line names ``config``'s robot and targets."""
+    targets = config.get("targets")
+    pair = ",".join(map(str, targets)) if isinstance(targets, list) else ""
+    return first.startswith(f"robot {config.get('robot')} (") and first.endswith(f", targets {pair}")
+
+
 def gather(directory: Path) -> ReportData:
     """Read an artifacts folder: both logs, sidecars and triage's buckets."""
     notes: list[str] = []
@@ -338,6 +370,14 @@ def gather(directory: Path) -> ReportData:
     sidecars = _sidecars(directory)
     index = config_index(sidecars, lines)
     configs = [c for c in (s.get("config") for s in sidecars) if isinstance(c, dict)]
+    first = first_configuration(directory) if directory / CONFIGURATION not in outside else None
+    if index.only is not None and first is not None and not _agrees(first, index.only):
+        index = replace(index, only=None)  # the folder's first campaign ran on another configuration
+    if not configs and first is not None and (lines or procs):
+        notes.append(
+            "No crash file here records the configuration of the campaigns; the folder's first "
+            f"campaign ran on: {first} ({CONFIGURATION})."
+        )
     summary = summarize(lines, procs, buckets, configs)
     if procs and summary.divergent_in_stats != summary.divergent:
         notes.append(

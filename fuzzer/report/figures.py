@@ -49,6 +49,16 @@ def _style(ax: Axes) -> None:
         ax.spines[side].set_visible(False)
 
 
+def rate_label(rate: float | None, executions: int | None) -> str:
+    """Fig. 6's label of a strategy's divergence rate: ``100% of 1,818`` (``.2g`` printed
+    "1e+02% of 1,818"), ``n/a`` where no execution of it was recorded (it read "0% of 0")."""
+    if not executions or rate is None:
+        return "n/a (no executions recorded)"
+    percent = 100 * rate
+    shown = f"{percent:.3g}" if percent >= 10 else f"{percent:.2g}"
+    return f"{shown}% of {executions:,}"
+
+
 def strategies(rows: Sequence[StrategyRow]) -> bytes:
     """Fig. 6: divergences per mutation strategy, and the rate per strategy when known."""
     rows = list(rows)
@@ -72,7 +82,7 @@ def strategies(rows: Sequence[StrategyRow]) -> bytes:
         rates = [100 * (r.rate or 0.0) for r in rows]
         ax.barh(y, rates, color=colors)
         for yi, r, rate in zip(y, rows, rates, strict=True):
-            ax.annotate(f" {rate:.2g}% of {r.executions or 0:,}", (rate, yi), va="center", fontsize=9)
+            ax.annotate(f" {rate_label(r.rate, r.executions)}", (rate, yi), va="center", fontsize=9)
         ax.set_xlabel("divergence rate (% of the test cases it produced)", fontsize=11)
         ax.set_title("Divergences per execution", fontsize=12)
         ax.margins(x=0.35)
@@ -164,13 +174,13 @@ def differences(data: Differences) -> bytes:
     left.set_ylabel("divergent executions", fontsize=11)
     left.set_title("Size of value differences", fontsize=12)
     _style(left)
-    labels = ["status", "crash", "other", "zero or\nnot finite"]
-    counts = [data.status, data.crash, data.other, data.zero + data.nonfinite]
-    right.bar(labels, counts, color=["#6a51a3", "#c00000", OTHER_COLOR, OTHER_COLOR])
+    labels = ["status", "crash", "other", "other\nunits", "zero or\nnot finite"]
+    counts = [data.status, data.crash, data.other, data.other_units, data.zero + data.nonfinite]
+    right.bar(labels, counts, color=["#6a51a3", "#c00000", OTHER_COLOR, OTHER_COLOR, OTHER_COLOR])
     for i, n in enumerate(counts):
         right.annotate(str(n), (i, n), ha="center", va="bottom", fontsize=9)
     right.set_ylabel("divergent executions", fontsize=11)
-    right.set_title("Without a size", fontsize=12)
+    right.set_title("Without a size in m or rad", fontsize=12)
     right.tick_params(axis="x", labelsize=9)
     right.margins(y=0.12)
     _style(right)

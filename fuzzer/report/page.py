@@ -214,9 +214,10 @@ def _fig8(data: ReportData, png: bytes | None) -> str:
         "Histogram of log10 differences",
         "Left: the size of each value or representation divergence on a log scale (metres for positions, "
         "radians for angles and revolute joints; a representation difference of 2π shows at 0.8). Dashed "
-        "lines: Table III's 1e-2 and 1e-1 limits. Right: divergences without a size: a different status "
-        f"or error ({d.status:,}), a crash ({d.crash:,}), other kinds ({d.other:,}), and value divergences "
-        f"whose difference is zero or not finite ({d.zero + d.nonfinite:,}).",
+        "lines: Table III's 1e-2 and 1e-1 limits. Right: divergences without a size in metres or radians: "
+        f"a different status or error ({d.status:,}), a crash ({d.crash:,}), other kinds ({d.other:,}), "
+        f"value divergences in other units, a duration, a velocity or a count ({d.other_units:,}), "
+        f"and value divergences whose difference is zero or not finite ({d.zero + d.nonfinite:,}).",
         "No divergences.",
     )
 

@@ -37,7 +37,8 @@ TABLE_III_RULES = (
     "Status: kind 'status' (different statuses, error classes or codes).",
     "Positive and negative: kind 'representation' (equal modulo 2pi or q/-q, different as "
     "numbers) or a value divergence whose differing numbers have opposite signs. "
-    "Field joint_values or position: coordinate values; field orientation: rotation values.",
+    "Field joint_values or position: coordinate values; field orientation: rotation values; "
+    "a value divergence of another field with opposite signs is sized as the others.",
     "Value difference: the remaining 'value' divergences, by their difference d (metres or "
     "radians, after canonicalization): d < 1e-2, 1e-2 <= d < 1e-1, d >= 1e-1 (or not finite); "
     "a scenario's differences in other units (a duration in s, a velocity, a count of points) "
@@ -81,7 +82,10 @@ def classify(line: Divergence) -> str:
             return ROW_ROTATIONS
         if field_ in ("joint_values", "position"):
             return ROW_COORDINATES
-        return ROW_OTHER
+        if line.kind == "representation":
+            return ROW_OTHER
+        # a value of another field (a named target, a trajectory's points) with opposite signs
+        # is sized as the others: all of them went to the last row
     if line.kind == "value":
         if line.unit not in ("", "m", "rad"):
             return ROW_OTHER_UNITS
@@ -258,6 +262,9 @@ class Differences:
     status: int
     crash: int
     other: int
+    other_units: int = 0
+    """Value divergences in units other than m and rad (a duration, a velocity, a count):
+    Table III's row of their own, not on Fig. 8's axis of metres and radians."""
 
     @property
     def empty(self) -> bool:
@@ -269,15 +276,18 @@ class Differences:
             or self.status
             or self.crash
             or self.other
+            or self.other_units
         )
 
 
 def differences(lines: Sequence[Divergence]) -> Differences:
     found: dict[str, list[float]] = {"value": [], "representation": []}
-    zero = nonfinite = 0
+    zero = nonfinite = other_units = 0
     kinds: Counter[str] = Counter()
     for line in lines:
-        if line.kind in found:
+        if line.kind == "value" and line.unit not in ("", "m", "rad"):
+            other_units += 1  # drawn on an axis of "m or rad": 40.8 s among them
+        elif line.kind in found:
             if not math.isfinite(line.difference):
                 nonfinite += 1
             elif line.difference > 0:
@@ -294,4 +304,5 @@ def differences(lines: Sequence[Divergence]) -> Differences:
         kinds["status"],
         kinds["crash"],
         kinds["other"],
+        other_units,
     )
