@@ -23,7 +23,7 @@ from fuzzer import dry_harness, dry_run, reporting
 from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
-from fuzzer.campaign_end import CampaignEnd
+from fuzzer.campaign_end import USAGE_EXIT, CampaignEnd
 from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, versions
 from fuzzer.generation.corpus import bag_seeds, prescan, write_seeds
@@ -138,6 +138,13 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     evaluator = session.evaluator()
     timeout = int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"]))
     evaluator.check_seconds = check_seconds(timeout)
+    if config.transport == "ros" and timeout > 0:
+        from fuzzer.ros import transport as ros_transport
+
+        # a silent node is a crashed:NodeTimeout crash file only if its wait, and that of the
+        # confirming re-run, end before libFuzzer's -timeout: at 20 s both, a hang was a
+        # timeout file without a sidecar and a thread dump (exit 70)
+        ros_transport.REQUEST_TIMEOUT = min(ros_transport.REQUEST_TIMEOUT, timeout / ROS_WAITS_PER_INPUT)
     dry: dry_run.Stages | None = None
     dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
     timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
@@ -253,6 +260,11 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if dry is not None:
         atexit.unregister(dry.stop)  # from here the campaign's end waits for them (CampaignEnd)
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
+    lost: tuple[type[Exception], ...] = ()
+    if config.transport == "ros":
+        from fuzzer.ros.transport import TransportLost
+
+        lost = (TransportLost,)
 
     def end_now(status: int) -> NoReturn:
         """End this process with ``status`` from inside an input, its exit hook run first."""
@@ -280,6 +292,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         except ArtifactsUnwritable:  # said, with the input it could not save: not a crash of a target
             end.unwritable = True
             end_now(WRITE_FAILED_EXIT)
+        except lost as exc:  # a node that died and cannot start again: the transport, not a target
+            reporting.error(f"--transport ros: {exc}; the campaign stops (its findings so far are kept)")
+            end.reason = "a target's ROS node could not be started again: the error above says why"
+            end_now(USAGE_EXIT)
         end.in_callback = False
 
     reporting.info(
@@ -370,6 +386,11 @@ def _harness(
         campaign_seeds=campaign_seeds,
     )
     return harness, features
+
+
+ROS_WAITS_PER_INPUT = 4
+"""Over ROS, a node's answer is awaited at most ``-timeout`` / this (s): a hang's wait, its
+confirmation's on fresh targets, and the two nodes' restarts fit in one input's time."""
 
 
 def check_seconds(timeout: int) -> float | None:

@@ -74,6 +74,8 @@ class CampaignEnd:
     """Written-ahead inputs found at the start (``guard.leftovers``), settled by a normal end."""
     in_callback: bool = False
     unwritable: bool = False
+    reason: str | None = None
+    """What ended the campaign, when not libFuzzer nor a signal (the summary's exit line says it)."""
     corpus: tuple[Path, ...] = field(init=False)
     """The corpus folders, resolved when the campaign's end is set up (before a ``-jobs``
     supervisor changes its working folder): one gone at the end (removed or renamed meanwhile)
@@ -131,6 +133,7 @@ class CampaignEnd:
             for path in guard.settle(self.leftovers):
                 reporting.info(f"{path}: the input a campaign died on ran as a seed, harmless now; kept")
         meaning = self._job_meaning(code, found) if job_failed else (LIBFUZZER_ERROR if refused else None)
+        meaning = self.reason or meaning
         if full is not None:
             meaning = (
                 f"the artifacts folder {self.options.artifacts} cannot be written ({full}): a job's "

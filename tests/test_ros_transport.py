@@ -92,6 +92,27 @@ def test_dead_and_silent_nodes_are_crashes_and_restarted(transport, monkeypatch:
         runner.node.stop()
 
 
+def test_a_node_that_cannot_start_again_keeps_its_outcome_then_stops(
+    transport, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    """A helper killed the campaign's master, then a node: the restart's NodeStartError escaped
+    the request, the NodeDied outcome with it (an uncaught exception, exit 77 "a target died",
+    the divergence lost). The outcome is returned, and the next request says why it cannot go on."""
+    runner = transport.RosRunner.create(FAULTY, robots.resolve(robots.DEFAULT_ROBOT), None)
+    try:
+
+        def refuse(self: object) -> None:
+            raise transport.NodeStartError("its ROS node exited; the ROS master at http://x does not answer")
+
+        monkeypatch.setattr(transport.TargetNode, "restart", refuse)
+        died = runner.run(FkCall((faulty.DIE, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        assert (died.status, died.error) == (Status.CRASHED, "NodeDied")
+        with pytest.raises(transport.TransportLost, match="master at http://x does not answer"):
+            runner.run(FkCall((0.1, 0.0, 0.0, 0.0, 0.0, 0.0)))
+    finally:
+        runner.node.stop()
+
+
 def test_protocol_encoding_round_trips_and_refuses_garbage(transport) -> None:  # type: ignore[no-untyped-def]
     payload = {
         "call": {"kind": "FkCall", "joint_values": [math.nan, math.inf, -math.inf, 0.1], "link": "NaN"}
@@ -145,6 +166,29 @@ def test_campaign_over_ros_saves_crashes_that_replay_in_process(transport, tmp_p
         capture_output=True, text=True, timeout=120, env=environment, cwd=ROOT, check=False,
     )  # fmt: skip
     assert "still diverges (same signature)" in replay.stdout + replay.stderr, replay.stderr[-2000:]
+
+
+def test_a_hanging_node_is_a_crash_file_within_libfuzzer_s_timeout(transport, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The node's answer was awaited 20 s, libFuzzer's default -timeout too: a hang became a
+    timeout file without a sidecar and a thread dump (exit 70), never the documented
+    crashed:NodeTimeout. The wait is now a quarter of -timeout."""
+    corpus, artifacts = tmp_path / "corpus", tmp_path / "art"
+    corpus.mkdir()
+    _case(corpus / "seed-hang", faulty.HANG)
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+    environment["ROS_LOG_DIR"] = str(tmp_path)
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), str(corpus), "--op", "fk", "--transport", "ros",
+         "--targets", f"python,{FAULTY}", "--artifacts", str(artifacts), "-runs=3", "-timeout=8",
+         "-seed=1", "--no-progress"],
+        capture_output=True, text=True, timeout=300, env=environment, cwd=ROOT, check=False,
+    )  # fmt: skip
+    assert run.returncode == 1, run.stderr[-3000:]
+    errors = [json.loads(p.read_text())["outcomes"][1]["error"] for p in artifacts.glob("crash-*.json")]
+    assert errors == ["NodeTimeout"], (errors, run.stderr[-2000:])
+    sidecar = next(artifacts.glob("crash-*.json")).read_text()
+    assert "no answer from the target's node in 2.0 s" in sidecar
+    assert not list(artifacts.glob("timeout-*"))
 
 
 def test_an_ik_status_split_gets_the_same_verdict_over_ros(transport, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]

@@ -79,6 +79,11 @@ class NodeStartError(RuntimeError):
     """A target node that could not start (the message has its log's tail)."""
 
 
+class TransportLost(RuntimeError):
+    """A target's node died and could not be started again (its master gone, say): the campaign
+    stops with this message (``fuzzer.campaign``: exit 2), its findings so far kept."""
+
+
 def _tagged(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return {"$float": "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")}
@@ -157,6 +162,8 @@ class TargetNode:
     _ready: dict[str, Any] | None = None
     _changed: threading.Condition = field(default_factory=threading.Condition)
     _topics: list[Any] = field(default_factory=list)
+    lost: str | None = None
+    """Why the node could not be started again after it died (``TransportLost``), else None."""
 
     @property
     def topic(self) -> str:
@@ -217,10 +224,18 @@ class TargetNode:
             self.process.stop()
             raise NodeStartError(f"target {self.spec!r} as a ROS node: {self._ready['error']}")
         if not ready:
+            exited = not self.process.alive()
+            status = self.process.popen.returncode if exited else None
             self.process.stop()
+            why = (
+                f"exited (status {status}) before it was ready"
+                if exited
+                else f"did not start in {START_TIMEOUT} s"
+            )
+            master = ros.master.uri
+            gone = "" if processes.master_answers(master) else f"; the ROS master at {master} does not answer"
             raise NodeStartError(
-                f"target {self.spec!r}: its ROS node did not start in {START_TIMEOUT} s; log:\n"
-                f"{self.process.log_tail()}"
+                f"target {self.spec!r}: its ROS node {why}{gone}; log:\n{self.process.log_tail()}"
             )
 
     def _ping(self) -> bool:
@@ -250,9 +265,19 @@ class TargetNode:
             self._changed.notify_all()
 
     def request(self, payload: dict[str, Any]) -> Outcome:
-        """Send one request and wait for its answer; a dead or silent node is a crash outcome."""
+        """Send one request and wait for its answer; a dead or silent node is a crash outcome.
+
+        Raises
+        ------
+        TransportLost
+            The node died and could not be started again (its master gone, say): raised at the
+            request after the one whose outcome said so, which is kept."""
+        if self.lost is not None:
+            raise TransportLost(self.lost)
         if self.process is None or not self.process.alive():
-            self.restart()
+            self._restart_or_lose()
+            if self.lost is not None:
+                raise TransportLost(self.lost)
         assert self.process is not None
         std_msgs = env.import_module("std_msgs.msg")
         ident = next(self._ids)
@@ -262,12 +287,12 @@ class TargetNode:
             while ident not in self._answers:
                 if not self.process.alive():
                     status = self.process.popen.returncode
-                    self.restart()
+                    self._restart_or_lose()
                     return Outcome(
                         Status.CRASHED, "NodeDied", None, f"the target's ROS node died (status {status})"
                     )
                 if time.monotonic() > deadline:
-                    self.restart()
+                    self._restart_or_lose()
                     return Outcome(
                         Status.CRASHED,
                         "NodeTimeout",
@@ -282,6 +307,15 @@ class TargetNode:
                 outcome.status, error_class(outcome.code).__name__, outcome.code, outcome.message
             )
         return outcome
+
+    def _restart_or_lose(self) -> None:
+        """Start the node again; if it cannot be, keep why (``lost``) for the next request, so
+        that the outcome of this one is returned (a restart that raised lost it: an uncaught
+        ``NodeStartError``, exit 77 "a target died", the divergence gone)."""
+        try:
+            self.restart()
+        except NodeStartError as exc:
+            self.lost = str(exc)
 
     def restart(self) -> None:
         """Stop the node (its whole process group) and start it again."""
