@@ -72,6 +72,9 @@ HOSTILE = [
     # given a corpus folder, libFuzzer ran the folder as an input: std::bad_alloc, exit 77
     (["-minimize_crash=1"], "-minimize_crash=1 and -cleanse_crash=1 take one crash file, not the folder"),
     (["-cleanse_crash=1"], "take one crash file"),
+    # libFuzzer said "Test unit written to /proc/1/crash-..." and wrote nothing: the input lost
+    (["-artifact_prefix=/proc/1/"], "-artifact_prefix=/proc/1/: cannot write into the folder /proc/1"),
+    (["-artifact_prefix=README.md/"], "-artifact_prefix=README.md/: README.md is a file, not a folder"),
     # libFuzzer's integer flags: Atheris' stoul raised (then the interpreter crashed, exit 139,
     # under a summary saying "exit status 0"); -jobs=-1 started jobs without end
     (["-seed=abc"], "-seed=abc: libFuzzer's -seed takes an integer from 0 to 4294967295"),

@@ -4,10 +4,12 @@ campaign's summary cannot tell from its own; and the argv it hands over (``libfu
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shlex
 import string
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -154,12 +156,26 @@ def cut_seeds(flags: tuple[str, ...], sizes: Sequence[int]) -> str | None:
     )
 
 
+def _unwritable(folder: Path) -> str | None:
+    """Why no file can be created in ``folder`` (a read-only mount, /proc), or None."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".tmp-probe-", dir=folder)
+    except OSError as exc:
+        return str(exc.strerror or exc)
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
+    return None
+
+
 def check_path_flags(flags: tuple[str, ...]) -> None:
     """Raise ValueError naming a path flag that libFuzzer would refuse after start-up, exiting
     with its status 1 (which a campaign reads as "new divergences"): an ``-artifact_prefix``,
     ``-exact_artifact_path`` or ``-merge_control_file`` whose folder does not exist, an
     ``-exact_artifact_path`` that is a folder (the crash file written "to" it was lost), a
-    ``-seed_inputs=@FILE`` whose file does not exist."""
+    ``-seed_inputs=@FILE`` whose file does not exist; and a folder no file can be written into
+    (a read-only mount, ``/proc/1/``: libFuzzer said "Test unit written to ..." and the input
+    that killed a target was nowhere)."""
 
     def folder_of(value: str) -> Path:
         return Path(value) if value.endswith("/") else Path(value).parent
@@ -168,10 +184,17 @@ def check_path_flags(flags: tuple[str, ...]) -> None:
         value = flag_value(flags, name)
         if not value:
             continue
-        if not folder_of(value).is_dir():
-            raise ValueError(f"{name}={value}: the folder {folder_of(value)} does not exist")
+        folder = folder_of(value)
+        if folder.is_file() or any(p.is_file() for p in folder.parents):
+            blocker = folder if folder.is_file() else next(p for p in folder.parents if p.is_file())
+            raise ValueError(f"{name}={value}: {blocker} is a file, not a folder")
+        if not folder.is_dir():
+            raise ValueError(f"{name}={value}: the folder {folder} does not exist")
         if name != "-artifact_prefix" and Path(value).is_dir():
             raise ValueError(f"{name}={value}: a folder; give a file's path")
+        problem = _unwritable(folder)
+        if problem is not None:  # libFuzzer said "Test unit written to ..." and wrote nothing
+            raise ValueError(f"{name}={value}: cannot write into the folder {folder}: {problem}")
     seeds = flag_value(flags, "-seed_inputs")
     if seeds and seeds.startswith("@") and not Path(seeds[1:]).is_file():
         raise ValueError(f"-seed_inputs={seeds}: no such file {seeds[1:]}")
