@@ -35,6 +35,7 @@ from fuzzer.mutation.session_values import field_types, interesting_values
 from fuzzer.processes import (
     CHILD_ENV,
     DEADLINE_ENV,
+    SINGLE_RUN_FLAGS,
     SUPERVISOR_ENV,
     TIMEOUT_EXIT,
     flag_value,
@@ -251,6 +252,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         started,
         child=child,
         supervisor=supervisor,
+        single_run=not child and any(int_flag(options.libfuzzer_flags, n, 0) != 0 for n in SINGLE_RUN_FLAGS),
         timeout_code=timeout_code,
         interrupted=interrupted,
         dry=dry,

@@ -69,6 +69,10 @@ class CampaignEnd:
     timeout_code: int
     interrupted: int
     """libFuzzer's ``-interrupted_exitcode``: a worker's status after Ctrl-C."""
+    single_run: bool = False
+    """A merge or a crash's minimization (``processes.SINGLE_RUN_FLAGS``): its inner processes ran
+    the inputs, and the summary adds up their counts as a supervisor's (it said "executions: 0"
+    beside new crash files)."""
     dry: dry_run.Stages | None = None
     leftovers: list[Path] = field(default_factory=list)
     """Written-ahead inputs found at the start (``guard.leftovers``), settled by a normal end."""
@@ -95,7 +99,8 @@ class CampaignEnd:
                 self.unwritable = True
         status = self._signalled(WRITE_FAILED_EXIT if self.unwritable and not status else status)
         found = self._found()
-        totals = worker_totals(self.artifacts, self.started, os.getpid()) if self.supervisor else None
+        spawned = self.supervisor or self.single_run
+        totals = worker_totals(self.artifacts, self.started, os.getpid()) if spawned else None
         dry = None if self.dry is None else worker_totals(self.artifacts, self.started, pids=self.dry.pids)
         stopped = status == self.interrupted or (totals or {}).get("interrupted")
         job_failed = refused = False

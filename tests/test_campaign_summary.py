@@ -102,6 +102,24 @@ def test_a_campaign_reports_the_explained_crash_files_it_wrote(tmp_path: Path) -
     assert int(ours.group(1)) + int(dry.group(1)) == len(logged)
 
 
+def test_a_merge_s_summary_adds_up_its_inner_process(tmp_path: Path) -> None:
+    """-merge=1 runs the inputs in an inner process: its summary said "executions: 0,
+    divergences: 0" beside the crash files it listed."""
+    into, source, artifacts = tmp_path / "into", tmp_path / "source", tmp_path / "a"
+    into.mkdir()
+    seeded = fuzz(str(source), "-runs=1", "--seeds=12", "-seed=1", f"--artifacts={tmp_path / 'seeding'}")
+    assert seeded.returncode in (0, 1), seeded.stderr[-2000:]
+    run = fuzz(str(into), str(source), "-merge=1", f"--artifacts={artifacts}",
+               "--targets=native,tests.plugins.faults:tight_tolerance")  # fmt: skip
+    assert run.returncode in (0, 1), run.stderr[-2000:]
+    executions = re.search(r"executions: (\d+) in", run.stderr)
+    logged = (artifacts / "divergences.jsonl").read_text().splitlines() if run.returncode else []
+    divergences = re.search(r"\]\s+divergences: (\d+)", run.stderr)
+    assert executions and int(executions.group(1)) >= 12, run.stderr[-2000:]
+    assert divergences and int(divergences.group(1)) == len(logged), run.stderr[-2000:]
+    assert "totals over 1 child process(es)" in run.stderr
+
+
 def test_the_summary_counts_the_dry_run_apart(capsys: pytest.CaptureFixture[str]) -> None:
     dry = {"processes": 1, "execs": 40, "divergences": 3, "divergent": {"value": 2, "ill_conditioned": 1}}
     reporting.summary(Stats(), 0, "arts", ["c"], [], dry_run=dry)
