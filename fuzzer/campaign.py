@@ -53,6 +53,7 @@ from fuzzer.signals import (
     INTERRUPTED_EXIT,
     defer_to_next_input,
     end_with_supervisor,
+    forward_term_to_jobs,
     on_signal,
     stop_requested,
 )
@@ -114,7 +115,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         end_with_supervisor()  # a -jobs worker outlived a supervisor killed alone
     else:
         os.environ[SUPERVISOR_ENV] = str(os.getpid())  # for the processes libFuzzer starts
-    if one_campaign(options.libfuzzer_flags):  # SIGTERM ends it with its summary (-handle_term=0)
+    if one_campaign(options.libfuzzer_flags) or child or supervises(options.libfuzzer_flags):
+        # SIGTERM ends it with its summary, a worker at its next input with its last snapshot
+        # (-handle_term=0; a supervisor passes it on to its jobs: signals.forward_term_to_jobs)
         signal.signal(signal.SIGTERM, on_signal)
     supervisor = not child and supervises(options.libfuzzer_flags)
     options.artifacts.mkdir(parents=True, exist_ok=True)
@@ -320,6 +323,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         atheris.Setup(argv, test_one_input)
     else:
         atheris.Setup(argv, test_one_input, custom_mutator=harness.mutate, custom_crossover=harness.crossover)
+    if supervisor:
+        forward_term_to_jobs()
     try:
         atheris.Fuzz()
     except SystemExit as exc:  # how Atheris ends a -jobs supervisor: with libFuzzer's status

@@ -13,7 +13,8 @@ a ``-fork`` parent stops its other jobs; a second Ctrl-C, or a second SIGTERM, a
 A ``-jobs``/``-fork`` supervisor runs its jobs through ``system()``, which ignores SIGINT in
 the caller while a job runs: only a Ctrl-C to the whole process group (a terminal's, or
 ``timeout -s INT``'s) reaches the jobs. The supervisor learns of it from its workers' last
-snapshots (``interrupted``) and exits 130 (``INT_EXIT``).
+snapshots (``interrupted``) and exits 130 (``INT_EXIT``). A SIGTERM to the supervisor is passed
+on to its jobs (``forward_term_to_jobs``), and it exits 143 with its summary.
 """
 
 from __future__ import annotations
@@ -60,6 +61,66 @@ def defer_to_next_input() -> None:
     _DEFERRING.append(True)
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, on_signal)
+
+
+WATCHER = """
+import os, signal, sys
+fd, parent, term = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+for ignored in (signal.SIGINT, signal.SIGTERM):
+    signal.signal(ignored, signal.SIG_IGN)
+while True:
+    try:
+        data = os.read(fd, 64)
+    except InterruptedError:
+        continue
+    if not data:
+        break
+    if term not in data:
+        continue
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit() or int(entry) == os.getpid():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as handle:
+                ppid = int(handle.read().rsplit(")", 1)[1].split()[1])
+            if ppid == parent:
+                os.kill(int(entry), term)
+        except (OSError, ValueError, IndexError):
+            pass
+"""
+"""The supervisor's SIGTERM forwarder (:func:`forward_term_to_jobs`), run as ``python -c``."""
+
+
+def forward_term_to_jobs() -> None:
+    """In a ``-jobs``/``-fork`` supervisor about to enter libFuzzer (run with ``-handle_term=0``):
+    a SIGTERM is passed on to its jobs, which end at their next input with their last snapshots
+    (``on_signal``), and is kept for the supervisor's end, whose summary then says "terminated"
+    (143). libFuzzer's own handler ended the supervisor with ``_Exit`` and no summary, and its
+    jobs with ``_Exit(72)`` and no last snapshot (their counts lost).
+
+    The supervisor's main thread stays in libFuzzer with the GIL held, so no Python code of it
+    runs there, not even another thread: the interpreter's C-level handler writes the signal's
+    number to a wakeup pipe, and a small process started here (:data:`WATCHER`) reads it and
+    sends SIGTERM to the supervisor's children. It ends when the supervisor does (the pipe closes)."""
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.set_blocking(write, False)
+    try:
+        subprocess.Popen(
+            [sys.executable, "-S", "-c", WATCHER, str(read), str(os.getpid()), str(int(signal.SIGTERM))],
+            pass_fds=(read,),
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,  # a terminal's Ctrl-C, a timeout's group signal: not for it
+        )
+    except OSError:
+        os.close(write)
+        return  # no forwarder: libFuzzer's jobs end with the supervisor (end_with_supervisor)
+    finally:
+        os.close(read)
+    signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+    _DEFERRING.append(True)  # from here, on_signal keeps a SIGTERM for the supervisor's end
 
 
 def stop_requested() -> bool:

@@ -601,23 +601,37 @@ def test_a_signal_ends_a_campaign_with_its_summary(
     assert "Traceback" not in text and "Uncaught Python exception" not in text
 
 
-def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path) -> None:
+@pytest.mark.parametrize("flag", ["-jobs=2", "-fork=2"])
+def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path, flag: str) -> None:
     # `kill PID` of a -jobs campaign (CI's timeout): its workers, each under a shell of its own,
-    # fuzzed on with no end
+    # fuzzed on with no end. Then the supervisor died in libFuzzer's handler: no summary, and its
+    # workers' last counts lost; now it passes the SIGTERM on and ends with its summary, 143
     artifacts = tmp_path / "a"
+    stats = artifacts / "stats.jsonl"
 
-    def workers_fuzzing() -> bool:
-        logs = [artifacts / f"fuzz-{i}.log" for i in (0, 1)]
-        return all(log.exists() and b"INFO: seed corpus" in log.read_bytes() for log in logs)
+    def workers_fuzzing() -> bool:  # each worker snapshots its counters at its first input
+        pids = (
+            {json.loads(line).get("pid") for line in stats.read_text().splitlines()}
+            if stats.exists()
+            else set()
+        )
+        return len(pids) >= 2
 
-    process, _, processes = _started(
-        tmp_path, "-seed=1", "-jobs=2", f"--artifacts={artifacts}", ready=workers_fuzzing
+    process, err, processes = _started(
+        tmp_path, "-seed=1", flag, "-max_total_time=120", f"--artifacts={artifacts}", ready=workers_fuzzing
     )
     try:
-        assert len(processes()) > 1, "the workers never started"
+        if flag == "-jobs=2":  # a -fork job's command line names a folder of libFuzzer's, not ours
+            assert len(processes()) > 1, "the workers never started"
         process.send_signal(signal.SIGTERM)
-        process.wait(timeout=60)
+        assert process.wait(timeout=60) == 143
         assert _all_ended(processes), "workers outlived their supervisor"
+        text = err.read_text()
+        assert "campaign summary" in text and "exit status 143 (terminated (SIGTERM))" in text, text[-2000:]
+        last = {}
+        for record in map(json.loads, stats.read_text().splitlines()):
+            last[record["pid"]] = record
+        assert any(r.get("interrupted") for r in last.values()), "no worker ended with its last snapshot"
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)

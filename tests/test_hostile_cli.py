@@ -195,10 +195,11 @@ def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyP
     assert argv() == []
 
 
-def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch: pytest.MonkeyPatch) -> None:
-    """``-handle_term=0`` where Python's handler runs (``signals.on_signal``: the summary); a
-    supervisor's main thread stays in libFuzzer, so it, its workers, merges and a crash's
-    minimization keep libFuzzer's handler (a Python one would never run: SIGTERM ignored)."""
+def test_sigterm_is_left_to_python_in_a_campaign_and_its_jobs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-handle_term=0`` where Python's handler runs (``signals.on_signal``: the summary), in a
+    ``-jobs``/``-fork`` supervisor and its workers too (the supervisor's wakeup pipe and its
+    forwarder: ``signals.forward_term_to_jobs``); merges and a crash's minimization keep
+    libFuzzer's handler."""
     from fuzzer.input.libfuzzer_flags import libfuzzer_argv
     from fuzzer.processes import CHILD_ENV
 
@@ -208,7 +209,9 @@ def test_sigterm_is_left_to_python_only_in_a_campaign_of_one_process(monkeypatch
     monkeypatch.delenv(CHILD_ENV, raising=False)
     assert argv() == ["-handle_term=0"] and argv("-runs=9") == ["-handle_term=0"]
     assert argv("-handle_term=1") == ["-handle_term=1"]
-    for flags in ("-fork=2", "-jobs=2", "-merge=1", "-minimize_crash=1"):
+    for flags in ("-fork=2", "-jobs=2"):
+        assert argv(flags) == ["-handle_term=0"], flags
+    for flags in ("-merge=1", "-minimize_crash=1"):
         assert argv(flags) == [], flags
     monkeypatch.setenv(CHILD_ENV, "1")
     assert argv() == []

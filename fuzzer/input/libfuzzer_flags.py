@@ -233,7 +233,8 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     alone = not jobs and fork <= 0 and os.environ.get(CHILD_ENV) != "1"  # not a -jobs/-fork worker either
     if alone and flag_value(options.libfuzzer_flags, "-reload") is None:
         flags.append("-reload=0")
-    if one_campaign(options.libfuzzer_flags) and flag_value(options.libfuzzer_flags, "-handle_term") is None:
+    ours = one_campaign(options.libfuzzer_flags) or jobs > 0 or fork > 0  # (their workers get it too)
+    if ours and flag_value(options.libfuzzer_flags, "-handle_term") is None:
         flags.append("-handle_term=0")  # signals.on_signal: the summary, not libFuzzer's _Exit(72)
     forwarded = list(options.forwarded)
     corpus = [str(c) for c in options.corpus]
