@@ -312,7 +312,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     argv = libfuzzer_argv(options)  # a signal already waits for an input's start (before the seeds)
     os.environ[CHILD_ENV] = "1"
     os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
-    if not child and total and is_number(total) and int_flag(options.libfuzzer_flags, "-fork", 0) > 0:
+    if not child and total and is_number(total) and supervisor:
+        # -fork and -jobs: a job that starts after it exits at once, one that reaches it ends
+        # (-jobs=3 -workers=1 -max_total_time=10 ran 35 s: libFuzzer gives each job the time)
         os.environ[DEADLINE_ENV] = repr(time.time() + float(total))
     if not child and int_flag(options.libfuzzer_flags, "-jobs", 0) > 0:
         if os.environ.get("PYTHONPATH"):  # the jobs import plugin targets from it

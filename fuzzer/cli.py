@@ -144,6 +144,13 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
         reporting.warn(
             f"--max-steps {args.max_steps}: only a scenario has steps; --op {config.op} ignores it"
         )
+    given_seed = flag_value(tuple(flags), "-seed")
+    if int_flag(tuple(flags), "-jobs", 0) > 0 and given_seed not in (None, "0") and not travel.is_child():
+        reporting.warn(
+            f"-jobs with -seed={given_seed}: libFuzzer gives every job that seed, so each repeats "
+            "the others' choices (a probe's two jobs evaluated 259 of 995 divergent inputs twice); "
+            "leave -seed out, and each job draws its own"
+        )
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
     drawn_note = (
         f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "

@@ -217,6 +217,19 @@ def test_sigterm_is_left_to_python_in_a_campaign_and_its_jobs(monkeypatch: pytes
     assert argv() == []
 
 
+def test_jobs_with_one_seed_are_said_to_repeat_each_other(tmp_path: Path) -> None:
+    """libFuzzer gives every -jobs job the -seed given: each repeated the others' choices (a
+    probe's two jobs evaluated 259 of 995 divergent inputs twice), with no word of it. And
+    -max_total_time bounds the whole -jobs campaign, as it does -fork's (-jobs=3 -workers=1
+    -max_total_time=10 ran 35 s: the jobs started after it now exit at once)."""
+    run = fuzz(str(tmp_path / "c"), "-jobs=2", "-workers=1", "-max_total_time=3", "-seed=5",
+               f"--artifacts={tmp_path / 'a'}", "--no-progress")  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "-jobs with -seed=5: libFuzzer gives every job that seed" in run.stderr
+    logs = sorted((tmp_path / "a").glob("fuzz-*.log"))
+    assert len(logs) == 2 and b"INFO: seed corpus" not in logs[1].read_bytes(), "the second job fuzzed"
+
+
 def test_jobs_are_execd_by_libfuzzers_shell(monkeypatch: pytest.MonkeyPatch) -> None:
     """libFuzzer runs each job (``-jobs``, ``-fork``, a merge's, a crash minimization's) as
     ``sh -c "<argv> > log"``: a Ctrl-C killed the shell, and a ``-jobs`` supervisor read that
