@@ -19,7 +19,8 @@ from fuzzer.input.paths import given_path
 
 
 def replay_main(argv: Sequence[str]) -> int:
-    from fuzzer.triage.replay import replay_file, source_of
+    from fuzzer.triage.isolated import replay_isolated
+    from fuzzer.triage.replay import source_of
 
     args = replay_parser().parse_args(argv)
     base, given = config_from(args)
@@ -28,7 +29,7 @@ def replay_main(argv: Sequence[str]) -> int:
     files = _inputs(args.paths)
     for path in files:
         try:
-            result = replay_file(path, base, given, sessions, trust=args.trust_sidecar)
+            result = replay_isolated(path, base, given, sessions, args.trust_sidecar)
         except ConfigError as exc:
             _skip_file(exc, files)
             errors += 1

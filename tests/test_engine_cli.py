@@ -16,7 +16,7 @@ import pytest
 
 import python_impl
 from fuzzer.artifacts.divlog import STATS
-from fuzzer.input.testcase import decode
+from fuzzer.input.testcase import TestCase, decode
 from fuzzer.selection.state import BOUNDARY, SPACEFILL
 from robot_api.robots import default_robot_path
 
@@ -333,6 +333,23 @@ def test_a_dying_target_leaves_a_crash_file(tmp_path: Path) -> None:
     crashes = [p for p in artifacts.glob("crash-*") if not p.name.endswith(".json")]
     assert crashes
     assert decode(crashes[0].read_bytes()).message["position"][0] > 3.0  # the input that killed it
+
+
+def test_a_crash_file_that_kills_its_replay_is_a_verdict_and_the_others_replay(tmp_path: Path) -> None:
+    """A file a target aborts on killed `replay` with it: exit 134, no word, a folder's other
+    files never replayed. Each file is replayed in a child process now."""
+    folder = tmp_path / "crashes"
+    folder.mkdir()
+    for name, first in (("crash-aborts", 3.1), ("crash-fine", 0.5)):
+        message = {
+            "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+            "name": [], "position": [first, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
+        }  # fmt: skip
+        (folder / name).write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    run = fuzz("replay", str(folder), "--op=move", "--targets=native,tests.plugins.faults:aborts")
+    assert run.returncode == 1, (run.returncode, run.stderr[-2000:])
+    assert f"{folder / 'crash-aborts'}: crashes the replaying process (killed by SIGABRT" in run.stdout
+    assert f"{folder / 'crash-fine'}: the targets agree (no sidecar to compare with)" in run.stdout
 
 
 def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:

@@ -102,6 +102,24 @@ def source_of(path: Path) -> str:
     return str(found) if found.exists() else "command line"
 
 
+def session_for(path: Path, config: RunConfig, cache: dict[RunConfig, Session]) -> Session:
+    """The session of ``config`` from ``cache``, opened (and kept there) if need be.
+
+    Raises
+    ------
+    ConfigError
+        It cannot be opened; the message names ``path`` and where its configuration came from.
+    """
+    if config not in cache:
+        try:
+            cache[config] = Session.open(config)
+        except ConfigError as exc:
+            raise ConfigError(
+                f"{path}: cannot replay under the configuration from {_phrase(source_of(path))}: {exc}"
+            ) from None
+    return cache[config]
+
+
 def replay_file(
     path: Path,
     base: RunConfig,
@@ -125,14 +143,7 @@ def replay_file(
     except TestCaseError as exc:
         return Replay(path, Result.SKIPPED, None, None, f"not a test case: {exc}", config, not unrecorded)
     cache = sessions if sessions is not None else {}
-    if config not in cache:
-        try:
-            cache[config] = Session.open(config)
-        except ConfigError as exc:
-            raise ConfigError(
-                f"{path}: cannot replay under the configuration from {_phrase(source_of(path))}: {exc}"
-            ) from None
-    session = cache[config]
+    session = session_for(path, config, cache)
     if case.msg_type != config.message_type:
         return Replay(
             path,
