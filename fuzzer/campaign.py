@@ -26,7 +26,7 @@ from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUn
 from fuzzer.campaign_end import USAGE_EXIT, CampaignEnd
 from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, versions
-from fuzzer.generation.corpus import bag_seeds, prescan, write_seeds
+from fuzzer.generation.corpus import prescan, write_bag_seeds
 from fuzzer.generation.initial import initial_seeds
 from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS, cut_seeds, libfuzzer_argv
 from fuzzer.input.testcase import TestCase
@@ -143,12 +143,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     timeout = int_flag(options.libfuzzer_flags, "-timeout", int(DEFAULT_FLAGS["-timeout"]))
     evaluator.check_seconds = check_seconds(timeout)
     if config.transport == "ros" and timeout > 0:
-        from fuzzer.ros import transport as ros_transport
+        from fuzzer.ros.transport import fit_request_timeout
 
-        # a silent node is a crashed:NodeTimeout crash file only if its wait, and that of the
-        # confirming re-run, end before libFuzzer's -timeout: at 20 s both, a hang was a
-        # timeout file without a sidecar and a thread dump (exit 70)
-        ros_transport.REQUEST_TIMEOUT = min(ros_transport.REQUEST_TIMEOUT, timeout / ROS_WAITS_PER_INPUT)
+        fit_request_timeout(timeout)
     dry: dry_run.Stages | None = None
     dry_ok = dry_run.applies(config, options.mutator, child or supervisor, options.stop_on_divergence)
     timeout_code = int_flag(options.libfuzzer_flags, "-timeout_exitcode", TIMEOUT_EXIT)
@@ -161,10 +158,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         )
     usable, seeds = prescan(session, folders) if not child else (1, [])
     if options.seeds_from_bag is not None and not child and folders:
-        from_bag = bag_seeds(session, options.seeds_from_bag)
-        write_seeds(folders[0], from_bag)
+        from_bag = write_bag_seeds(session, options.seeds_from_bag, folders[0])
         seeds, usable = from_bag + seeds, usable + len(from_bag)
-        reporting.info(f"wrote {len(from_bag)} seeds from {options.seeds_from_bag} to {folders[0]}")
     wanted = (
         options.seeds
         if options.seeds is not None
@@ -395,11 +390,6 @@ def _harness(
         campaign_seeds=campaign_seeds,
     )
     return harness, features
-
-
-ROS_WAITS_PER_INPUT = 4
-"""Over ROS, a node's answer is awaited at most ``-timeout`` / this (s): a hang's wait, its
-confirmation's on fresh targets, and the two nodes' restarts fit in one input's time."""
 
 
 def check_seconds(timeout: int) -> float | None:

@@ -76,6 +76,21 @@ def test_bag_messages_become_seeds(ros: Any, tmp_path: Path) -> None:
     assert not any(c.origin == "hypothesis" for c in cases)  # the bag's seeds replace Hypothesis'
 
 
+def test_a_bag_of_non_finite_states_says_its_seeds_are_filtered(ros: Any, tmp_path: Path) -> None:
+    """ "wrote 2 seeds", then every one filtered: only libFuzzer's "no interesting inputs were
+    found" said so."""
+    rosbag, sensor_msgs, _std_msgs = ros
+    bag_path = tmp_path / "nan.bag"
+    with rosbag.Bag(str(bag_path), "w") as bag:
+        for k in range(2):
+            bag.write("/joint_states", _state(sensor_msgs, [math.nan] + [0.1] * 5, 10 + k))
+        bag.write("/joint_states", _state(sensor_msgs, [0.2] * 6, 12))
+    run = _fuzz(str(tmp_path / "c"), "--op", "fk", "--seeds-from-bag", str(bag_path), "--artifacts",
+                str(tmp_path / "a"), "-runs=5", "--no-progress", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert f"2 of the 3 seeds from {bag_path} hold a value that is not finite or absurd" in run.stderr
+
+
 def test_unusable_bags_are_usage_errors(ros: Any, tmp_path: Path) -> None:
     rosbag, _sensor_msgs, std_msgs = ros
     only_strings = tmp_path / "strings.bag"

@@ -348,6 +348,24 @@ def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
     return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]
 
 
+def write_bag_seeds(session: Session, bag: Path, corpus: Path) -> list[TestCase]:
+    """``--seeds-from-bag``: the bag's seeds (``bag_seeds``) written into ``corpus``, said, and
+    those the campaign's filter will drop said too (a bag of NaN states was "wrote 2 seeds",
+    then nothing but libFuzzer's "no interesting inputs were found")."""
+    from fuzzer.input.filtering import is_reasonable
+
+    seeds = bag_seeds(session, bag)
+    write_seeds(corpus, seeds)
+    reporting.info(f"wrote {len(seeds)} seeds from {bag} to {corpus}")
+    filtered = sum(not is_reasonable(case.message) for case in seeds) if session.config.filtering else 0
+    if filtered:
+        reporting.warn(
+            f"{filtered} of the {len(seeds)} seeds from {bag} hold a value that is not finite or "
+            "absurd: filtered, never run (--no-filter runs them)"
+        )
+    return seeds
+
+
 def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
     """Write the generated seeds into the corpus folder, without fsync: the same seed and robot
     make them again, and a short file left by a power loss is skipped as malformed (``prescan``)."""

@@ -75,6 +75,19 @@ PING_SECONDS = 0.25
 _names = itertools.count()
 
 
+WAITS_PER_INPUT = 4
+"""A node's answer is awaited at most libFuzzer's ``-timeout`` / this (s): a hang's wait, its
+confirmation's on fresh targets, and the two nodes' restarts fit in one input's time."""
+
+
+def fit_request_timeout(timeout: float) -> None:
+    """Shorten ``REQUEST_TIMEOUT`` to fit libFuzzer's ``-timeout`` (s, > 0): a silent node is a
+    ``crashed:NodeTimeout`` crash file only if its wait, and the confirming re-run's, end before
+    it (at 20 s both, a hang was a timeout file without a sidecar and a thread dump, exit 70)."""
+    global REQUEST_TIMEOUT
+    REQUEST_TIMEOUT = min(REQUEST_TIMEOUT, timeout / WAITS_PER_INPUT)
+
+
 class NodeStartError(RuntimeError):
     """A target node that could not start (the message has its log's tail)."""
 
