@@ -163,6 +163,8 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
         raise UsageError(f"--seeds-from-bag {args.seeds_from_bag}: {bag_problem}")
     try:  # libFuzzer refuses these after start-up with its status 1, the status of "divergences"
         check_path_flags(tuple(flags))
+    except FolderUnwritable:
+        raise
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it

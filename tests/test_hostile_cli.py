@@ -73,7 +73,6 @@ HOSTILE = [
     (["-minimize_crash=1"], "-minimize_crash=1 and -cleanse_crash=1 take one crash file, not the folder"),
     (["-cleanse_crash=1"], "take one crash file"),
     # libFuzzer said "Test unit written to /proc/1/crash-..." and wrote nothing: the input lost
-    (["-artifact_prefix=/proc/1/"], "-artifact_prefix=/proc/1/: cannot write into the folder /proc/1"),
     (["-artifact_prefix=README.md/"], "-artifact_prefix=README.md/: README.md is a file, not a folder"),
     # libFuzzer's integer flags: Atheris' stoul raised (then the interpreter crashed, exit 139,
     # under a summary saying "exit status 0"); -jobs=-1 started jobs without end
@@ -215,6 +214,14 @@ def test_sigterm_is_left_to_python_in_a_campaign_and_its_jobs(monkeypatch: pytes
         assert argv(flags) == [], flags
     monkeypatch.setenv(CHILD_ENV, "1")
     assert argv() == []
+
+
+def test_an_artifact_prefix_that_takes_no_file_exits_74(tmp_path: Path) -> None:
+    """libFuzzer said "Test unit written to /proc/1/crash-..." and wrote nothing: the input that
+    killed a target was lost. A folder that takes no file exits 74, as --artifacts does."""
+    run = fuzz(str(tmp_path / "c"), "-runs=1", "-artifact_prefix=/proc/1/", f"--artifacts={tmp_path / 'a'}")
+    assert run.returncode == 74, run.stderr[-1500:]
+    assert "-artifact_prefix=/proc/1/: cannot write into the folder /proc/1" in run.stderr
 
 
 def test_jobs_with_one_seed_are_said_to_repeat_each_other(tmp_path: Path) -> None:

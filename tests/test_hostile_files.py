@@ -551,14 +551,15 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     "artifacts-under-a-file": lambda t: Row(
         [str(t / "corpus"), *CAMPAIGN, f"--artifacts={_touch(t / 'file') / 'a'}"], 2, "is a file"
     ),
+    # a folder that cannot be written exits 74, as every write that fails (it was 2 here)
     "corpus-read-only": lambda t: Row(
-        [str(_read_only(t)), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "cannot write"
+        [str(_read_only(t)), *CAMPAIGN, f"--artifacts={t / 'a'}"], 74, "cannot write"
     ),
     "corpus-unreadable": lambda t: Row(
         [str(_unreadable(t)), *CAMPAIGN, f"--artifacts={t / 'a'}"], 2, "cannot (read|write)"
     ),
     "artifacts-read-only": lambda t: Row(
-        [str(t / "corpus"), *CAMPAIGN, f"--artifacts={_read_only(t)}"], 2, "artifacts .*cannot write"
+        [str(t / "corpus"), *CAMPAIGN, f"--artifacts={_read_only(t)}"], 74, "artifacts .*cannot write"
     ),
     # -- corpus manifests -------------------------------------------------------------------------
     "corpus-of-another-op": lambda t: Row(

@@ -194,7 +194,9 @@ def check_path_flags(flags: tuple[str, ...]) -> None:
             raise ValueError(f"{name}={value}: a folder; give a file's path")
         problem = _unwritable(folder)
         if problem is not None:  # libFuzzer said "Test unit written to ..." and wrote nothing
-            raise ValueError(f"{name}={value}: cannot write into the folder {folder}: {problem}")
+            from fuzzer.input.paths import FolderUnwritable  # exit 74, as any folder that takes no file
+
+            raise FolderUnwritable(f"{name}={value}: cannot write into the folder {folder}: {problem}")
     seeds = flag_value(flags, "-seed_inputs")
     if seeds and seeds.startswith("@") and not Path(seeds[1:]).is_file():
         raise ValueError(f"-seed_inputs={seeds}: no such file {seeds[1:]}")
