@@ -144,6 +144,14 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
         reporting.warn(
             f"--max-steps {args.max_steps}: only a scenario has steps; --op {config.op} ignores it"
         )
+    if args.stop_on_divergence and int_flag(tuple(flags), "-fork", 0) > 0:
+        # fork mode merges the corpus first: each divergent input crashed its merge (one retry
+        # each: 31 in 20 s, no input fuzzed), and each job's stop on a signature already on file
+        # was a crash file without a sidecar, counted as a target that died
+        raise UsageError(
+            "--stop-on-divergence with -fork: libFuzzer's fork mode would stop its merge at every "
+            "divergent input; use it in one process, or with -jobs"
+        )
     given_seed = flag_value(tuple(flags), "-seed")
     if int_flag(tuple(flags), "-jobs", 0) > 0 and given_seed not in (None, "0") and not travel.is_child():
         reporting.warn(

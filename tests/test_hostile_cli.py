@@ -72,6 +72,8 @@ HOSTILE = [
     # given a corpus folder, libFuzzer ran the folder as an input: std::bad_alloc, exit 77
     (["-minimize_crash=1"], "-minimize_crash=1 and -cleanse_crash=1 take one crash file, not the folder"),
     (["-cleanse_crash=1"], "take one crash file"),
+    # fork mode's merge crashed at every divergent input (31 retries in 20 s, nothing fuzzed)
+    (["-fork=1", "--stop-on-divergence"], "--stop-on-divergence with -fork: libFuzzer's fork mode"),
     # libFuzzer said "Test unit written to /proc/1/crash-..." and wrote nothing: the input lost
     (["-artifact_prefix=README.md/"], "-artifact_prefix=README.md/: README.md is a file, not a folder"),
     # libFuzzer's integer flags: Atheris' stoul raised (then the interpreter crashed, exit 139,
