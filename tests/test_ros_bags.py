@@ -321,7 +321,7 @@ def test_a_chunk_that_lies_about_its_size_stops_at_the_bound(
 def test_the_bounded_decompressors_give_what_the_whole_ones_give(ros: Any) -> None:
     import roslz4
 
-    from fuzzer.ros.bags import ChunkTooLargeError, bounded_bz2, bounded_lz4
+    from fuzzer.ros.bag_limits import ChunkTooLargeError, bounded_bz2, bounded_lz4
 
     data = bytes(range(256)) * 300
     two_streams = bz2.compress(data) + bz2.compress(data[:1000])
@@ -438,3 +438,58 @@ def test_a_recording_becomes_successive_moves_in_scripts(ros: Any, tmp_path: Pat
     assert moved[9]["pose"]["position"]["x"] == 0.2  # the pose, last in the bag
     with pytest.raises(ValueError, match="no valid scenario step"):
         scenario_bags.read_scenarios(path, session.validate, 1, joints)  # a move takes two steps
+
+
+def test_a_scenario_bag_is_read_within_bounds_and_by_its_index(ros: Any, tmp_path: Path) -> None:
+    """A helper's bags: a recording ahead of a bag's script steps hid them (the reading stopped
+    at its limit first); one NaN state dropped its script's seven valid moves with it; steps past
+    -max_len were packed into scripts libFuzzer cut short; 300 steps of 130,000 positions were
+    kept, 1.6 GB; --max-steps 1 said "no valid JointState" of valid ones."""
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.ros import scenario_bags
+
+    rosbag, sensor_msgs, std_msgs = ros
+    joints = [f"joint_{i}" for i in range(1, 7)]
+    session = Session.open(RunConfig(op="scenario", max_steps=4))
+    mixed = tmp_path / "mixed.bag"
+    with rosbag.Bag(str(mixed), "w") as bag:
+        for k in range(30):
+            bag.write("/joint_states", _state(sensor_msgs, [0.01 * k] * 6, 10 + k))
+        bag.write("/rrosfuzz/scenario/velocity_scaling", std_msgs.Float64(0.5))
+        bag.write("/rrosfuzz/scenario/go", std_msgs.Empty())
+    read = scenario_bags.read_scenarios(mixed, session.validate, 4, joints)
+    assert [[s["topic"] for s in sc["steps"]] for sc in read] == [["/velocity_scaling", "/go"]]
+    recording = tmp_path / "recording.bag"
+    with rosbag.Bag(str(recording), "w") as bag:
+        bag.write("/joint_states", _state(sensor_msgs, [math.nan] + [0.1] * 5, 9))
+        for k in range(4):
+            bag.write("/joint_states", _state(sensor_msgs, [0.1 * k] * 6, 10 + k))
+        bag.write(
+            "/joint_states", _state(sensor_msgs, [0.2] * 6 + [0.0] * 3000, 20)
+        )  # names 6, positions 3006
+    read = scenario_bags.read_scenarios(recording, session.validate, 4, joints)
+    moved = [sc["steps"][i]["msg"]["position"][0] for sc in read for i in range(0, len(sc["steps"]), 2)]
+    assert moved == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.2]), "the NaN state alone is left out"
+    small = scenario_bags.read_scenarios(recording, session.validate, 4, joints, max_bytes=1000)
+    assert [len(sc["steps"]) for sc in small] == [2, 2, 2, 2], "one move a script; the 12 kB one left out"
+    with pytest.raises(ValueError, match="a move takes two steps: --max-steps must be 2 or more"):
+        scenario_bags.read_scenarios(recording, session.validate, 1, joints)
+    assert len(scenario_bags.read_scenarios(recording, session.validate, 4, joints, filtering=False)) == 3
+
+
+def test_what_a_bag_holds_is_said_in_a_bounded_line() -> None:
+    from fuzzer.ros.bags import holdings
+
+    held = [f"std_msgs/String on /t{i}" for i in range(50_000)]
+    said = holdings(held)  # 50,000 topics made an error message of 1.4 MB
+    assert said.startswith("std_msgs/String on /t0, ") and said.endswith(", ... (50000 in all)")
+    assert len(said) < 1000 and holdings([]) == "no messages"
+
+
+def test_an_exported_bag_is_readable_by_others_as_the_umask_says(ros: Any, tmp_path: Path) -> None:
+    crash, _steps, _q = _scenario_crash(tmp_path)
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    mask = os.umask(0)
+    os.umask(mask)
+    assert (crash.with_name(crash.name + ".bag").stat().st_mode & 0o777) == 0o666 & ~mask  # it was 0600

@@ -342,7 +342,11 @@ def bag_seeds(session: Session, bag: Path) -> list[TestCase]:
 
     msg_type, joints = session.config.message_type, session.reference.joint_names
     if session.config.op == "scenario":
-        messages = read_scenarios(bag, session.validate, session.config.max_steps, joints)
+        from fuzzer.input.libfuzzer_flags import default_max_len
+
+        config = session.config
+        limit = default_max_len(config.op, config.max_steps)  # -max_len: a longer seed was cut short
+        messages = read_scenarios(bag, session.validate, config.max_steps, joints, limit, config.filtering)
     else:
         messages = read_seeds(bag, msg_type, session.validate, joints)
     return [TestCase(msg_type, m, sequence=i, origin="rosbag") for i, m in enumerate(messages)]

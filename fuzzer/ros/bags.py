@@ -13,12 +13,10 @@ plain data (:func:`to_data`) and pass the campaign's own validation.
 from __future__ import annotations
 
 import argparse
-import bz2
 import contextlib
 import os
 import tempfile
-import types
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +26,7 @@ from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import PathError, check_output_file, file_problem, given_path
 from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
+from fuzzer.ros.bag_limits import ChunkTooLargeError, bounded_chunks
 
 JOINT_STATE = "sensor_msgs/JointState"
 SCENARIO_TYPE = "rrosfuzz/Scenario"
@@ -47,69 +46,6 @@ MAX_SEEDS = 1000
 MAX_CHUNK_BYTES = 64 << 20
 """The largest chunk a bag may declare or decompress to (rosbag writes 768 KiB chunks): rosbag
 decompresses a chunk whole, and an 8 KB bz2 bag declaring 600 MB took 1.3 GB to read."""
-
-LZ4_PIECE = 4096
-"""Compressed bytes fed to the LZ4 decompressor at a time (each gives at most one block, 1 MiB)."""
-
-
-class ChunkTooLargeError(Exception):
-    """A chunk that decompresses past :data:`MAX_CHUNK_BYTES`, whatever its header declared."""
-
-
-def bounded_bz2(data: bytes, limit: int) -> bytes:
-    """``bz2.decompress(data)`` (every stream of it), stopping once past ``limit`` bytes.
-
-    Raises
-    ------
-    ChunkTooLargeError
-        More than ``limit`` bytes would come out.
-    ValueError, OSError
-        As ``bz2.decompress``: data cut short, or not bz2.
-    """
-    out = bytearray()
-    while data:
-        stream = bz2.BZ2Decompressor()
-        out += stream.decompress(data, max_length=limit + 1 - len(out))
-        if len(out) > limit:
-            raise ChunkTooLargeError(limit)
-        if not stream.eof:
-            raise ValueError("compressed data ended before the end-of-stream marker was reached")
-        data = stream.unused_data
-    return bytes(out)
-
-
-def bounded_lz4(roslz4: Any, data: bytes, limit: int) -> bytes:
-    """``roslz4.decompress(data)``, fed :data:`LZ4_PIECE` bytes at a time, stopping once past
-    ``limit`` bytes (:class:`ChunkTooLargeError`)."""
-    stream = roslz4.LZ4Decompressor()
-    out = bytearray()
-    for start in range(0, len(data), LZ4_PIECE):
-        out += stream.decompress(data[start : start + LZ4_PIECE])
-        if len(out) > limit:
-            raise ChunkTooLargeError(limit)
-    return bytes(out)
-
-
-@contextlib.contextmanager
-def bounded_chunks(rosbag: Any) -> Iterator[None]:
-    """While reading: rosbag's ``bz2.decompress`` and ``roslz4.decompress`` (module globals of
-    ``rosbag.bag``, looked up at each chunk) replaced by bounded ones, so a chunk that lies
-    about its size stops at :data:`MAX_CHUNK_BYTES` instead of filling the memory."""
-    module = rosbag.bag
-    saved = {name: getattr(module, name) for name in ("bz2", "roslz4") if hasattr(module, name)}
-    module.bz2 = types.SimpleNamespace(decompress=lambda data: bounded_bz2(data, MAX_CHUNK_BYTES))
-    if "roslz4" in saved:
-        lz4 = saved["roslz4"]
-        module.roslz4 = types.SimpleNamespace(
-            decompress=lambda data: bounded_lz4(lz4, data, MAX_CHUNK_BYTES),
-            LZ4Compressor=lz4.LZ4Compressor,
-            LZ4Decompressor=lz4.LZ4Decompressor,
-        )
-    try:
-        yield
-    finally:
-        for name, value in saved.items():
-            setattr(module, name, value)
 
 
 class BagError(ConfigError):
@@ -188,10 +124,19 @@ def from_data(cls: Any, data: Any) -> Any:
     return message
 
 
-def iter_messages(path: Path, msg_types: Sequence[str], held: list[str]) -> Iterator[tuple[str, str, Any]]:
+Chooser = Callable[[Sequence[tuple[str, str]]], Callable[[str, str], bool]]
+"""Given a bag's connections, (topic, type) each, the filter of the ones to read."""
+
+
+def iter_messages(
+    path: Path, msg_types: Sequence[str], held: list[str], choose: Chooser | None = None
+) -> Iterator[tuple[str, str, Any]]:
     """(topic, type, plain data) of each message of one of ``msg_types`` in a bag, in the bag's
     order, read with Debian's compiled classes only; ``held`` gets what the bag holds
-    ("type on topic"), for messages. Messages larger than a test case may be are skipped unread.
+    ("type on topic"), for messages. ``choose``: a filter of connections, made from the bag's
+    index before a message is read (a scenario bag's step topics, else its recorded states: a
+    PoseArray of 18,000 poses on another topic took 117 s of reading for nothing). Messages
+    larger than a test case may be are skipped unread.
 
     Raises
     ------
@@ -204,12 +149,23 @@ def iter_messages(path: Path, msg_types: Sequence[str], held: list[str]) -> Iter
         rosbag.bag._message_types[cls._md5sum] = cls  # never compile the bag's own definition
     wanted_types = {(cls._type, cls._md5sum) for cls in classes}
 
+    accept: Callable[[str, str], bool] = lambda topic, datatype: True  # noqa: E731
+
     def wanted(topic: str, datatype: str, md5sum: str, msg_def: str, header: Any) -> bool:
-        return (datatype, md5sum) in wanted_types
+        return (datatype, md5sum) in wanted_types and accept(topic, datatype)
 
     try:
-        with bounded_chunks(rosbag), known_types_only(rosbag, classes), rosbag.Bag(str(path), "r") as bag:
-            held.extend(sorted({f"{c.datatype} on {c.topic}" for c in bag._connections.values()}))
+        with (
+            bounded_chunks(rosbag, MAX_CHUNK_BYTES),
+            known_types_only(rosbag, classes),
+            rosbag.Bag(str(path), "r") as bag,
+        ):
+            connections = [(str(c.topic), str(c.datatype)) for c in bag._connections.values()]
+            held.extend(
+                sorted({reporting.shown(f"{datatype} on {topic}") for topic, datatype in connections})
+            )
+            if choose is not None:
+                accept = choose(connections)
             largest = max((h.uncompressed_size for h in bag._chunk_headers.values()), default=0)
             if largest > MAX_CHUNK_BYTES:  # as declared (one that lies stops in bounded_chunks)
                 raise BagError(
@@ -263,9 +219,19 @@ def read_seeds(
         if len(out) >= MAX_SEEDS:
             break
     if not out:
-        holds = ", ".join(held) or "no messages"
-        raise BagError(f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {holds})")
+        raise BagError(
+            f"--seeds-from-bag {path}: no valid {msg_type} message (the bag holds: {holdings(held)})"
+        )
     return out
+
+
+def holdings(held: Sequence[str], shown: int = 20) -> str:
+    """What a bag holds, for a message: the first ``shown`` connections and their count (a bag of
+    50,000 topics made an error message of 1.4 MB)."""
+    if not held:
+        return "no messages"
+    more = f", ... ({len(held)} in all)" if len(held) > shown else ""
+    return ", ".join(held[:shown]) + more
 
 
 def recorded_state(data: dict[str, Any], joints: Sequence[str]) -> dict[str, Any]:
@@ -366,11 +332,18 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
         with rosbag.Bag(name, "w") as bag:
             for topic, message, when in records:
                 bag.write(topic, message, when)
+        os.chmod(name, 0o666 & ~_umask())  # mkstemp's 0600 kept another user's rosbag play out
         os.replace(name, output)
     except Exception as exc:  # noqa: BLE001 - genpy's serialization errors name the field
         Path(name).unlink(missing_ok=True)
         raise BagError(f"{output}: cannot write the bag: {type(exc).__name__}: {exc}") from None
     return list(dict.fromkeys(topic for topic, _, _ in records))
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _check_output(output: Path, crash: Path) -> None:

@@ -19,11 +19,14 @@ a step (or move) the campaign's validation refuses is skipped.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+import json
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeGuard
 
+from fuzzer.input.filtering import is_reasonable
 from fuzzer.input.msgdef import MessageRegistry
+from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import bags, env
 from fuzzer.scenario.steps import KINDS, MAX_STEPS_LIMIT, TOPICS, validate
 
@@ -32,6 +35,13 @@ SCENARIO_NS = "/rrosfuzz/scenario"
 
 STEP_SECONDS = 1
 """Record time between two steps of an exported scenario (s): ``rosbag play`` at one step a second."""
+
+KEPT_BYTES = 64 << 20
+"""The most a bag's scenarios hold in all (encoded): 300 steps of 130,000 positions each took
+1.6 GB to keep before."""
+
+ENVELOPE = 300
+"""Bytes a test case adds around its steps (its format, type, origin, lineage), for packing."""
 
 MOVES = {"sensor_msgs/JointState": "joint_target", "geometry_msgs/PoseStamped": "pose_target"}
 """The message types of a recording that become moves, and the step kind each sets."""
@@ -125,12 +135,20 @@ def _numbers(value: Any, length: int) -> TypeGuard[list[float]]:
 
 
 def read_scenarios(
-    path: Path, validate: Callable[[Any], None], max_steps: int, joints: Sequence[str]
+    path: Path,
+    validate: Callable[[Any], None],
+    max_steps: int,
+    joints: Sequence[str],
+    max_bytes: int = MAX_BYTES,
+    filtering: bool = True,
 ) -> list[dict[str, Any]]:
     """A bag's scenario steps (or, if it has none, its recorded states as moves) as scenario
-    messages of at most ``max_steps`` steps each, each passing ``validate``; at most
-    ``bags.MAX_SEEDS`` of them. ``joints``: the chain's joints, the order a recorded state's
-    positions are put in (``bags.recorded_state``).
+    messages of at most ``max_steps`` steps and ``max_bytes`` bytes encoded each (libFuzzer's
+    ``-max_len``: a longer seed was cut into a malformed input), each passing ``validate`` (and,
+    with ``filtering``, the campaign's filter: one NaN state dropped its script's seven valid
+    moves with it); at most ``bags.MAX_SEEDS`` of them, holding at most :data:`KEPT_BYTES`.
+    ``joints``: the chain's joints, the order a recorded state's positions are put in
+    (``bags.recorded_state``).
 
     Raises
     ------
@@ -138,55 +156,94 @@ def read_scenarios(
         The file is not a readable bag, or holds nothing that makes a valid scenario.
     """
     types = sorted({spec.msg_type for spec in TOPICS.values()} | set(MOVES))
-    limit = bags.MAX_SEEDS * max_steps
     held: list[str] = []
-    script: list[list[dict[str, Any]]] = []
-    moves: list[list[dict[str, Any]]] = []
-    for topic, msg_type, data in bags.iter_messages(path, types, held):
-        spec = TOPICS.get(topic[len(SCENARIO_NS) :]) if topic.startswith(SCENARIO_NS + "/") else None
-        if spec is not None:
-            if spec.msg_type == msg_type:
-                _keep(script, [{"topic": KINDS[spec.kind], "msg": data}], validate)
-        elif msg_type in MOVES and not script:
+    mode: list[str] = []
+    packer = _Packer(max_steps, max_bytes)
+    seen = 0
+    for topic, msg_type, data in bags.iter_messages(path, types, held, lambda c: _chooser(c, mode)):
+        if mode == ["script"]:
+            unit = [{"topic": topic[len(SCENARIO_NS) :], "msg": data}]
+        else:
             if msg_type == "sensor_msgs/JointState":
                 data = bags.recorded_state(data, joints)
-            target = {"topic": KINDS[MOVES[msg_type]], "msg": data}
-            _keep(moves, [target, {"topic": KINDS["go"], "msg": {}}], validate)
-        if len(script) >= limit or (not script and len(moves) >= limit):
-            break
-    scenarios = _cut(script or moves, max_steps)[: bags.MAX_SEEDS]
+            unit = [{"topic": KINDS[MOVES[msg_type]], "msg": data}, {"topic": KINDS["go"], "msg": {}}]
+        seen += 1
+        size = packer.size_of(unit)  # before the validation, which a 130,000-value step made slow
+        if size is None or not _usable(unit, validate, filtering) or packer.add(unit, size):
+            continue
+        break  # full: MAX_SEEDS scripts, or KEPT_BYTES of them
+    scenarios = packer.done()
     if not scenarios:
-        holds = ", ".join(sorted(held)) or "no messages"
+        moves = "a move takes two steps: --max-steps must be 2 or more" if max_steps < 2 and seen else ""
         raise bags.BagError(
             f"--seeds-from-bag {path}: no valid scenario step on {SCENARIO_NS}/<step> and no valid "
-            f"JointState or PoseStamped to move to (the bag holds: {holds})"
+            f"JointState or PoseStamped to move to{f' ({moves})' if moves else ''} "
+            f"(the bag holds: {bags.holdings(held)})"
         )
     return scenarios
 
 
-Steps = list[dict[str, Any]]
+def _chooser(connections: Sequence[tuple[str, str]], mode: list[str]) -> Callable[[str, str], bool]:
+    """The connections to read, from the bag's index: its step topics (each of its step's type)
+    if it has any, else its recorded states (JointState and PoseStamped on any topic); ``mode``
+    gets which. A recording ahead of the steps hid them (the reading stopped at its limit)."""
+
+    def step(topic: str, datatype: str) -> bool:
+        spec = TOPICS.get(topic[len(SCENARIO_NS) :]) if topic.startswith(SCENARIO_NS + "/") else None
+        return spec is not None and spec.msg_type == datatype
+
+    if any(step(topic, datatype) for topic, datatype in connections):
+        mode.append("script")
+        return step
+    mode.append("recording")
+    return lambda topic, datatype: datatype in MOVES and not topic.startswith(SCENARIO_NS + "/")
 
 
-def _keep(units: list[Steps], unit: Steps, validate: Callable[[Any], None]) -> None:
-    """Append ``unit`` (steps) to ``units`` when ``validate`` takes it as a scenario."""
+def _usable(unit: list[dict[str, Any]], validate: Callable[[Any], None], filtering: bool) -> bool:
+    """Whether ``unit`` (steps) passes ``validate`` as a scenario, and the filter."""
     try:
         validate({"steps": unit})
     except ValueError:
-        return
-    units.append(unit)
+        return False
+    return not filtering or is_reasonable({"steps": unit})
 
 
-def _cut(units: Iterable[list[dict[str, Any]]], max_steps: int) -> list[dict[str, Any]]:
-    """Units of steps in order, packed into scenarios of at most ``max_steps`` steps."""
-    out: list[dict[str, Any]] = []
-    current: list[dict[str, Any]] = []
-    for unit in units:
-        if len(unit) > max_steps:
-            continue  # a move (two steps) in scripts of one step
-        if current and len(current) + len(unit) > max_steps:
-            out.append({"steps": current})
-            current = []
-        current = current + unit
-    if current:
-        out.append({"steps": current})
-    return out
+class _Packer:
+    """Units of steps, in order, packed into scenarios of at most ``max_steps`` steps and
+    ``max_bytes`` bytes (their test case's encoding, about), a unit never split."""
+
+    def __init__(self, max_steps: int, max_bytes: int) -> None:
+        self.max_steps, self.max_bytes = max_steps, max_bytes
+        self.scenarios: list[dict[str, Any]] = []
+        self.current: list[dict[str, Any]] = []
+        self.size = self.kept = 0
+
+    def size_of(self, unit: list[dict[str, Any]]) -> int | None:
+        """``unit``'s size encoded (bytes, with a test case's envelope), or None when it can never
+        be packed: a move in scripts of one step, a step larger than a scenario may be."""
+        if len(unit) > self.max_steps:
+            return None
+        size = len(json.dumps(unit, separators=(",", ":"), ensure_ascii=False).encode()) + ENVELOPE
+        return size if size <= self.max_bytes else None
+
+    def add(self, unit: list[dict[str, Any]], size: int) -> bool:
+        """Keep ``unit`` (``size_of`` it); False once full (no room for it)."""
+        if self.current and (
+            len(self.current) + len(unit) > self.max_steps or self.size + size > self.max_bytes
+        ):
+            self._close()
+        if len(self.scenarios) >= bags.MAX_SEEDS or self.kept + size > KEPT_BYTES:
+            return False
+        self.current += unit
+        self.size += size
+        self.kept += size
+        return True
+
+    def _close(self) -> None:
+        self.scenarios.append({"steps": self.current})
+        self.current, self.size = [], 0
+
+    def done(self) -> list[dict[str, Any]]:
+        if self.current and len(self.scenarios) < bags.MAX_SEEDS:
+            self._close()
+        return self.scenarios
