@@ -196,8 +196,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     )
     if stop_requested() and not child:
         raise KeyboardInterrupt  # fuzzer.cli: "interrupted" (or "terminated"), 130 (143)
-    if flag_value(options.libfuzzer_flags, "-max_len") is not None and not child:  # given: a check
-        cut = cut_seeds(options.libfuzzer_flags, [len(case.encode()) for case in (*seeds, *filling)])
+    if not child:  # given or ours (a bag's 20 kB JointState was cut short at the default, unsaid)
+        limits = (f"-max_len={options.max_len}", *options.libfuzzer_flags)  # the last one given wins
+        cut = cut_seeds(limits, [len(case.encode()) for case in (*seeds, *filling)])
         if cut is not None:
             reporting.warn(cut)
     if not child:  # the seeds made: record the configuration in the corpus manifest
@@ -260,11 +261,9 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if dry is not None:
         atexit.unregister(dry.stop)  # from here the campaign's end waits for them (CampaignEnd)
     edge_callback: list[str | None] = []  # fastcov.install's answer, asked at the first call
-    lost: tuple[type[Exception], ...] = ()
+    lost_reason: Any = None
     if config.transport == "ros":
-        from fuzzer.ros.transport import TransportLost
-
-        lost = (TransportLost,)
+        from fuzzer.ros.transport import lost_reason
 
     def end_now(status: int) -> NoReturn:
         """End this process with ``status`` from inside an input, its exit hook run first."""
@@ -292,11 +291,12 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         except ArtifactsUnwritable:  # said, with the input it could not save: not a crash of a target
             end.unwritable = True
             end_now(WRITE_FAILED_EXIT)
-        except lost as exc:  # a node that died and cannot start again: the transport, not a target
-            reporting.error(f"--transport ros: {exc}; the campaign stops (its findings so far are kept)")
+        end.in_callback = False
+        lost = lost_reason(session.runners) if lost_reason is not None else None
+        if lost is not None:  # a node that died and cannot start again: the transport, not a target
+            reporting.error(f"--transport ros: {lost}; the campaign stops (its findings so far are kept)")
             end.reason = "a target's ROS node could not be started again: the error above says why"
             end_now(USAGE_EXIT)
-        end.in_callback = False
 
     reporting.info(
         f"fuzzing {config.op} on {session.urdf.name} ({session.reference.dof} joints): "

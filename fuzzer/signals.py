@@ -64,29 +64,40 @@ def defer_to_next_input() -> None:
 
 
 WATCHER = """
-import os, signal, sys
+import os, select, signal, sys
 fd, parent, term = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
 for ignored in (signal.SIGINT, signal.SIGTERM):
     signal.signal(ignored, signal.SIG_IGN)
-while True:
-    try:
-        data = os.read(fd, 64)
-    except InterruptedError:
-        continue
-    if not data:
-        break
-    if term not in data:
-        continue
+
+def children():
     for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) == os.getpid():
-            continue
+        if entry.isdigit() and int(entry) != os.getpid():
+            try:
+                with open(f"/proc/{entry}/stat") as handle:
+                    if int(handle.read().rsplit(")", 1)[1].split()[1]) == parent:
+                        yield int(entry)
+            except (OSError, ValueError, IndexError):
+                pass
+
+told = None
+while True:
+    ready, _, _ = select.select([fd], [], [], 0.2 if told is not None else None)
+    if ready:
         try:
-            with open(f"/proc/{entry}/stat") as handle:
-                ppid = int(handle.read().rsplit(")", 1)[1].split()[1])
-            if ppid == parent:
-                os.kill(int(entry), term)
-        except (OSError, ValueError, IndexError):
-            pass
+            data = os.read(fd, 64)
+        except InterruptedError:
+            continue
+        if not data:
+            break
+        if term in data and told is None:
+            told = set()
+    if told is not None:
+        for pid in set(children()) - told:
+            told.add(pid)
+            try:
+                os.kill(pid, term)
+            except OSError:
+                pass
 """
 """The supervisor's SIGTERM forwarder (:func:`forward_term_to_jobs`), run as ``python -c``."""
 
@@ -101,7 +112,10 @@ def forward_term_to_jobs() -> None:
     The supervisor's main thread stays in libFuzzer with the GIL held, so no Python code of it
     runs there, not even another thread: the interpreter's C-level handler writes the signal's
     number to a wakeup pipe, and a small process started here (:data:`WATCHER`) reads it and
-    sends SIGTERM to the supervisor's children. It ends when the supervisor does (the pipe closes)."""
+    sends SIGTERM to the supervisor's children, and to each child started after it, once (libFuzzer
+    went on starting the jobs waiting for a worker, and a -fork parent its next job after a hung
+    one's timeout: they ran to -max_total_time, or for good). It ends when the supervisor does
+    (the pipe closes)."""
     import subprocess
     import sys
 

@@ -352,6 +352,33 @@ def test_a_crash_file_that_kills_its_replay_is_a_verdict_and_the_others_replay(t
     assert f"{folder / 'crash-fine'}: the targets agree (no sidecar to compare with)" in run.stdout
 
 
+def test_a_crash_file_a_target_exits_or_hangs_on_is_a_verdict(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A target's exit() was "the replay failed" (exit 2, a usage error); a hanging one made
+    `replay` wait for good, and a SIGTERM to it left the child spinning at 100% CPU."""
+    from fuzzer import cli
+    from fuzzer.triage import isolated
+
+    monkeypatch.setattr(isolated, "REPLAY_SECONDS", 3.0)
+    crash = tmp_path / "crash-high"
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": [3.1, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
+    }  # fmt: skip
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    verdicts = {
+        "exits": "ends the replaying process (exit status 3: a target ended it)",
+        "hangs": "hangs the replaying process (no verdict in 3 s: a target hangs on it)",
+    }
+    for plugin, said in verdicts.items():
+        code = cli.main(
+            ["replay", str(crash), "--op=move", f"--targets=native,tests.plugins.faults:{plugin}"]
+        )
+        out = capsys.readouterr().out
+        assert code == 1 and f"{crash}: {said}" in out, (plugin, code, out)
+
+
 def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
     corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
     env = dict(os.environ, PYTHONPATH=str(ROOT))

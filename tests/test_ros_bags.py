@@ -91,6 +91,22 @@ def test_a_bag_of_non_finite_states_says_its_seeds_are_filtered(ros: Any, tmp_pa
     assert f"2 of the 3 seeds from {bag_path} hold a value that is not finite or absurd" in run.stderr
 
 
+def test_a_bag_seed_longer_than_the_default_max_len_is_said(ros: Any, tmp_path: Path) -> None:
+    """ "wrote 2 seeds", then "malformed 1": libFuzzer cut the longer one at the default -max_len,
+    which only a -max_len given was checked against."""
+    rosbag, sensor_msgs, _std_msgs = ros
+    bag_path = tmp_path / "long.bag"
+    with rosbag.Bag(str(bag_path), "w") as bag:
+        long = _state(sensor_msgs, [0.1] * 6, 10)
+        long.header.frame_id = "x" * 20_000
+        bag.write("/joint_states", long)
+        bag.write("/joint_states", _state(sensor_msgs, [0.2] * 6, 11))
+    run = _fuzz(str(tmp_path / "c"), "--op", "fk", "--seeds-from-bag", str(bag_path), "--artifacts",
+                str(tmp_path / "a"), "-runs=2", "--no-progress", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "1 of 2 seeds are longer than -max_len=16384" in run.stderr
+
+
 def test_unusable_bags_are_usage_errors(ros: Any, tmp_path: Path) -> None:
     rosbag, _sensor_msgs, std_msgs = ros
     only_strings = tmp_path / "strings.bag"

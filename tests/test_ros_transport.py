@@ -97,7 +97,8 @@ def test_a_node_that_cannot_start_again_keeps_its_outcome_then_stops(
 ) -> None:  # type: ignore[no-untyped-def]
     """A helper killed the campaign's master, then a node: the restart's NodeStartError escaped
     the request, the NodeDied outcome with it (an uncaught exception, exit 77 "a target died",
-    the divergence lost). The outcome is returned, and the next request says why it cannot go on."""
+    the divergence lost; later, the confirming re-run raised, and lost it too). The outcome is
+    returned, later requests are NodeLost outcomes, and the campaign stops after the input."""
     runner = transport.RosRunner.create(FAULTY, robots.resolve(robots.DEFAULT_ROBOT), None)
     try:
 
@@ -107,8 +108,13 @@ def test_a_node_that_cannot_start_again_keeps_its_outcome_then_stops(
         monkeypatch.setattr(transport.TargetNode, "restart", refuse)
         died = runner.run(FkCall((faulty.DIE, 0.0, 0.0, 0.0, 0.0, 0.0)))
         assert (died.status, died.error) == (Status.CRASHED, "NodeDied")
-        with pytest.raises(transport.TransportLost, match="master at http://x does not answer"):
-            runner.run(FkCall((0.1, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        again = runner.run(FkCall((0.1, 0.0, 0.0, 0.0, 0.0, 0.0)))  # a confirming re-run, say
+        assert (again.status, again.error) == (
+            Status.CRASHED,
+            "NodeLost",
+        ) and "does not answer" in again.message
+        said = transport.lost_reason([runner])
+        assert said == "its ROS node exited; the ROS master at http://x does not answer"
     finally:
         runner.node.stop()
 

@@ -49,6 +49,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -92,9 +93,15 @@ class NodeStartError(RuntimeError):
     """A target node that could not start (the message has its log's tail)."""
 
 
-class TransportLost(RuntimeError):
-    """A target's node died and could not be started again (its master gone, say): the campaign
-    stops with this message (``fuzzer.campaign``: exit 2), its findings so far kept."""
+def lost_reason(runners: Sequence[Any]) -> str | None:
+    """Why a target's node died and could not be started again (its master gone, say), or None:
+    the campaign stops after the input that found it (exit 2), that input's divergence recorded.
+    Raised inside the input, it was lost (the confirming re-run met it: no crash file)."""
+    for runner in runners:
+        lost = getattr(getattr(runner, "node", None), "lost", None)
+        if lost is not None:
+            return str(lost)  # it names the target
+    return None
 
 
 def _tagged(value: Any) -> Any:
@@ -176,7 +183,7 @@ class TargetNode:
     _changed: threading.Condition = field(default_factory=threading.Condition)
     _topics: list[Any] = field(default_factory=list)
     lost: str | None = None
-    """Why the node could not be started again after it died (``TransportLost``), else None."""
+    """Why the node could not be started again after it died (``lost_reason``), else None."""
 
     @property
     def topic(self) -> str:
@@ -278,19 +285,14 @@ class TargetNode:
             self._changed.notify_all()
 
     def request(self, payload: dict[str, Any]) -> Outcome:
-        """Send one request and wait for its answer; a dead or silent node is a crash outcome.
-
-        Raises
-        ------
-        TransportLost
-            The node died and could not be started again (its master gone, say): raised at the
-            request after the one whose outcome said so, which is kept."""
-        if self.lost is not None:
-            raise TransportLost(self.lost)
+        """Send one request and wait for its answer; a dead or silent node is a crash outcome,
+        and so is a node that could not be started again (``lost``: ``NodeLost``; the campaign
+        stops after the input, ``lost_reason``)."""
         if self.process is None or not self.process.alive():
-            self._restart_or_lose()
+            if self.lost is None:
+                self._restart_or_lose()
             if self.lost is not None:
-                raise TransportLost(self.lost)
+                return Outcome(Status.CRASHED, "NodeLost", None, self.lost[:500])
         assert self.process is not None
         std_msgs = env.import_module("std_msgs.msg")
         ident = next(self._ids)
@@ -322,9 +324,9 @@ class TargetNode:
         return outcome
 
     def _restart_or_lose(self) -> None:
-        """Start the node again; if it cannot be, keep why (``lost``) for the next request, so
-        that the outcome of this one is returned (a restart that raised lost it: an uncaught
-        ``NodeStartError``, exit 77 "a target died", the divergence gone)."""
+        """Start the node again; if it cannot be, keep why (``lost``), so that the outcome of this
+        request is returned (a restart that raised lost it: an uncaught ``NodeStartError``, exit 77
+        "a target died", the divergence gone)."""
         try:
             self.restart()
         except NodeStartError as exc:

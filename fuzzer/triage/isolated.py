@@ -13,10 +13,14 @@ rospy's threads and connections.
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import json
 import os
+import select
 import signal
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -26,6 +30,25 @@ from fuzzer.triage.replay import Replay, config_for, replay_file, session_for
 
 CRASHES = "crashes the replaying process"
 """The verdict of a file whose replay killed its process."""
+
+ENDS = "ends the replaying process"
+"""The verdict of a file on which a target ended the process (``exit()``: it was a usage error)."""
+
+HANGS = "hangs the replaying process"
+"""The verdict of a file whose replay gave no verdict in :data:`REPLAY_SECONDS`."""
+
+REPLAY_SECONDS = 60.0
+"""The longest a file's replay may take (s): a hanging target made ``replay`` wait for good.
+Three times libFuzzer's default ``-timeout``, which a campaign's input, oracle included, has."""
+
+CRASH_SIGNALS = {signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS, signal.SIGFPE, signal.SIGILL}
+"""Signals a target's own crash raises; any other came from outside (a kill, the OOM killer)."""
+
+try:
+    _prctl: Any = ctypes.CDLL(None, use_errno=True).prctl  # resolved here: no dlopen after fork
+except (OSError, AttributeError):  # not Linux
+    _prctl = None
+PR_SET_PDEATHSIG = 1
 
 
 @dataclass(frozen=True)
@@ -63,6 +86,8 @@ def replay_isolated(
     pid = os.fork()
     if pid == 0:  # the child: replay, answer, and end without the parent's exit handlers
         os.close(read)
+        if _prctl is not None:  # a replay stopped by a signal left its child spinning at 100% CPU
+            _prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         try:
             payload: dict[str, Any] = {
                 "verdict": Verdict.of(replay_file(path, base, given, sessions, trust)).__dict__
@@ -78,14 +103,28 @@ def replay_isolated(
         sys.stderr.flush()
         os._exit(0)
     os.close(write)
-    with open(read, "rb") as pipe:
-        data = pipe.read()
+    data, finished = _read_until(read, time.monotonic() + REPLAY_SECONDS)
+    if not finished:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
     _, status = os.waitpid(pid, 0)
+    recorded = sidecar is not None
+    if not finished:
+        return Verdict(HANGS, f"no verdict in {REPLAY_SECONDS:g} s: a target hangs on it", (), recorded, True)
     if os.WIFSIGNALED(status):
         number = os.WTERMSIG(status)
-        name = signal.Signals(number).name if number in signal.Signals._value2member_map_ else str(number)
-        detail = f"killed by {name}: a target crashed on it"
-        return Verdict(CRASHES, detail, (), sidecar is not None, True)
+        known = number in signal.Signals._value2member_map_
+        name = signal.Signals(number).name if known else str(number)
+        why = (
+            "a target crashed on it"
+            if known and signal.Signals(number) in CRASH_SIGNALS
+            else "a target, or something outside, killed it"
+        )
+        return Verdict(CRASHES, f"killed by {name}: {why}", (), recorded, True)
+    if not data and os.waitstatus_to_exitcode(status) != 0:  # a target's exit(): no answer sent
+        return Verdict(
+            ENDS, f"exit status {os.waitstatus_to_exitcode(status)}: a target ended it", (), recorded, True
+        )
     try:
         payload = json.loads(data) if data else {}
     except ValueError:
@@ -97,7 +136,7 @@ def replay_isolated(
             payload.get("failure") or f"its process ended with status {os.waitstatus_to_exitcode(status)}"
         )
         raise ConfigError(f"{path}: the replay failed: {failure}")
-    fields = payload["verdict"]
+    fields = payload["verdict"]  # (a child that sent one ended normally)
     return Verdict(
         str(fields["result"]),
         str(fields["detail"]),
@@ -105,3 +144,18 @@ def replay_isolated(
         bool(fields["has_sidecar"]),
         bool(fields["diverges"]),
     )
+
+
+def _read_until(fd: int, deadline: float) -> tuple[bytes, bool]:
+    """What the child sends through ``fd`` until it closes it (True), or until ``deadline``
+    (``time.monotonic()``; False)."""
+    chunks: list[bytes] = []
+    with open(fd, "rb", buffering=0) as pipe:
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([pipe], [], [], left)[0]:
+                return b"".join(chunks), False
+            chunk = pipe.read(1 << 16)
+            if not chunk:
+                return b"".join(chunks), True
+            chunks.append(chunk)
