@@ -47,6 +47,20 @@ def replay_main(argv: Sequence[str]) -> int:
     return 2 if errors else (1 if diverging else 0)
 
 
+def _ends_its_process(
+    path: Path, base: Any, given: dict[str, Any], sessions: dict[Any, Any], trust: bool
+) -> str | None:
+    """What ``path``'s replay does to its process, when it kills it, ends it or hangs (None
+    otherwise): such a file is libFuzzer's to minimize (``fuzzer.triage.isolated``)."""
+    from fuzzer.triage.isolated import CRASHES, ENDS, HANGS, replay_isolated
+
+    try:
+        verdict = replay_isolated(path, base, given, sessions, trust)
+    except ConfigError:
+        return None  # load() said it already, or shrink() will
+    return f"{verdict.result} ({verdict.detail})" if verdict.result in (CRASHES, ENDS, HANGS) else None
+
+
 def _skip_file(exc: ConfigError, files: list[Path]) -> None:
     """A file of several that cannot be read under this configuration: say so and go on (the
     caller counts it); with a single file, the error is the command's (re-raised)."""
@@ -121,7 +135,7 @@ def minimize_main(argv: Sequence[str]) -> int:
     args = parser.parse_args(argv)
     if args.budget < 1:
         raise UsageError("--budget must be >= 1")
-    _, given = config_from(args)
+    base, given = config_from(args)
     files = _inputs(args.paths, folders=False)
     if args.output is not None:
         from fuzzer.input.paths import prepare_folder
@@ -135,6 +149,13 @@ def minimize_main(argv: Sequence[str]) -> int:
         except ConfigError as exc:
             _skip_file(exc, files)
             errors += 1
+            continue
+        ended = _ends_its_process(path, base, given, sessions, args.trust_sidecar)
+        if ended is not None:  # it ended minimize with it (exit 134, no word)
+            reporting.verdict(
+                str(path), f"not minimized: it {ended}; libFuzzer's -minimize_crash=1 minimizes such an input"
+            )
+            stale += 1
             continue
         try:
             shrunk = crashfiles.shrink(loaded, args.budget)

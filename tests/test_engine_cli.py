@@ -379,6 +379,29 @@ def test_a_crash_file_a_target_exits_or_hangs_on_is_a_verdict(
         assert code == 1 and f"{crash}: {said}" in out, (plugin, code, out)
 
 
+def test_minimize_says_a_file_that_kills_its_process_is_libfuzzers_to_minimize(tmp_path: Path) -> None:
+    """A file a target aborts on ended `minimize` with it: exit 134, no word."""
+    artifacts = tmp_path / "a"
+    run = fuzz(
+        str(tmp_path / "c"), "-runs=300", "-seed=1", f"--artifacts={artifacts}", f"--targets=native,{TIGHT}"
+    )
+    assert run.returncode == 1, run.stderr[-2000:]
+    sidecar = next(artifacts.glob("crash-*.json"))
+    crash = tmp_path / "crash-high"
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": [3.1, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
+    }  # fmt: skip
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    crash.with_name(crash.name + ".json").write_bytes(sidecar.read_bytes())
+    from tests.support import fuzz as plain  # minimize takes no --no-progress
+
+    run = plain("minimize", str(crash), "--targets=native,tests.plugins.faults:aborts")
+    assert run.returncode == 1, (run.returncode, run.stderr[-2000:])
+    assert f"{crash}: not minimized: it crashes the replaying process (killed by SIGABRT" in run.stdout
+    assert "-minimize_crash=1 minimizes such an input" in run.stdout
+
+
 def test_kill_minus_9_leaves_no_half_written_artifact(tmp_path: Path) -> None:
     corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
