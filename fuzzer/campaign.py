@@ -196,7 +196,10 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     )
     if stop_requested() and not child:
         raise KeyboardInterrupt  # fuzzer.cli: "interrupted" (or "terminated"), 130 (143)
-    if not child:  # given or ours (a bag's 20 kB JointState was cut short at the default, unsaid)
+    given_len = flag_value(options.libfuzzer_flags, "-max_len") is not None
+    if not child and (given_len or options.seeds_from_bag is not None):
+        # a given -max_len, or ours for a bag's seeds (a 20 kB JointState was cut short, unsaid);
+        # generated seeds fit ours, and encoding them all cost the start-up up to 1.8 ms
         limits = (f"-max_len={options.max_len}", *options.libfuzzer_flags)  # the last one given wins
         cut = cut_seeds(limits, [len(case.encode()) for case in (*seeds, *filling)])
         if cut is not None:
