@@ -269,5 +269,6 @@ class RobotModel(LibraryModel):
 
 api = make_api(RobotModel, __name__)
 api.OPS = ("fk",)  # what it answers (fuzzer.execution.session.answered_ops): IK is unsupported
+api.BATCHED = False  # a batch is one tf2 round trip a row: no batched sweeps (session.batches)
 """The implementation object for ``--targets adapters.ros_tf:api`` (alias ``ros_tf``)."""
 MoveGroup = api.MoveGroup

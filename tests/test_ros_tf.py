@@ -91,6 +91,15 @@ def test_ros_tf_is_refused_for_an_op_it_does_not_answer(op: str) -> None:
         Session.open(RunConfig(op=op, targets=("native", "ros_tf")))
 
 
+def test_ros_tf_gets_no_batched_sweeps() -> None:
+    """Its batch is one tf2 round trip a row: the sweeps took 25.8 s of a 26-s campaign, 2 inputs
+    a second (748 without them), and the campaign ran past -max_total_time."""
+    from fuzzer.execution.session import batches
+
+    assert not batches("ros_tf") and batches("native") and batches("python")
+    assert not batches("no_such_module:api")
+
+
 def _processes_with(marker: str) -> list[int]:
     """Live processes whose environment contains ``marker`` (our ROS_LOG_DIR)."""
     found = []

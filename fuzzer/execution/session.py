@@ -131,6 +131,19 @@ def answered_ops(spec: str, op: str) -> None:
         raise ConfigError(f"--targets: {spec!r} answers --op {', '.join(map(str, ops))} only, not --op {op}")
 
 
+def batches(spec: str) -> bool:
+    """Whether target ``spec`` computes ``forward_kinematics_batch`` at once, as the batched
+    sweeps assume: a target may say it does not (``BATCHED = False`` beside its ``RobotModel``;
+    ``ros_tf`` answers row by row through tf2, and its sweeps took 25.8 s of a 26-s campaign,
+    which then ran past -max_total_time on its seeds alone)."""
+    from fuzzer.execution.targets import TargetError, load_target
+
+    try:
+        return getattr(load_target(spec), "BATCHED", True) is not False
+    except TargetError:
+        return False
+
+
 def max_steps_of(value: Any) -> int:
     """A recorded or given ``max_steps``, checked.
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from functools import partial
 from typing import Any
 
-from fuzzer.execution.session import Session
+from fuzzer.execution.session import Session, batches
 
 SWEEP_SEED = 0x5EED
 """Added to ``-seed`` for the sweeps' Sobol stream (another sequence than ``spacefill``'s)."""
@@ -70,7 +70,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
         "float_tracer": tracer,
         "i2s": I2SQueue(arm, compared.is_unsolved),
     }
-    if config.op == "fk" and config.transport == "inprocess":
+    if config.op == "fk" and config.transport == "inprocess" and all(map(batches, config.targets)):
         from fuzzer.generation.sweep import Sweep
 
         search["sweep"] = Sweep(
