@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fuzzer.artifacts.store import oversized, sidecar_path
+from fuzzer.artifacts.store import derived, oversized, sidecar_path
 from fuzzer.execution.records import UNCOUNTED
 from fuzzer.input import untrusted_json
 
@@ -175,7 +175,7 @@ def new_artifacts(directory: Path, since: float) -> Found:
     divergences, crashes, timeouts, explained = [], [], [], []
     for path in sorted(directory.iterdir()) if directory.is_dir() else ():
         name = path.name
-        if name.endswith(".json") or not path.is_file():
+        if derived(path) or not path.is_file():  # a sidecar, an exported bag
             continue
         try:
             if path.stat().st_mtime < since:

@@ -502,6 +502,25 @@ def test_what_a_bag_holds_is_said_in_a_bounded_line() -> None:
     assert len(said) < 1000 and holdings([]) == "no messages"
 
 
+def test_an_exported_bag_beside_its_crash_file_is_not_taken_for_one(ros: Any, tmp_path: Path) -> None:
+    """export-bag's default CRASH.bag was triage's most severe bucket, "crash without sidecar",
+    and `show FOLDER` and `minimize art/crash-*` stopped on it."""
+    from fuzzer.artifacts.store import ArtifactStore
+    from fuzzer.input.paths import crash_inputs
+    from fuzzer.processes import new_artifacts
+    from fuzzer.triage.pipeline import collect
+
+    crash, _steps, _q = _scenario_crash(tmp_path)
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    bag = crash.with_name(crash.name + ".bag")
+    assert bag.is_file()
+    assert crash_inputs([tmp_path]) == [crash] and crash_inputs([crash, bag]) == [crash]
+    assert ArtifactStore(tmp_path).crash_files() == [crash]
+    assert [b.representative for b in collect(tmp_path)] == [crash]
+    assert bag not in new_artifacts(tmp_path, 0.0).crashes
+
+
 def test_an_exported_bag_is_readable_by_others_as_the_umask_says(ros: Any, tmp_path: Path) -> None:
     crash, _steps, _q = _scenario_crash(tmp_path)
     run = _fuzz("export-bag", str(crash), cwd=tmp_path)

@@ -53,6 +53,17 @@ class ArtifactsUnwritable(Exception):
     :data:`WRITE_FAILED_EXIT` rather than go on finding divergences it cannot keep."""
 
 
+DERIVED_SUFFIXES = (".json", ".jsonl", ".bag")
+"""Files made from a crash file, beside it (its sidecar, the logs, ``export-bag``'s default
+``CRASH.bag``), never crash files themselves: a bag named ``crash-<sha1>.bag`` was triage's most
+severe bucket, "crash without sidecar", and stopped `show`, `minimize` and `report` on the folder."""
+
+
+def derived(path: Path) -> bool:
+    """Whether ``path`` is made from a crash file (:data:`DERIVED_SUFFIXES`), not one."""
+    return path.name.endswith(DERIVED_SUFFIXES)
+
+
 def _temporary(path: Path) -> Path:
     return path.parent / f"{TMP_PREFIX}{path.name}.{os.getpid()}.{secrets.token_hex(4)}"
 
@@ -298,7 +309,7 @@ class ArtifactStore:
         return completed
 
     def crash_files(self) -> list[Path]:
-        return sorted(p for p in self.directory.glob("crash-*") if not p.name.endswith(".json"))
+        return sorted(p for p in self.directory.glob("crash-*") if not derived(p))
 
     # -- writing without claiming (minimize, tests) -------------------------------------------
 

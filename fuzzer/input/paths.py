@@ -22,6 +22,7 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
+from fuzzer.artifacts.store import derived
 from fuzzer.execution.session import ConfigError
 
 
@@ -36,6 +37,7 @@ class FolderUnwritable(PathError):
 
 
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")
+
 
 JOB_LOG = re.compile(r"fuzz-[0-9]+\.log")
 """The log libFuzzer's ``-jobs`` writes per worker into the artifacts folder."""
@@ -85,8 +87,10 @@ def is_sidecar(path: Path) -> bool:
 
 
 def _beside_crash_files(path: Path) -> bool:
-    """A sidecar, or a campaign's log (``.jsonl``), which a glob such as ``art/*`` also matches."""
-    return is_sidecar(path) or path.name.endswith(".jsonl")
+    """A sidecar, a campaign's log (``.jsonl``) or an exported bag of a crash file beside it
+    (``crash-X.bag``), which a glob such as ``art/crash-*`` also matches."""
+    exported = path.name.endswith(".bag") and path.with_name(path.name[: -len(".bag")]).is_file()
+    return is_sidecar(path) or path.name.endswith(".jsonl") or exported
 
 
 def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
@@ -120,7 +124,7 @@ def crash_inputs(paths: Iterable[Path], *, folders: bool = True) -> list[Path]:
                 f
                 for f in entries
                 if f.is_file()
-                and not f.name.endswith((".json", ".jsonl"))
+                and not derived(f)
                 and not f.name.startswith(".")
                 and not JOB_LOG.fullmatch(f.name)  # a -jobs worker's log, never a test case
                 and (not f.is_symlink() or contained(path, f))  # a folder's link out of it: not read

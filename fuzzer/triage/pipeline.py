@@ -122,13 +122,14 @@ class Bucket:
 
 def _artifacts(directory: Path) -> list[Path]:
     """The artifacts of a folder; symlinks that lead outside it are ignored with a warning."""
+    from fuzzer.artifacts.store import derived
     from fuzzer.input.paths import contained
     from fuzzer.reporting import warn
 
     out = []
     for p in sorted(directory.iterdir()):
         if (
-            not p.name.endswith(".json")
+            not derived(p)
             and not p.name.startswith(".")
             and p.name.split("-")[0] in ("crash", "timeout", "oom", "minimized")
             and p.is_file()
