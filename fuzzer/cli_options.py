@@ -42,7 +42,7 @@ exit status of a campaign:
       could not save
   77  a crash: a target died (deadly signal) or --stop-on-divergence stopped at one
       (libFuzzer's -error_exitcode)
-  130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary
+  130 interrupted (Ctrl-C)       143 terminated (SIGTERM); both print the summary once fuzzing began
   -jobs/-fork: the workers' crash, oom and timeout files make it 77, 71 or 70 (libFuzzer's
       supervisor says 1 or 0); a 1 no file explains reads "a job failed" in the summary
   any other status is libFuzzer's own
@@ -111,7 +111,7 @@ def config_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--tolerance",
         default=None,
-        help="reasonable difference: 1e-6 (m and rad) or m=1e-5,rad=1e-6 (default 1e-6)",
+        help="reasonable difference: 1e-6 (m and rad) or m=1e-5,rad=1e-6 (default 1e-6; 1e-5 for --op ik)",
     )
     parser.add_argument(
         "--msg-type",

@@ -119,8 +119,8 @@ def minimize_main(argv: Sequence[str]) -> int:
         description="Shrink crash files to the simplest input with the same signature, under the "
         "configuration their sidecars record (options given here override it).",
         epilog="exit status: 0 every file minimized or already minimal; 1 a file that no longer "
-        "reproduces its signature (nothing written for it); 2 a file or sidecar that cannot be read; "
-        "74 an output that cannot be written",
+        "reproduces its signature, or that kills, ends or hangs its process (nothing written for it); "
+        "2 a file or sidecar that cannot be read; 74 an output that cannot be written",
     )
     parser.add_argument("paths", nargs="+", type=given_path, help="crash files with sidecars (globs work)")
     config_options(parser)

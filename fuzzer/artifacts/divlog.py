@@ -53,9 +53,12 @@ def append_line(path: Path, record: dict[str, Any]) -> None:
     data = (json.dumps(record, separators=(",", ":")) + "\n").encode()
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
-        if os.write(fd, data) != len(data):
+        written = os.write(fd, data)
+        if written != len(data):  # a full disk, or a file size limit (which said "No space left")
             raise OSError(
-                errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} (only part of a line written)", str(path)
+                errno.ENOSPC,
+                f"only {written} of a line's {len(data)} bytes written (a full disk?)",
+                str(path),
             )
     finally:
         os.close(fd)

@@ -238,6 +238,10 @@ def libfuzzer_argv(options: CampaignOptions) -> list[str]:
     ours = one_campaign(options.libfuzzer_flags) or jobs > 0 or fork > 0  # (their workers get it too)
     if ours and flag_value(options.libfuzzer_flags, "-handle_term") is None:
         flags.append("-handle_term=0")  # signals.on_signal: the summary, not libFuzzer's _Exit(72)
+    if flag_value(options.libfuzzer_flags, "-handle_xfsz") is None:
+        # a file size limit (ulimit -f) fails a write with EFBIG, which the campaign says and
+        # ends with 74; libFuzzer's own SIGXFSZ handler made it a crash (77), input unsaved
+        flags.append("-handle_xfsz=0")
     forwarded = list(options.forwarded)
     corpus = [str(c) for c in options.corpus]
     if jobs > 0:

@@ -99,7 +99,8 @@ def step_records(steps: Sequence[dict[str, Any]], start: Any) -> list[Record]:
 
 
 def state_records(outcomes: Sequence[Any], joint_names: Sequence[str], root: str, start: Any) -> list[Record]:
-    """Each target's joint state and pose after each step, from a scenario sidecar's outcomes
+    """Each target's joint state after each step, and its pose after each step that reports one,
+    from a scenario sidecar's outcomes
     (``outcomes[k]["steps"][i]["values"]``), at step ``i``'s time; what a step did not report
     is left out."""
     rospy = env.import_module("rospy")
