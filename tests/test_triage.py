@@ -120,6 +120,24 @@ def test_minimize_keeps_the_signature_and_simplifies(tight: Session) -> None:
     assert Minimizer(tight).minimize(case).case == shrunk.case  # deterministic
 
 
+def test_minimize_converges_where_any_smaller_value_still_diverges() -> None:
+    """A continuous joint wrapped to [0, 2pi) diverges at every negative value: halving took
+    -1.81 to -2.5e-94 and never converged (the budget every time, a longer file each run)."""
+    session = Session.open(
+        RunConfig(
+            robot="double_pendulum_continuous", targets=("native", "tests.plugins.faults:wrap_continuous")
+        )
+    )
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": [-1.8123456, 0.0], "velocity": [], "effort": [],
+    }  # fmt: skip
+    shrunk = Minimizer(session).minimize(TestCase("sensor_msgs/JointState", message))
+    assert shrunk.complete and shrunk.case.message["position"] == [-0.5, 0.0], shrunk.case.message
+    again = Minimizer(session).minimize(shrunk.case)
+    assert again.case.message == shrunk.case.message and again.accepted == 0
+
+
 def test_minimize_refuses_an_agreeing_input() -> None:
     session = Session.open(RunConfig())
     with pytest.raises(ValueError, match="does not diverge"):
