@@ -521,6 +521,26 @@ def test_an_exported_bag_beside_its_crash_file_is_not_taken_for_one(ros: Any, tm
     assert bag not in new_artifacts(tmp_path, 0.0).crashes
 
 
+def test_a_bag_that_cannot_be_written_exits_74(
+    ros: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """As every output that cannot be written (it was 2, a usage error)."""
+    import errno
+    import tempfile
+
+    from fuzzer import cli
+
+    crash, _steps, _q = _scenario_crash(tmp_path)
+
+    def read_only(*_args: Any, **_kwargs: Any) -> Any:
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "mkstemp", read_only)
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["export-bag", str(crash), "-o", str(tmp_path / "x.bag")]) == 74
+    assert "x.bag: cannot write the bag: Read-only file system" in capsys.readouterr().err
+
+
 def test_an_exported_bag_is_readable_by_others_as_the_umask_says(ros: Any, tmp_path: Path) -> None:
     crash, _steps, _q = _scenario_crash(tmp_path)
     run = _fuzz("export-bag", str(crash), cwd=tmp_path)

@@ -23,7 +23,7 @@ from typing import Any
 from fuzzer import reporting
 from fuzzer.cli_options import trust_option
 from fuzzer.execution.session import ConfigError
-from fuzzer.input.paths import PathError, check_output_file, file_problem, given_path
+from fuzzer.input.paths import FolderUnwritable, PathError, check_output_file, file_problem, given_path
 from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
 from fuzzer.ros.bag_limits import ChunkTooLargeError, bounded_chunks
@@ -325,8 +325,8 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     # was, and a symlink planted at the name is replaced, never followed
     try:
         handle, name = tempfile.mkstemp(prefix=f".{output.name}.", suffix=".tmp", dir=output.parent)
-    except OSError as exc:
-        raise BagError(f"{output}: cannot write the bag: {exc.strerror or exc}") from None
+    except OSError as exc:  # exit 74, as every output that cannot be written (it was 2)
+        raise FolderUnwritable(f"{output}: cannot write the bag: {exc.strerror or exc}") from None
     os.close(handle)
     try:
         with rosbag.Bag(name, "w") as bag:
@@ -334,6 +334,9 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
                 bag.write(topic, message, when)
         os.chmod(name, 0o666 & ~_umask())  # mkstemp's 0600 kept another user's rosbag play out
         os.replace(name, output)
+    except OSError as exc:  # a full disk
+        Path(name).unlink(missing_ok=True)
+        raise FolderUnwritable(f"{output}: cannot write the bag: {exc.strerror or exc}") from None
     except Exception as exc:  # noqa: BLE001 - genpy's serialization errors name the field
         Path(name).unlink(missing_ok=True)
         raise BagError(f"{output}: cannot write the bag: {type(exc).__name__}: {exc}") from None
