@@ -373,7 +373,11 @@ def write_bag_seeds(session: Session, bag: Path, corpus: Path) -> list[TestCase]
 def write_seeds(corpus: Path, seeds: list[TestCase]) -> None:
     """Write the generated seeds into the corpus folder, without fsync: the same seed and robot
     make them again, and a short file left by a power loss is skipped as malformed (``prescan``)."""
+    from fuzzer.signals import stop_requested
+
     for case in seeds:
+        if stop_requested():  # a kept Ctrl-C or SIGTERM: it waited for the last of 200,000 files
+            raise KeyboardInterrupt
         data = case.encode()
         name = f"seed-{case.sequence:05d}-{hashlib.sha1(data).hexdigest()[:10]}"
         atomic_write(corpus / name, data, durable=False)

@@ -25,6 +25,8 @@ import hypothesis
 from hypothesis import HealthCheck, Phase, Verbosity, given, settings
 from hypothesis.strategies import SearchStrategy
 
+from fuzzer.signals import stop_requested
+
 __all__ = ["MAX_ATTEMPTS", "canonical_json", "generate_seeds", "smallest_fits"]
 
 #: Hypothesis runs (with seeds ``seed``, ``seed + 1``, ...) tried before giving up on ``n``.
@@ -121,6 +123,8 @@ def _draw(strategy: SearchStrategy[Any], max_examples: int, seed: int) -> list[A
     )
     @given(strategy)
     def collect(value: Any) -> None:
+        if stop_requested():  # a kept Ctrl-C or SIGTERM: 100,000 seeds were all drawn first (6 min)
+            raise KeyboardInterrupt
         drawn.append(value)
 
     with _without_local_constants():
