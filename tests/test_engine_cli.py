@@ -11,6 +11,7 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -341,15 +342,21 @@ def test_a_crash_file_that_kills_its_replay_is_a_verdict_and_the_others_replay(t
     folder = tmp_path / "crashes"
     folder.mkdir()
     for name, first in (("crash-aborts", 3.1), ("crash-fine", 0.5)):
-        message = {
-            "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
-            "name": [], "position": [first, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
-        }  # fmt: skip
-        (folder / name).write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+        _move_case(folder / name, first)
     run = fuzz("replay", str(folder), "--op=move", "--targets=native,tests.plugins.faults:aborts")
     assert run.returncode == 1, (run.returncode, run.stderr[-2000:])
     assert f"{folder / 'crash-aborts'}: crashes the replaying process (killed by SIGABRT" in run.stdout
     assert f"{folder / 'crash-fine'}: the targets agree (no sidecar to compare with)" in run.stdout
+
+
+def _move_case(path: Path, first: float) -> None:
+    """A move test case to joint_1 = ``first`` (the others 0) at ``path``: the faulty plugins
+    abort, exit or hang above 3 rad."""
+    message = {
+        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
+        "name": [], "position": [first, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
+    }  # fmt: skip
+    path.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
 
 
 def test_a_crash_file_a_target_exits_or_hangs_on_is_a_verdict(
@@ -362,11 +369,7 @@ def test_a_crash_file_a_target_exits_or_hangs_on_is_a_verdict(
 
     monkeypatch.setattr(isolated, "REPLAY_SECONDS", 3.0)
     crash = tmp_path / "crash-high"
-    message = {
-        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
-        "name": [], "position": [3.1, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
-    }  # fmt: skip
-    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    _move_case(crash, 3.1)
     verdicts = {
         "exits": "ends the replaying process (exit status 3: a target ended it)",
         "hangs": "hangs the replaying process (no verdict in 3 s: a target hangs on it)",
@@ -388,11 +391,7 @@ def test_minimize_says_a_file_that_kills_its_process_is_libfuzzers_to_minimize(t
     assert run.returncode == 1, run.stderr[-2000:]
     sidecar = next(artifacts.glob("crash-*.json"))
     crash = tmp_path / "crash-high"
-    message = {
-        "header": {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""},
-        "name": [], "position": [3.1, 0.0, 0.0, 0.0, 0.0, 0.0], "velocity": [], "effort": [],
-    }  # fmt: skip
-    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    _move_case(crash, 3.1)
     crash.with_name(crash.name + ".json").write_bytes(sidecar.read_bytes())
     from tests.support import fuzz as plain  # minimize takes no --no-progress
 
@@ -668,6 +667,14 @@ def test_a_signal_ends_a_campaign_with_its_summary(
     assert "Traceback" not in text and "Uncaught Python exception" not in text
 
 
+def _snapshots(stats: Path) -> dict[Any, dict[str, Any]]:
+    """Each process's last snapshot in a campaign's stats.jsonl, by pid (none yet: empty)."""
+    last: dict[Any, dict[str, Any]] = {}
+    for record in map(json.loads, stats.read_text().splitlines() if stats.exists() else []):
+        last[record.get("pid")] = record
+    return last
+
+
 @pytest.mark.parametrize("flag", ["-jobs=2", "-fork=2"])
 def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path, flag: str) -> None:
     # `kill PID` of a -jobs campaign (CI's timeout): its workers, each under a shell of its own,
@@ -677,12 +684,7 @@ def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path, flag: str) -
     stats = artifacts / "stats.jsonl"
 
     def workers_fuzzing() -> bool:  # each worker snapshots its counters at its first input
-        pids = (
-            {json.loads(line).get("pid") for line in stats.read_text().splitlines()}
-            if stats.exists()
-            else set()
-        )
-        return len(pids) >= 2
+        return len(_snapshots(stats)) >= 2
 
     process, err, processes = _started(
         tmp_path, "-seed=1", flag, "-max_total_time=120", f"--artifacts={artifacts}", ready=workers_fuzzing
@@ -695,10 +697,8 @@ def test_workers_end_with_a_supervisor_killed_alone(tmp_path: Path, flag: str) -
         assert _all_ended(processes), "workers outlived their supervisor"
         text = err.read_text()
         assert "campaign summary" in text and "exit status 143 (terminated (SIGTERM))" in text, text[-2000:]
-        last = {}
-        for record in map(json.loads, stats.read_text().splitlines()):
-            last[record["pid"]] = record
-        assert any(r.get("interrupted") for r in last.values()), "no worker ended with its last snapshot"
+        last = _snapshots(stats).values()
+        assert any(r.get("interrupted") for r in last), "no worker ended with its last snapshot"
     finally:
         for pid in processes():
             os.kill(pid, signal.SIGKILL)
@@ -714,12 +714,7 @@ def test_ctrl_c_ends_jobs_and_their_supervisor_with_130(tmp_path: Path, flag: st
     stats = artifacts / "stats.jsonl"
 
     def jobs_fuzzing() -> bool:  # each job snapshots its counters at its first input
-        pids = (
-            {json.loads(line).get("pid") for line in stats.read_text().splitlines()}
-            if stats.exists()
-            else set()
-        )
-        return len(pids) >= (2 if flag == "-jobs=2" else 1)
+        return len(_snapshots(stats)) >= (2 if flag == "-jobs=2" else 1)
 
     process, err, processes = _started(
         tmp_path, "-seed=1", flag, "-max_total_time=120", f"--artifacts={artifacts}", ready=jobs_fuzzing
