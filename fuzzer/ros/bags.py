@@ -27,10 +27,9 @@ from fuzzer.input.paths import FolderUnwritable, PathError, check_output_file, f
 from fuzzer.input.testcase import MAX_BYTES
 from fuzzer.ros import env
 from fuzzer.ros.bag_limits import ChunkTooLargeError, bounded_chunks
+from fuzzer.scenario.steps import MSG_TYPE
 
 JOINT_STATE = "sensor_msgs/JointState"
-SCENARIO_TYPE = "rrosfuzz/Scenario"
-"""``fuzzer.scenario.steps.MSG_TYPE`` (a scenario's steps go to ``fuzzer.ros.scenario_bags``)."""
 
 TOPICS = {
     JOINT_STATE: "/joint_states",
@@ -294,7 +293,7 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
     records: list[tuple[str, Any, Any]] = []
-    if case.msg_type == SCENARIO_TYPE:
+    if case.msg_type == MSG_TYPE:
         from fuzzer.ros.scenario_bags import export_records
 
         records = export_records(crash, case.message, sidecar, model, start)
@@ -306,7 +305,7 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
                 f"{crash}: its message is not a {case.msg_type}: {type(exc).__name__}: {exc}"
             ) from None
         records.append((TOPICS[case.msg_type], message, start))
-    for k, outcome in enumerate(sidecar.get("outcomes", [])[:2] if case.msg_type != SCENARIO_TYPE else []):
+    for k, outcome in enumerate(sidecar.get("outcomes", [])[:2] if case.msg_type != MSG_TYPE else []):
         values = outcome.get("values", {}) if isinstance(outcome, dict) else {}
         joints = values.get("joint_values")
         if isinstance(joints, list) and len(joints) == model.dof:

@@ -113,13 +113,12 @@ def replay_isolated(
         return Verdict(HANGS, f"no verdict in {REPLAY_SECONDS:g} s: a target hangs on it", (), recorded, True)
     if os.WIFSIGNALED(status):
         number = os.WTERMSIG(status)
-        known = number in signal.Signals._value2member_map_
-        name = signal.Signals(number).name if known else str(number)
-        why = (
-            "a target crashed on it"
-            if known and signal.Signals(number) in CRASH_SIGNALS
-            else "a target, or something outside, killed it"
-        )
+        try:
+            name = signal.Signals(number).name
+        except ValueError:
+            name = str(number)
+        crashed = number in {int(s) for s in CRASH_SIGNALS}
+        why = "a target crashed on it" if crashed else "a target, or something outside, killed it"
         return Verdict(CRASHES, f"killed by {name}: {why}", (), recorded, True)
     if not data and os.waitstatus_to_exitcode(status) != 0:  # a target's exit(): no answer sent
         return Verdict(
