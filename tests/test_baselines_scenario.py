@@ -116,7 +116,7 @@ def test_uniform_sampling_and_hypothesis_alone_start_with_their_own_first_input(
     for uniform sampling, Hypothesis' import too): the start-up the tables compare is each
     engine's own. Uniform sampling's inputs are the same stream as before, from its first."""
     program = f"""
-import random, sys, tempfile
+import random, sys
 from pathlib import Path
 from benchmarks import baselines
 from fuzzer.execution.session import RunConfig, Session
@@ -130,7 +130,7 @@ def first(self, data):
 Harness.test_one_input = first
 config = RunConfig(op={op!r}, targets=("native", "python"), tolerance=default_tolerance({op!r}))
 try:
-    baselines.run("uniform", Session.open(config), Path(tempfile.mkdtemp()), 5.0, 7)
+    baselines.run("uniform", Session.open(config), Path({str(tmp_path / 'uniform')!r}), 5.0, 7)
 except SystemExit:
     pass
 session, rng = Session.open(config), random.Random(7)
