@@ -71,6 +71,30 @@ def test_promote_again_in_place_and_a_suite_that_is_a_file_are_named(
             promote(known, fixed=False, suite=suite, trust=True)
 
 
+@pytest.mark.parametrize("failure", ["EROFS", "ENOSPC", "EACCES"])
+def test_promote_into_a_suite_that_takes_no_file_exits_74(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, failure: str
+) -> None:
+    """A read-only, full or foreign suite folder is the exit table's 74 for every file, as every
+    folder that takes no file is; it was each file's "not promoted", exit 1."""
+    import errno
+    import os
+
+    from fuzzer.input.paths import FolderUnwritable
+    from fuzzer.triage import regressions
+
+    monkeypatch.chdir(ROOT)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+
+    def refuse(path: Path, data: bytes) -> None:
+        code = getattr(errno, failure)
+        raise OSError(code, os.strerror(code), str(path))
+
+    monkeypatch.setattr(regressions, "atomic_write", refuse)
+    with pytest.raises(FolderUnwritable, match=f"--suite {tmp_path}: cannot hold the crash file"):
+        promote(known, fixed=False, suite=tmp_path, trust=True)
+
+
 def test_a_replay_on_another_robot_file_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The sidecar's ``robot_sha256`` against today's file: a robot edited since the campaign
     made "now agrees" read as a fix, without a word (the URDF probe)."""

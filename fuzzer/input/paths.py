@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import stat
@@ -34,6 +35,13 @@ class FolderUnwritable(PathError):
     """A folder that cannot be created or written into (a read-only mount, a full disk): the
     command exits 74, as for any write that fails (docs/engine.md, "Progress, summary and exit
     status"); ``report`` said 2."""
+
+
+WRITE_FAILURES = frozenset(
+    {errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
+)
+"""The ``errno`` values of a folder that takes no file (read-only, not ours, full, over a
+quota or a file size limit): :class:`FolderUnwritable`'s, exit 74, rather than a bad path."""
 
 
 ARTIFACT_PREFIXES = ("crash-", "timeout-", "oom-", "leak-", "slow-unit-", "minimized-")

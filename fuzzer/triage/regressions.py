@@ -27,6 +27,7 @@ from typing import Any
 from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
 from fuzzer.artifacts.store import atomic_write, load_sidecar, sidecar_path
 from fuzzer.execution.session import ConfigError, RunConfig
+from fuzzer.input.paths import WRITE_FAILURES, FolderUnwritable
 from fuzzer.input.testcase import TestCaseError, read_bytes
 from fuzzer.triage.replay import ROBOT_CHANGED, Replay, Result, replay_file
 from robot_api import robots
@@ -100,10 +101,12 @@ def promote(
     try:
         suite.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise PromoteError(f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})") from None
+        raise _cannot_hold(suite, exc) from None
     try:
         kept = None if robot in robots.known_robots() else _keep_robot(robot, suite)
     except OSError as exc:
+        if exc.errno in WRITE_FAILURES:
+            raise _cannot_hold(suite, exc) from None
         raise PromoteError(f"{crash}: its robot file cannot be kept in --suite {suite} ({exc})") from None
     try:
         if not (target.exists() and target.samefile(crash)):  # promoted again (--fixed): in place
@@ -111,7 +114,7 @@ def promote(
             # followed (shutil.copyfile wrote the crash file over whatever it pointed at)
             atomic_write(target, read_bytes(crash))
     except OSError as exc:
-        raise PromoteError(f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})") from None
+        raise _cannot_hold(suite, exc) from None
     except TestCaseError as exc:  # replaced since it was replayed
         raise PromoteError(f"{crash}: not a test case: {exc}") from None
     entry: dict[str, Any] = dict(sidecar)
@@ -125,8 +128,19 @@ def promote(
         entry["config"] = {**sidecar["config"], "robot": _suite_name(kept, suite)}
         entry["robot_path"] = str(kept)
         entry["regression"]["robot_from"] = robot
-    atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
+    try:
+        atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
+    except OSError as exc:
+        raise _cannot_hold(suite, exc) from None
     return Promoted(target, entry["regression"]["expect"])
+
+
+def _cannot_hold(suite: Path, exc: OSError) -> PromoteError | FolderUnwritable:
+    """The error for a suite folder that took no file: a read-only, full or foreign one exits 74
+    for every file, as any folder that takes no file does (it exited 1, "not promoted"); a bad
+    path (through a file) is this file's "not promoted"."""
+    message = f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})"
+    return FolderUnwritable(message) if exc.errno in WRITE_FAILURES else PromoteError(message)
 
 
 def _short(result: Replay) -> str:
