@@ -200,10 +200,19 @@ def report_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "-o", "--output", type=given_path, default=None, help="output folder (default DIR/report)"
     )
+    parser.add_argument(
+        "--robot",
+        action="append",
+        default=[],
+        help="a campaign's URDF file (or robot name), for sidecars whose path was relative to "
+        "another working folder: used for every crash file whose sidecar records its SHA-256 "
+        "(repeat it for several robots)",
+    )
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     if not args.directory.is_dir():
         raise UsageError(f"{args.directory}: not a folder")
+    robots = _robots_by_digest(args.robot)
     output = args.output
     if output is None:
         output = args.directory / "report"
@@ -212,9 +221,22 @@ def report_main(argv: Sequence[str]) -> int:
     from fuzzer.input.paths import prepare_folder
 
     prepare_folder(output, "report output", writable=True)
-    page = write_report(args.directory, output, trust=args.trust_sidecar)
+    page = write_report(args.directory, output, trust=args.trust_sidecar, robots=robots)
     reporting.out(reporting.shown(f"report: {page}"))
     return 0
+
+
+def _robots_by_digest(given: Sequence[str]) -> dict[str, str]:
+    """``report --robot`` files by their SHA-256 (a usage error for one that does not resolve)."""
+    from fuzzer.artifacts.manifest import robot_digest
+
+    out = {}
+    for robot in given:
+        digest = robot_digest(robot)
+        if digest is None:
+            raise UsageError(f"--robot {robot}: neither a shipped robot nor a readable file")
+        out[digest] = robot
+    return out
 
 
 def promote_main(argv: Sequence[str]) -> int:

@@ -153,7 +153,7 @@ def test_promote_keeps_a_robot_file_the_suite_can_replay_elsewhere(
     # the default suite names its copies from the repository's root, as the shipped ones are
     assert _suite_name(SUITE / "urdfs" / "x.urdf", SUITE) == "tests/regressions/urdfs/x.urdf"
     # promoted from another folder: the relative path leads nowhere, and --robot names the file
-    with pytest.raises(PromoteError, match="promote takes --robot"):
+    with pytest.raises(PromoteError, match="promote, export-bag, view and report take --robot"):
         promote(crash, fixed=False, suite=tmp_path / "elsewhere", trust=True)
     elsewhere = promote(crash, fixed=False, suite=tmp_path / "elsewhere", trust=True, robot=str(arm))
     assert load_sidecar(elsewhere.path)["regression"]["robot_from"] == str(arm)  # type: ignore[index]

@@ -512,6 +512,55 @@ def test_sessions_are_cached_per_configuration() -> None:
     assert RunConfig.from_json(config()).robot == "probot_anno"
 
 
+def _suite_ik_crash(folder: Path) -> Path:
+    """A copy of the suite's IK crash file on Kinova whose goal lies at x = -1.8e308 m."""
+    name = "crash-71f78e4fcc3be2f3a2216b1111a7d9dd961c70b8"
+    folder.mkdir(parents=True, exist_ok=True)
+    for suffix in ("", ".json"):
+        shutil.copyfile(ROOT / "tests" / "regressions" / (name + suffix), folder / (name + suffix))
+    return folder / name
+
+
+def test_an_ik_goal_far_off_the_arm_is_a_note_not_the_picture_s_scale(tmp_path: Path) -> None:
+    """The goal at -1.8e308 m set the 3D view's scale: numpy overflowed ("RuntimeWarning:
+    overflow encountered in scalar subtract" on the console) and the arm was a dot."""
+    import warnings
+
+    crash = _suite_ik_crash(tmp_path / "art")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        text = write_report(crash.parent).read_text()
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert "The requested position (IK), (-1.798e+308, 0.151, 0.2155) m, lies far off the arm" in text
+
+
+def test_report_robot_replaces_a_relative_robot_path_by_its_sha256(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A campaign's ``--robot my.urdf`` does not resolve from another working folder, and
+    ``--trust-sidecar`` cannot make it; ``report --robot FILE`` gives it again, for the sidecars
+    that record its SHA-256."""
+    import hashlib
+
+    from robot_api import robots
+
+    crash = _suite_ik_crash(tmp_path / "campaign" / "art")
+    urdf = tmp_path / "campaign" / "my.urdf"
+    shutil.copyfile(robots.resolve("kinova"), urdf)
+    car = json.loads(crash.with_name(crash.name + ".json").read_text())
+    car["config"]["robot"] = "my.urdf"
+    car["robot_sha256"] = hashlib.sha256(urdf.read_bytes()).hexdigest()
+    crash.with_name(crash.name + ".json").write_text(json.dumps(car))
+    monkeypatch.chdir(tmp_path)
+    unresolved = "robot &#x27;my.urdf&#x27; is neither a shipped robot nor an existing file"
+    assert unresolved in write_report(crash.parent, tmp_path / "r1", trust=True).read_text()
+    digest = car["robot_sha256"]
+    text = write_report(crash.parent, tmp_path / "r2", robots={digest: str(urdf)}).read_text()
+    assert "Cannot re-run" not in text and "re-run: failed vs failed" in text
+    other = write_report(crash.parent, tmp_path / "r3", robots={"0" * 64: str(urdf)}).read_text()
+    assert unresolved in other, "a file of another digest is not used"
+
+
 # -- end to end: a real campaign -----------------------------------------------------------------------------
 
 

@@ -280,6 +280,25 @@ def test_export_bag_writes_only_a_bag_file_and_names_what_it_cannot_use(ros: Any
     run = _fuzz("export-bag", str(crash), "--trust-sidecar", cwd=tmp_path)
     assert run.returncode == 2 and "README.md does not load: URDFError" in run.stderr, run.stderr[-800:]
     assert "Traceback" not in run.stderr
+    # a path relative to another working folder: given again with --robot, checked by SHA-256
+    import hashlib
+    import shutil
+
+    from robot_api import robots
+
+    urdf = tmp_path / "sub" / "my.urdf"
+    urdf.parent.mkdir()
+    shutil.copyfile(robots.resolve("probot_anno"), urdf)
+    digest = hashlib.sha256(urdf.read_bytes()).hexdigest()
+    recorded = {"config": {**config, "robot": "my.urdf"}, "signature": {"key": "k"}, "robot_sha256": digest}
+    sidecar.write_text(json.dumps(recorded))
+    crash.write_bytes(TestCase("sensor_msgs/JointState", message).encode())
+    run = _fuzz("export-bag", str(crash), cwd=tmp_path)
+    assert run.returncode == 2 and "'my.urdf' is neither a shipped robot" in run.stderr, run.stderr[-800:]
+    run = _fuzz("export-bag", str(crash), "--robot", str(urdf), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-800:]
+    run = _fuzz("export-bag", str(crash), "--robot", "ur5", cwd=tmp_path)
+    assert run.returncode == 2 and "--robot ur5: not the robot file" in run.stderr, run.stderr[-800:]
 
 
 def test_a_bag_s_chunks_and_messages_are_read_within_bounds(

@@ -116,3 +116,35 @@ def test_a_sidecar_robot_outside_the_folders_is_not_read(
         load(crash)
     with pytest.raises(ConfigError, match=r"README\.md does not load: URDFError"):
         load(crash, trust=True)  # read, as the user vouched for the file
+
+
+def test_a_relative_robot_path_from_another_folder_is_given_again_with_robot(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A campaign run with ``--robot my.urdf`` records the path as typed; from any other working
+    folder it does not resolve. ``view``/``export-bag --robot`` give the file again (checked by
+    its SHA-256); they had only ``--trust-sidecar``, which cannot make the path resolve."""
+    import hashlib
+
+    from fuzzer.execution.session import ConfigError
+    from fuzzer.ros.view import load
+    from robot_api import robots
+
+    campaign, elsewhere = tmp_path / "campaign", tmp_path / "elsewhere"
+    (campaign / "art").mkdir(parents=True)
+    elsewhere.mkdir()
+    urdf = campaign / "my.urdf"
+    shutil.copyfile(robots.resolve("probot_anno"), urdf)
+    crash = _crash(campaign / "art", [0.1] * 6, [0.2] * 6)
+    sidecar = json.loads(crash.with_name(crash.name + ".json").read_text())
+    sidecar["config"]["robot"] = "my.urdf"
+    sidecar["robot_sha256"] = hashlib.sha256(urdf.read_bytes()).hexdigest()
+    crash.with_name(crash.name + ".json").write_text(json.dumps(sidecar))
+    monkeypatch.chdir(elsewhere)
+    for trust in (False, True):
+        with pytest.raises(ConfigError, match=r"'my\.urdf' is neither a shipped robot nor an existing file"):
+            load(crash, trust)
+    _, _, model, _ = load(crash, robot=str(urdf))
+    assert model.dof == 6
+    with pytest.raises(ConfigError, match=r"--robot ur5: not the robot file .* SHA-256 .* differs"):
+        load(crash, robot="ur5")

@@ -61,8 +61,8 @@ def outside(spec: str, folders: tuple[Path, ...]) -> bool:
 
 
 OPTIONS_OF = (
-    "replay, minimize and a campaign take it; promote takes --robot; report, export-bag and view "
-    "take --trust-sidecar only"
+    "replay, minimize and a campaign take it; promote, export-bag, view and report take --robot "
+    "(the campaign's file) and --trust-sidecar"
 )
 """Where the options a refusal suggests (``--targets``, ``--robot``, ``--msg-path``) exist."""
 
@@ -105,21 +105,34 @@ def safe_robot(spec: str, source: Path, trust: bool = False, folder: Path | None
     return spec
 
 
-def sidecar_model(config: dict[str, Any], source: Path, trust: bool = False) -> tuple[Path, Any]:
+def sidecar_model(
+    config: dict[str, Any],
+    source: Path,
+    trust: bool = False,
+    robot: str | None = None,
+    digest: object = None,
+) -> tuple[Path, Any]:
     """The URDF and the twin's model of the robot a sidecar's ``config`` names (the default robot
     when it names none), for the commands that draw or export a crash (``export-bag``, ``view``).
+
+    ``robot`` (``--robot``) replaces it, for a sidecar whose robot path was relative to another
+    working folder; it must be the campaign's file when the sidecar records one (``digest``,
+    its ``robot_sha256``).
 
     Raises
     ------
     SidecarError
         The robot is neither a shipped one nor a regular file where a file may point
         (:func:`safe_robot`; ``trust``: anywhere), or it no longer loads (a file changed or
-        gone since, a tip link not in it).
+        gone since, a tip link not in it), or ``robot`` is not the campaign's file.
     """
     import python_impl
     from robot_api.errors import RobotAPIError
 
-    robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), source, trust)
+    if robot is not None:
+        check_given_robot(robot, digest, source)
+    else:
+        robot = safe_robot(config.get("robot", robots.DEFAULT_ROBOT), source, trust)
     try:
         urdf = robots.resolve(robot)
         return urdf, python_impl.RobotModel(urdf, config.get("tip_link"))
@@ -127,6 +140,27 @@ def sidecar_model(config: dict[str, Any], source: Path, trust: bool = False) -> 
         raise SidecarError(
             f"{source}: its sidecar's robot {robot} does not load: {type(exc).__name__}: {exc}"
         ) from None
+
+
+def check_given_robot(robot: str, digest: object, source: Path) -> None:
+    """Refuse a ``--robot`` that is not the campaign's file: its SHA-256 against the sidecar's
+    ``robot_sha256`` (``digest``; no check when the sidecar records none).
+
+    Raises
+    ------
+    SidecarError
+        The file does not resolve, or its SHA-256 differs.
+    """
+    from fuzzer.artifacts.manifest import robot_digest
+
+    mine = robot_digest(robot)
+    if mine is None:
+        raise SidecarError(f"--robot {robot}: neither a shipped robot nor a readable file")
+    if isinstance(digest, str) and digest and mine != digest:
+        raise SidecarError(
+            f"--robot {robot}: not the robot file {source}'s campaign ran on (its SHA-256 "
+            f"{mine[:12]} differs from the sidecar's robot_sha256 {digest[:12]})"
+        )
 
 
 def config_from(data: dict[str, Any], source: Path, given: dict[str, Any], trust: bool = False) -> RunConfig:

@@ -19,14 +19,17 @@ This package imports nothing heavy itself: :mod:`fuzzer.triage.pipeline` uses
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 __all__ = ["write_report"]
 
 
-def write_report(directory: Path, out: Path | None = None, trust: bool = False) -> Path:
+def write_report(
+    directory: Path, out: Path | None = None, trust: bool = False, robots: Mapping[str, str] | None = None
+) -> Path:
     """Write ``out/report.html`` and every figure as a PNG file in ``out``
     (:func:`fuzzer.report.build.write_report`, which documents the parameters)."""
     from fuzzer.report.build import write_report as write
 
-    return write(directory, out, trust)
+    return write(directory, out, trust, robots)

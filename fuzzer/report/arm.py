@@ -79,11 +79,18 @@ class Sessions:
     existing file.
     """
 
-    def __init__(self, trust: bool = False) -> None:
+    def __init__(self, trust: bool = False, robots: Mapping[str, str] | None = None) -> None:
         self._cache: dict[str, Session | str] = {}
         self.trust = trust
+        self.robots = dict(robots or {})
+        """``--robot`` files by SHA-256: each replaces the robot of a sidecar that records its digest
+        (a path relative to another working folder does not resolve here)."""
 
-    def get(self, config: Mapping[str, Any], source: Path = Path("sidecar")) -> Session | str:
+    def get(
+        self, config: Mapping[str, Any], source: Path = Path("sidecar"), digest: object = None
+    ) -> Session | str:
+        if isinstance(digest, str) and digest in self.robots:
+            config = {**config, "robot": self.robots[digest]}
         key = json.dumps(config, sort_keys=True, default=str)
         if key not in self._cache:
             try:
@@ -153,13 +160,13 @@ def scene(bucket: Bucket, sessions: Sessions) -> ArmScene | str:
     sidecar = bucket.sidecar
     if sidecar is None or not isinstance(sidecar.get("config"), dict):
         return "No sidecar: the configuration of this file is unknown, so it cannot be re-run here."
+    digest = sidecar.get("robot_sha256")
     session = sessions.get(
-        sidecar["config"], bucket.representative.with_name(bucket.representative.name + ".json")
+        sidecar["config"], bucket.representative.with_name(bucket.representative.name + ".json"), digest
     )
     if isinstance(session, str):
         return f"Cannot re-run under the recorded configuration: {session}"
     notes = []
-    digest = sidecar.get("robot_sha256")
     try:
         if digest and session.robot_digest() != digest:
             notes.append(
@@ -201,14 +208,26 @@ def scene(bucket: Bucket, sessions: Sessions) -> ArmScene | str:
     except Exception as exc:  # noqa: BLE001 - a model that cannot do FK: say so, no picture
         return f"Cannot compute the arm's links: {type(exc).__name__}: {exc}"
     goal = tuple(float(x) for x in call.position) if isinstance(call, IkCall) else None
-    return ArmScene(
-        tuple(chains),
-        names,
-        commanded,
-        (goal[0], goal[1], goal[2]) if goal and len(goal) == 3 else None,
-        rerun,
-        tuple(notes),
-    )
+    point = (goal[0], goal[1], goal[2]) if goal and len(goal) == 3 else None
+    if point is not None and not _on_scale(point, chains):
+        notes.append(
+            f"The requested position (IK), ({', '.join(f'{x:.4g}' for x in point)}) m, lies far off "
+            "the arm: it is not drawn, so that the arm keeps its scale."
+        )
+        point = None
+    return ArmScene(tuple(chains), names, commanded, point, rerun, tuple(notes))
+
+
+GOAL_SCALE = 10.0
+"""An IK goal is drawn when it lies within this many times the arm's reach from its base (a
+fuzzed goal at -1.8e308 m made the picture's scale overflow, and the arm a dot)."""
+
+
+def _on_scale(point: tuple[float, float, float], chains: Sequence[Chain]) -> bool:
+    base = chains[0].points[0]
+    reach = max((math.dist(base, p) for c in chains for p in c.points), default=0.0)
+    distance = math.dist(base, point) if all(math.isfinite(x) for x in point) else math.inf
+    return distance <= GOAL_SCALE * max(reach, 0.1)
 
 
 def draw(view: ArmScene) -> bytes:

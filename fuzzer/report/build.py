@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import re
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -64,7 +65,9 @@ PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}
 no mathtext, so ``$...$`` in a lineage cannot break (or style) a figure."""
 
 
-def write_report(directory: Path, out: Path | None = None, trust: bool = False) -> Path:
+def write_report(
+    directory: Path, out: Path | None = None, trust: bool = False, robots: Mapping[str, str] | None = None
+) -> Path:
     """Write ``out/report.html`` and every figure as a PNG file in ``out``.
 
     Parameters
@@ -77,6 +80,9 @@ def write_report(directory: Path, out: Path | None = None, trust: bool = False) 
     trust : bool
         Re-run buckets whose sidecar names targets other than the builtins
         (``--trust-sidecar``); without it they get a note instead of a 3D view.
+    robots : mapping, optional
+        ``--robot`` files by their SHA-256: the robot of every sidecar that records that
+        digest, for paths relative to another working folder.
 
     Returns
     -------
@@ -91,7 +97,7 @@ def write_report(directory: Path, out: Path | None = None, trust: bool = False) 
     data = gather(directory)
     with matplotlib.rc_context(PLAIN_TEXT):
         pictures = build_figures(data)
-        sessions = Sessions(trust=trust)
+        sessions = Sessions(trust=trust, robots=robots)
         arms: dict[str, ArmView] = {b.key: render(b, sessions) for b in data.buckets if b.sidecar is not None}
         views = {b.key: scenario.view_of(b.sidecar) for b in data.buckets}
         scenarios = {

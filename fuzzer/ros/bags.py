@@ -259,7 +259,7 @@ def pose_stamped(values: dict[str, Any], frame: str) -> Any:
     return pose
 
 
-def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
+def export_bag(crash: Path, output: Path, trust: bool = False, robot: str | None = None) -> list[str]:
     """Write a divergence as a bag: its input, and each target's final joint state and pose.
 
     Topics: the input on ``TOPICS[msg_type]`` (``/joint_states`` for a JointState);
@@ -268,6 +268,7 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     ``/rrosfuzz/target_k/pose`` (``geometry_msgs/PoseStamped`` in the root link's
     frame). A scenario: its steps on ``/rrosfuzz/scenario/<step>``, one second apart, and
     each target's state after each step at the step's time (``fuzzer.ros.scenario_bags``).
+    ``robot``: ``--robot``, the campaign's robot file given again (its SHA-256 checked).
     Returns the topics written.
 
     Raises
@@ -288,7 +289,7 @@ def export_bag(crash: Path, output: Path, trust: bool = False) -> list[str]:
     rosbag = env.import_module("rosbag")
     rospy = env.import_module("rospy")
     sensor_msgs = env.import_module("sensor_msgs.msg")
-    _, model = sidecar_model(config, crash, trust)
+    _, model = sidecar_model(config, crash, trust, robot, sidecar.get("robot_sha256"))
     stamp = case.message.get("header", {}).get("stamp", {})
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
@@ -364,6 +365,12 @@ def export_bag_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("crash", type=given_path)
     parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
+        "another working folder; it must be the campaign's file (SHA-256)",
+    )
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     problem = file_problem(args.crash)
@@ -374,7 +381,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
     except env.RosUnavailableError as exc:
         raise BagError(str(exc)) from None
     output = args.output or args.crash.with_name(args.crash.name + ".bag")
-    topics = export_bag(args.crash, output, args.trust_sidecar)
+    topics = export_bag(args.crash, output, args.trust_sidecar, args.robot)
     reporting.out(f"wrote {output}: {', '.join(topics)}")
     reporting.out(f"play it: rosbag play {output}")
     return 0

@@ -195,8 +195,9 @@ def start_xvfb(log_dir: str) -> tuple[str, processes.Process]:
     raise ConfigError("view: no Xvfb display could be started (scripts/ros-ensure.sh --viz installs Xvfb)")
 
 
-def load(crash: Path, trust: bool = False) -> tuple[Any, dict[str, Any], Any, Any]:
-    """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on."""
+def load(crash: Path, trust: bool = False, robot: str | None = None) -> tuple[Any, dict[str, Any], Any, Any]:
+    """The crash's test case, its sidecar, and the chain (model and parsed tree) it ran on
+    (``robot``: ``--robot``, the campaign's file given again)."""
     from fuzzer.artifacts.sidecar import read_sidecar
     from fuzzer.artifacts.trust import sidecar_model
     from fuzzer.input.testcase import read_case
@@ -208,21 +209,23 @@ def load(crash: Path, trust: bool = False) -> tuple[Any, dict[str, Any], Any, An
         raise ConfigError(f"{crash}: not a crash file: {exc}") from None
     sidecar = read_sidecar(crash) or {}
     config = sidecar.get("config", {})
-    urdf, model = sidecar_model(config, crash, trust)
+    urdf, model = sidecar_model(config, crash, trust, robot, sidecar.get("robot_sha256"))
     return case, sidecar, model, load_urdf(str(urdf), True)
 
 
-def run_view(crash: Path, screenshot: Path | None, seconds: float, trust: bool = False) -> int:
+def run_view(
+    crash: Path, screenshot: Path | None, seconds: float, trust: bool = False, robot: str | None = None
+) -> int:
     """Show ``crash`` in RViz until RViz closes. With ``screenshot``: under Xvfb, save the
     screen every second until both arms are drawn (``MIN_PIXELS`` of each colour) or
     ``seconds`` have passed; 0 if they are, 1 if not. ``trust``: ``--trust-sidecar``, the
-    sidecar's robot read wherever it is."""
+    sidecar's robot read wherever it is; ``robot``: ``--robot``."""
     env.require()
     if shutil.which("rviz") is None or (screenshot is not None and shutil.which("Xvfb") is None):
         raise ConfigError(
             "view: RViz (and Xvfb for --screenshot) are not installed: scripts/ros-ensure.sh --viz"
         )
-    case, sidecar, model, tree = load(crash, trust)
+    case, sidecar, model, tree = load(crash, trust, robot)
     states = states_of(case, sidecar, model)
     log_dir = processes.log_folder(prefix="rrosfuzz-view-")
     try:
@@ -329,6 +332,12 @@ def view_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "--seconds", type=float, default=60.0, help="with --screenshot: the longest wait for both arms (60)"
     )
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
+        "another working folder; it must be the campaign's file (SHA-256)",
+    )
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     problem = file_problem(args.crash)
@@ -338,4 +347,4 @@ def view_main(argv: Sequence[str]) -> int:
         raise ConfigError("--seconds must be in (0, 600]")
     if args.screenshot is not None:  # before RViz starts, not after (a FIFO there blocked it)
         check_output_file(args.screenshot, args.crash, "--screenshot")
-    return run_view(args.crash, args.screenshot, args.seconds, args.trust_sidecar)
+    return run_view(args.crash, args.screenshot, args.seconds, args.trust_sidecar, args.robot)
