@@ -74,8 +74,17 @@ def to_vector(values: Any, what: str) -> list[float]:
         if values.dtype.kind not in _REAL_KINDS:
             raise bad(what, f"array of kind '{values.dtype.kind}' is not real")
         refuse_masked(values, what)
-        return np.asarray(values, dtype=np.float64).tolist()  # type: ignore[no-any-return]
+        return as_float64(values, what).tolist()  # type: ignore[no-any-return]
     raise bad(what, f"expected a list, tuple or 1-D array of numbers, got {type(values).__name__}")
+
+
+def as_float64(values: np.ndarray, what: str, code: ErrorCode = ErrorCode.INVALID_ARGUMENT) -> np.ndarray:
+    """A real array as a C-ordered float64 one; one whose copy cannot be made (no memory: a
+    broadcast view of 10**10 values takes 8 bytes) is the argument's, as in native."""
+    try:
+        return np.ascontiguousarray(values, dtype=np.float64)
+    except MemoryError:
+        raise InvalidInputError(f"{what}: cannot convert the array to float64", code) from None
 
 
 def to_string(value: Any, what: str) -> str:

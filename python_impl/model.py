@@ -193,7 +193,7 @@ class RobotModel:
                     f"{what}: expected {self.dof} columns, got {rows.shape[1]}", ErrorCode.WRONG_LENGTH
                 )
             convert.refuse_masked(rows, what)
-            q = np.ascontiguousarray(rows, dtype=np.float64)
+            q = convert.as_float64(rows, what)
         else:
             raise convert.bad(what, f"expected a 2-D array or a list of rows, got {type(rows).__name__}")
         finite = np.isfinite(q).all(axis=1)

@@ -334,9 +334,10 @@ class MoveGroup:
                 ErrorCode.INVALID_TRAJECTORY,
             )
         convert.refuse_masked(positions, "trajectory positions", ErrorCode.INVALID_TRAJECTORY)
+        values = convert.as_float64(positions, "trajectory positions", ErrorCode.INVALID_TRAJECTORY)
         if not isinstance(wait, bool):
             raise convert.bad("wait", "expected a bool")
-        self._execute(names, times, np.asarray(positions, dtype=np.float64))
+        self._execute(names, times, values)
         return True
 
     def _execute(self, names: list[str], times: Sequence[float] | np.ndarray, positions: np.ndarray) -> None:

@@ -72,9 +72,16 @@ def resolve(spec: str | os.PathLike[str]) -> Path:
     Raises
     ------
     URDFError
-        If ``spec`` is neither an existing file nor a known name.
+        If ``spec`` is neither an existing file nor a known name (nor a str or path at all).
     """
-    text = os.fspath(spec)
+    if not isinstance(spec, str | os.PathLike):
+        raise URDFError(f"robot: expected a name or a path, got {type(spec).__name__}")
+    try:
+        text = os.fspath(spec)
+    except TypeError as exc:  # a PathLike whose __fspath__ returns bytes or anything else
+        raise URDFError(f"robot: {exc}") from None
+    if not text:  # Path("") is the working folder: "not a regular file" hid what was wrong
+        raise URDFError("robot: an empty name (an unset variable?); give a robot name or a URDF path")
     if text in _SHIPPED:
         return _SHIPPED[text]
     if text in EXAMPLE_ROBOTS:

@@ -130,7 +130,7 @@ def first(self, data):
 Harness.test_one_input = first
 config = RunConfig(op={op!r}, targets=("native", "python"), tolerance=default_tolerance({op!r}))
 try:
-    baselines.run("uniform", Session.open(config), Path({str(tmp_path / 'uniform')!r}), 5.0, 7)
+    baselines.run("uniform", Session.open(config), Path({str(tmp_path / "uniform")!r}), 5.0, 7)
 except SystemExit:
     pass
 session, rng = Session.open(config), random.Random(7)

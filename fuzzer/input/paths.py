@@ -37,9 +37,7 @@ class FolderUnwritable(PathError):
     status"); ``report`` said 2."""
 
 
-WRITE_FAILURES = frozenset(
-    {errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
-)
+WRITE_FAILURES = frozenset({errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 """The ``errno`` values of a folder that takes no file (read-only, not ours, full, over a
 quota or a file size limit): :class:`FolderUnwritable`'s, exit 74, rather than a bad path."""
 

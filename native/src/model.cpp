@@ -332,10 +332,12 @@ KDL::Frame Model::fk(const std::vector<double>& q, int link) const {
   return f;
 }
 
-void Model::fk_rows(const double* q, std::size_t begin, std::size_t end, int link, double* out) const {
-  // A private copy: KDL::Joint::pose() caches into mutable members, so segments
-  // shared with other calls or threads would race.
-  const KDL::Chain chain = chain_;
+void Model::fk_rows(const KDL::Chain& snapshot, const double* q, std::size_t begin, std::size_t end, int link,
+                    double* out) const {
+  // A private copy per thread: KDL::Joint::pose() caches into mutable members, so segments
+  // shared with other threads would race. Copied from the caller's snapshot, never from
+  // chain_, which fk() rewrites meanwhile (the batch runs without the GIL).
+  const KDL::Chain chain = snapshot;
   KDL::ChainFkSolverPos_recursive solver(chain);
   KDL::JntArray qk(chain.getNrOfJoints());
   KDL::Frame f;
@@ -347,22 +349,22 @@ void Model::fk_rows(const double* q, std::size_t begin, std::size_t end, int lin
   }
 }
 
-void Model::fk_batch(const double* q, std::size_t n, int link, double* out) const {
+void Model::fk_batch(const KDL::Chain& chain, const double* q, std::size_t n, int link, double* out) const {
   // Large batches are split over the machine's cores (rows are independent).
   constexpr std::size_t kRowsPerThread = 4096;
   const std::size_t cores = std::max(1u, std::thread::hardware_concurrency());
   const std::size_t workers = std::min({cores, std::size_t{16}, std::max<std::size_t>(1, n / kRowsPerThread)});
   if (workers <= 1) {
-    fk_rows(q, 0, n, link, out);
+    fk_rows(chain, q, 0, n, link, out);
     return;
   }
   std::vector<std::thread> threads;
   const std::size_t chunk = (n + workers - 1) / workers;
   for (std::size_t w = 1; w < workers; ++w) {
     const std::size_t begin = std::min(n, w * chunk), end = std::min(n, (w + 1) * chunk);
-    threads.emplace_back([=] { fk_rows(q, begin, end, link, out); });
+    threads.emplace_back([=, &chain] { fk_rows(chain, q, begin, end, link, out); });
   }
-  fk_rows(q, 0, std::min(n, chunk), link, out);
+  fk_rows(chain, q, 0, std::min(n, chunk), link, out);
   for (auto& t : threads) t.join();
 }
 

@@ -79,9 +79,14 @@ class Model {
 
   // q has dof() entries, already checked.
   KDL::Frame fk(const std::vector<double>& q, int link) const;
-  // q: n rows of dof() values; out: n row-major 4x4 matrices. Thread-safe;
+  // The chain, copied: the argument fk_batch takes. Take it while no fk() runs (the binding
+  // holds the GIL): fk() rewrites the cached poses of KDL::Joint in chain_, and a copy taken
+  // during it could pair a new joint value with the old pose (wrong batch rows, no error).
+  KDL::Chain chain_snapshot() const { return chain_; }
+  // chain: chain_snapshot(); q: n rows of dof() values; out: n row-major 4x4 matrices.
+  // Touches nothing of the model's own, so it runs without the GIL beside other calls;
   // batches of 8192 rows or more run on several threads.
-  void fk_batch(const double* q, std::size_t n, int link, double* out) const;
+  void fk_batch(const KDL::Chain& chain, const double* q, std::size_t n, int link, double* out) const;
 
   IkAnswer ik(const KDL::Frame& target, const std::vector<double>& seed, int link) const;
 
@@ -89,7 +94,8 @@ class Model {
   struct IkSolver;
 
   void to_kdl(const double* q, KDL::JntArray& out) const;
-  void fk_rows(const double* q, std::size_t begin, std::size_t end, int link, double* out) const;
+  void fk_rows(const KDL::Chain& snapshot, const double* q, std::size_t begin, std::size_t end, int link,
+               double* out) const;
   const IkSolver& ik_solver(int link) const;
 
   std::string name_;

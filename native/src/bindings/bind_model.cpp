@@ -41,6 +41,9 @@ std::vector<double> batch_input(const Model& m, py::handle h, std::size_t& rows)
     }
     py_api::refuse_masked(h, "joint value rows");
     auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    // ensure() clears the error it met: no memory for the float64 copy (a broadcast view of
+    // 10**9 rows), which segfaulted here
+    if (!d) fail(ErrorCode::kInvalidArgument, "joint value rows: cannot convert the array to float64");
     rows = static_cast<std::size_t>(a.shape(0));
     data.assign(d.data(), d.data() + d.size());
   } else {
@@ -92,9 +95,10 @@ void bind_model(py::module_& m) {
              const int index = self.link_index(py_api::to_optional_string(link, "link"));
              py::array_t<double> out({static_cast<py::ssize_t>(rows), py::ssize_t{4}, py::ssize_t{4}});
              double* dst = out.mutable_data();
+             const KDL::Chain chain = self.chain_snapshot();  // under the GIL: no fk() runs now
              {
                py::gil_scoped_release release;
-               self.fk_batch(data.data(), rows, index, dst);
+               self.fk_batch(chain, data.data(), rows, index, dst);
              }
              return out;
            })

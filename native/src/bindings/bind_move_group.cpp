@@ -76,6 +76,7 @@ Trajectory to_trajectory(const MoveGroup& g, py::handle plan, std::vector<std::s
   }
   py_api::refuse_masked(positions, "trajectory positions", ErrorCode::kInvalidTrajectory);
   auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!d) fail(ErrorCode::kInvalidTrajectory, "trajectory positions: cannot convert the array to float64");
   t.positions.assign(d.data(), d.data() + d.size());
   return t;
 }

@@ -114,10 +114,10 @@ std::vector<double> to_vector(py::handle h, const char* what) {
     if (kind != 'f' && kind != 'i' && kind != 'u') bad(what, std::string("array of kind '") + kind + "' is not real");
     refuse_masked(h, what);
     auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-    if (!d) {
-      clear_or_propagate();
-      bad(what, "cannot convert the array to float64");
-    }
+    // ensure() clears the error it met (no memory for the copy), so there is none to propagate:
+    // clear_or_propagate() threw pybind11's "error_already_set called while Python error
+    // indicator not set" here
+    if (!d) bad(what, "cannot convert the array to float64");
     return std::vector<double>(d.data(), d.data() + d.size());
   }
   bad(what, "expected a list, tuple or 1-D array of numbers, got " + type_of(h));
