@@ -31,6 +31,8 @@ def is_real(value: Any) -> bool:
         return True
     if isinstance(value, bool | str | bytes | bytearray):
         return False
+    if isinstance(value, np.generic):  # a numpy scalar is real by its dtype, as an array is
+        return value.dtype.kind in _REAL_KINDS
     return isinstance(value, int | float) or hasattr(t, "__float__")
 
 

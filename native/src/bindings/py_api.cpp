@@ -15,7 +15,7 @@ struct Handles {
   py::object pose, ik_result, ik_success, ik_no_solution, joint_limit, mimic_joint, trajectory, make_error;
   py::object plan_result, moveit_error_code, robot_state, joint_state;
   py::object joint_type_revolute, joint_type_continuous, joint_type_prismatic;
-  py::object ndarray, masked_array, is_masked;
+  py::object ndarray, masked_array, is_masked, generic;
 };
 Handles* handles = nullptr;
 
@@ -55,6 +55,7 @@ void init() {
   handles->robot_state = records.attr("RobotState");
   handles->joint_state = records.attr("JointState");
   handles->ndarray = py::module_::import("numpy").attr("ndarray");
+  handles->generic = py::module_::import("numpy").attr("generic");
   auto ma = py::module_::import("numpy.ma");
   handles->masked_array = ma.attr("MaskedArray");
   handles->is_masked = ma.attr("is_masked");
@@ -64,13 +65,30 @@ bool is_string(py::handle h) { return PyUnicode_Check(h.ptr()); }
 
 bool is_real(py::handle h) {
   PyObject* o = h.ptr();
+  if (PyFloat_CheckExact(o) || PyLong_CheckExact(o)) return true;
   if (PyBool_Check(o) || PyUnicode_Check(o) || PyBytes_Check(o) || PyByteArray_Check(o)) return false;
+  if (py::isinstance(h, handles->generic)) {  // a numpy scalar is real by its dtype, as an array is
+    const char kind = h.attr("dtype").attr("kind").cast<std::string>().at(0);
+    return kind == 'f' || kind == 'i' || kind == 'u';
+  }
   if (PyFloat_Check(o) || PyLong_Check(o)) return true;
   return Py_TYPE(o)->tp_as_number != nullptr && Py_TYPE(o)->tp_as_number->nb_float != nullptr;
 }
 
 double to_real(py::handle h, const char* what) {
   if (!is_real(h)) bad(what, "expected a real number, got " + type_of(h));
+  if (PyFloat_Check(h.ptr()) && !PyFloat_CheckExact(h.ptr())) {
+    // a float subclass: its own __float__, as float() (the twin) calls it; PyFloat_AsDouble
+    // read the stored value and skipped it
+    PyObject* f = PyNumber_Float(h.ptr());
+    if (f == nullptr) {
+      clear_or_propagate();
+      bad(what, "cannot convert " + type_of(h) + " to a float");
+    }
+    const double v = PyFloat_AS_DOUBLE(f);
+    Py_DECREF(f);
+    return v;
+  }
   const double v = PyFloat_AsDouble(h.ptr());
   if (v == -1.0 && PyErr_Occurred()) {
     clear_or_propagate();
