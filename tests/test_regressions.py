@@ -211,3 +211,31 @@ def test_an_unreadable_crash_file_is_an_error_not_skipped(monkeypatch: pytest.Mo
         replay_file(known, RunConfig(), {}, trust=True)
     with pytest.raises(PromoteError, match="cannot be read"):
         promote(known, fixed=False, suite=ROOT / "nowhere", trust=True)
+
+
+def test_a_replay_under_settings_other_than_the_campaign_s_names_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """"now agrees" under other targets, another tolerance, or in process for a file found over
+    ROS read as a fix; the verdict now names each setting that is not the campaign's."""
+    import json
+    import shutil
+
+    from fuzzer.execution.tolerance import Tolerance
+
+    monkeypatch.chdir(ROOT)
+    fixed = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "agree")  # type: ignore[index]
+    same = replay_file(fixed, RunConfig(), {}, trust=True)
+    assert same.result is Result.AGREES and "replayed with" not in same.detail
+    other = replay_file(fixed, RunConfig(), {"targets": ("native", "native")}, trust=True)
+    assert "replayed with targets native,native (the campaign's: native,python)" in other.detail
+    looser = replay_file(fixed, RunConfig(), {"tolerance": Tolerance(1e-3, 1e-3)}, trust=True)
+    assert "tolerance 0.001 m / 0.001 rad (the campaign's: 1e-06 m / 1e-06 rad)" in looser.detail
+    copy = tmp_path / fixed.name
+    shutil.copyfile(fixed, copy)
+    sidecar = load_sidecar(fixed)
+    assert sidecar is not None
+    sidecar["config"]["transport"] = "ros"
+    (tmp_path / f"{fixed.name}.json").write_text(json.dumps(sidecar))
+    in_process = replay_file(copy, RunConfig(), {}, trust=True)
+    assert "replayed with transport inprocess (the campaign's: ros)" in in_process.detail

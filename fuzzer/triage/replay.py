@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer.artifacts import manifest
-from fuzzer.artifacts.sidecar import SidecarError, read_sidecar
+from fuzzer.artifacts.sidecar import BUILTIN_TARGETS, SidecarError, read_sidecar
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.artifacts.trust import config_from, describe
 from fuzzer.execution.evaluate import Evaluation, Verdict
@@ -190,8 +190,12 @@ def replay_file(
         steps = scenario_lines(case, evaluation, tuple(r.name for r in session.runners))
     if unrecorded:
         detail = "; ".join(filter(None, [detail, f"replayed under {describe(config)}"]))
-    elif robot_changed(session, sidecar):
-        detail = "; ".join(filter(None, [detail, ROBOT_CHANGED]))
+    else:
+        changed = settings_changed(config, sidecar)
+        if changed:  # "now agrees" under other targets read as a fix
+            detail = "; ".join(filter(None, [detail, f"replayed with {changed}"]))
+        if robot_changed(session, sidecar):
+            detail = "; ".join(filter(None, [detail, ROBOT_CHANGED]))
     if steps:
         detail = f"{detail}; {steps[0]}"  # the step list follows the verdict line (cli_tools.replay_main)
     return Replay(path, result, evaluation, expected, detail, config, not unrecorded, steps=steps)
@@ -213,6 +217,39 @@ def robot_changed(session: Session, sidecar: dict[str, Any] | None) -> bool:
         return session.robot_digest() != digest
     except OSError:
         return True  # the file is gone or unreadable now: not the campaign's, as far as we know
+
+
+def settings_changed(config: RunConfig, sidecar: dict[str, Any] | None) -> str:
+    """The settings ``config`` (the command line's options on the sidecar's) replays with that
+    are not the campaign's, each with the campaign's value: "" when none is. A verdict of "now
+    agrees" under ``--targets native,native2``, or in process for a file found over ROS, read as
+    a fix without a word."""
+    recorded = sidecar.get("config") if sidecar is not None else None
+    if not isinstance(recorded, dict):
+        return ""
+    out = []
+    targets = recorded.get("targets", list(BUILTIN_TARGETS))
+    if isinstance(targets, list) and tuple(targets) != config.targets:
+        out.append(f"targets {','.join(config.targets)} (the campaign's: {','.join(map(str, targets))})")
+    for name in ("op", "transport"):
+        was = recorded.get(name, RunConfig.__dataclass_fields__[name].default)
+        now = getattr(config, name)
+        if isinstance(was, str) and was != now:
+            out.append(f"{name} {now} (the campaign's: {was})")
+    tolerance = recorded.get("tolerance")
+    if isinstance(tolerance, dict):
+        was_m, was_rad = tolerance.get("m"), tolerance.get("rad")
+        if (was_m, was_rad) != (config.tolerance.metres, config.tolerance.radians):
+            out.append(
+                f"tolerance {config.tolerance.metres:g} m / {config.tolerance.radians:g} rad "
+                f"(the campaign's: {was_m:g} m / {was_rad:g} rad)"
+                if isinstance(was_m, int | float) and isinstance(was_rad, int | float)
+                else f"tolerance {config.tolerance.metres:g} m / {config.tolerance.radians:g} rad"
+            )
+    filtering = recorded.get("filtering")
+    if isinstance(filtering, bool) and filtering != config.filtering:
+        out.append("--no-filter" if not config.filtering else "the filter on (the campaign's: --no-filter)")
+    return ", ".join(out)
 
 
 def scenario_lines(case: TestCase, evaluation: Evaluation, targets: tuple[str, ...]) -> tuple[str, ...]:
