@@ -216,7 +216,7 @@ def test_an_unreadable_crash_file_is_an_error_not_skipped(monkeypatch: pytest.Mo
 def test_a_replay_under_settings_other_than_the_campaign_s_names_them(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """"now agrees" under other targets, another tolerance, or in process for a file found over
+    """A verdict of "now agrees" under other targets, another tolerance, or in process for a file found over
     ROS read as a fix; the verdict now names each setting that is not the campaign's."""
     import json
     import shutil
