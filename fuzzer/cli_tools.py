@@ -66,7 +66,7 @@ def _skip_file(exc: ConfigError, files: list[Path]) -> None:
     caller counts it); with a single file, the error is the command's (re-raised)."""
     if len(files) == 1:
         raise exc
-    sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
+    sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
 
 
 def _inputs(paths: Sequence[Path], *, folders: bool = True) -> list[Path]:
@@ -177,7 +177,8 @@ def minimize_main(argv: Sequence[str]) -> int:
         try:
             minimized = crashfiles.write_minimized(folder, data, out)
         except OSError as exc:  # a full disk or a read-only folder: nothing of this file is left there
-            sys.stderr.write(f"fuzz_diff.py: error: cannot write into {folder}: {exc.strerror or exc}\n")
+            problem = f"cannot write into {folder}: {exc.strerror or exc}"
+            sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(problem)}\n")
             unwritten += 1
             continue
         reporting.verdict(
@@ -304,5 +305,9 @@ def coverage_main(argv: Sequence[str]) -> int:
     for folder in (p.resolve() for p in args.corpus if p.is_dir()):
         if html == folder or folder in html.parents:  # its pages became the corpus's inputs
             raise PathError(f"--html {args.html}: inside the corpus folder {folder}; choose one outside it")
+    from fuzzer.input.paths import prepare_folder
+
+    # a path through a file said "Not a directory" and exited 74; read-only still exits 74
+    prepare_folder(args.html, "--html", writable=True)
     reporting.out(measure(list(args.corpus), config, args.html).line())
     return 0

@@ -26,14 +26,40 @@ def info(text: str, stream: TextIO | None = None) -> None:
     (stream or sys.stderr).flush()
 
 
+MESSAGE_LINE_CHARS = 2000
+"""At most this many characters of one line of a warning or error: a sidecar's 2 MB robot path
+made a 2,000,254-byte error line (the middle is left out, and counted)."""
+
+MESSAGE_LINES = 40
+"""At most this many lines of a warning or error (a log's last lines are fewer)."""
+
+
+def message(text: str) -> str:
+    """A warning's or error's text for the terminal: unprintable characters escaped
+    (:func:`shown`) but its own line breaks, each continuation line indented (so that a line
+    break in a file name or a sidecar's string cannot print a line that reads as the program's
+    own, such as ``fuzz_diff.py: error: ...``), and bounded (``MESSAGE_LINE_CHARS``,
+    ``MESSAGE_LINES``)."""
+    lines = shown(text, LINES).split("\n")
+    if len(lines) > MESSAGE_LINES:
+        lines = [*lines[: MESSAGE_LINES - 1], f"... ({len(lines) - MESSAGE_LINES + 1} more lines)"]
+    bounded = []
+    for line in lines:
+        if len(line) > MESSAGE_LINE_CHARS:
+            half = MESSAGE_LINE_CHARS // 2
+            line = f"{line[:half]} ... ({len(line) - 2 * half} characters left out) ... {line[-half:]}"
+        bounded.append(line)
+    return "\n    ".join(bounded)
+
+
 def warn(text: str) -> None:
-    sys.stderr.write(f"{PREFIX} warning: {shown(text, LINES)}\n")
+    sys.stderr.write(f"{PREFIX} warning: {message(text)}\n")
     sys.stderr.flush()
 
 
 def error(text: str) -> None:
     """An error that ends the run (the caller sets the status)."""
-    sys.stderr.write(f"{PREFIX} error: {shown(text, LINES)}\n")
+    sys.stderr.write(f"{PREFIX} error: {message(text)}\n")
     sys.stderr.flush()
 
 

@@ -98,8 +98,9 @@ def test_the_report_opens_no_fifo_planted_as_a_sidecar(tmp_path: Path) -> None:
     from fuzzer.report.data import _sidecars
 
     os.mkfifo(tmp_path / (CRASH + ".json"))  # reading it would wait for a writer for ever
-    (tmp_path / "crash-1.json").write_text(json.dumps({"signature": {"key": "k"}}))
-    assert _sidecars(tmp_path) == [{"signature": {"key": "k"}}]
+    valid = {"config": {"op": "move"}, "signature": {"key": "k"}}
+    (tmp_path / "crash-1.json").write_text(json.dumps(valid))
+    assert _sidecars(tmp_path) == [valid]
 
 
 def test_a_huge_crash_file_is_refused_unread(tmp_path: Path) -> None:

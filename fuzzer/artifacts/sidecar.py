@@ -9,6 +9,7 @@ is :mod:`fuzzer.artifacts.trust`'s. The same rules apply to a corpus manifest
 
 from __future__ import annotations
 
+import contextlib
 import math
 import stat
 from collections.abc import Callable
@@ -92,9 +93,28 @@ def read_sidecar(crash: Path) -> dict[str, Any] | None:
     path = sidecar_path(crash)
     if not path.exists() and not path.is_symlink():
         return None
+    if path.is_symlink() and _leads_somewhere(path):  # a loop or a dangling link: reading it says so
+        from fuzzer.input.paths import contained
+
+        folders = [crash.parent]
+        with contextlib.suppress(OSError):  # the working folder was removed
+            folders.append(Path.cwd())
+        if not any(contained(folder, path) for folder in folders):  # replay used what it found there
+            raise SidecarError(
+                f"{path}: a link to a file outside {crash.parent} and the working folder; a sidecar "
+                "is read only inside them, and this one was not opened (copy it there if you trust it)"
+            )
     data = read_json_file(path)
     validate(data, path)
     return data
+
+
+def _leads_somewhere(link: Path) -> bool:
+    try:
+        link.resolve(strict=True)
+    except (OSError, RuntimeError):
+        return False
+    return True
 
 
 def validate(data: dict[str, Any], path: Path) -> None:
@@ -239,8 +259,11 @@ def _outcome(raw: Any, where: str, limit: int, fail: Fail, nested: bool = False)
     """Check one recorded outcome (and its step outcomes, at most ``limit``)."""
     if not isinstance(raw, dict):
         raise fail(where, f"must be an object, not {_type_name(raw)}")
-    if "status" in raw and raw["status"] not in {str(s) for s in Status}:
-        raise fail(f"{where}.status", f"is {raw['status']!r}, expected one of {', '.join(map(str, Status))}")
+    status = raw.get("status", str(Status.OK))
+    if not isinstance(status, str):  # a list or object: "not in" a set raised TypeError
+        raise fail(f"{where}.status", f"must be a string, not {_type_name(status)}")
+    if status not in {str(s) for s in Status}:
+        raise fail(f"{where}.status", f"is {status[:80]!r}, expected one of {', '.join(map(str, Status))}")
     for key in ("target", "error", "message", "shortened"):
         if key in raw and not isinstance(raw[key], str | type(None)):
             raise fail(f"{where}.{key}", f"must be a string, not {_type_name(raw[key])}")

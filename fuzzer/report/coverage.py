@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzer.execution.session import RunConfig
-from fuzzer.input.mapping import mapping_for
+from fuzzer.input.mapping import MappingError, mapping_for
 from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.input.testcase import TestCaseError, read_case
 from robot_api import robots
@@ -45,12 +45,18 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
     """Run every input of ``corpus`` (files or folders) on the twin under coverage."""
     import coverage
 
-    files = [
-        f
-        for p in corpus
-        for f in (sorted(p.iterdir()) if p.is_dir() else [p])
-        if f.is_file() and not f.name.startswith(".") and not f.name.endswith(".json")
-    ]
+    from fuzzer.input.paths import contained
+    from fuzzer.reporting import warn
+
+    files = []
+    for p in corpus:
+        for f in sorted(p.iterdir()) if p.is_dir() else [p]:
+            if not f.is_file() or f.name.startswith(".") or f.name.endswith(".json"):
+                continue
+            if p.is_dir() and f.is_symlink() and not contained(p, f):  # it ran what the link led to
+                warn(f"corpus file {f} is a link to a file outside the corpus folder {p}: not read")
+                continue
+            files.append(f)
     cov = coverage.Coverage(branch=True, source_pkgs=["python_impl"], data_file=None)
     cov.start()
     try:
@@ -65,7 +71,10 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
             raise ConfigError(f"--robot {config.robot}{tip}: {type(exc).__name__}: {exc}") from None
         registry = MessageRegistry(config.msg_path)
         msg_type = config.message_type
-        mapping = mapping_for(config.op, msg_type)
+        try:
+            mapping = mapping_for(config.op, msg_type)
+        except MappingError as exc:  # a manifest's or --msg-type's type the op cannot use: a traceback
+            raise ConfigError(str(exc)) from None
         run = skipped = 0
         for path in files:
             try:
@@ -86,7 +95,13 @@ def measure(corpus: list[Path], config: RunConfig, html: Path) -> CoverageTotals
     html.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=".tmp-coverage-", dir=html))
     try:  # written aside, then each page renamed into place: a FIFO there blocked coverage.py,
-        cov.html_report(directory=str(staging))  # and a link there was written through
+        try:  # and a link there was written through
+            cov.html_report(directory=str(staging))
+        except OSError as exc:  # a full disk said "No space left on device", naming no folder
+            from fuzzer.input.paths import WRITE_FAILURES, FolderUnwritable
+
+            problem = f"--html {html}: cannot write the report: {exc.strerror or exc}"
+            raise (FolderUnwritable if exc.errno in WRITE_FAILURES else ConfigError)(problem) from None
         for page in sorted(staging.iterdir()):
             try:
                 os.replace(page, html / page.name)

@@ -299,6 +299,7 @@ def outside_links(directory: Path) -> list[Path]:
 
 def _sidecars(directory: Path) -> list[dict[str, Any]]:
     """Every readable sidecar of the folder (all crash files, not only representatives)."""
+    from fuzzer.artifacts.sidecar import SidecarError, validate
     from fuzzer.artifacts.store import oversized
     from fuzzer.input.paths import contained
 
@@ -311,8 +312,13 @@ def _sidecars(directory: Path) -> list[dict[str, Any]]:
             data = untrusted_json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError, RecursionError):  # not UTF-8, bad JSON, an int past a float's range
             continue
-        if isinstance(data, dict) and "signature" in data:
-            out.append(data)
+        if not (isinstance(data, dict) and "signature" in data):
+            continue
+        try:  # a damaged one (config.targets a number) ended the report with a traceback
+            validate(data, path)
+        except SidecarError:
+            continue  # triage's bucket of the file says "damaged sidecar"
+        out.append(data)
     return out
 
 

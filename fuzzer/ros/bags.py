@@ -290,10 +290,16 @@ def export_bag(crash: Path, output: Path, trust: bool = False, robot: str | None
     rospy = env.import_module("rospy")
     sensor_msgs = env.import_module("sensor_msgs.msg")
     _, model = sidecar_model(config, crash, trust, robot, sidecar.get("robot_sha256"))
-    stamp = case.message.get("header", {}).get("stamp", {})
+    header = case.message.get("header")  # a header of 5 was an AttributeError's traceback
+    stamp = header.get("stamp", {}) if isinstance(header, dict) else {}
     secs = stamp.get("secs", 0) if isinstance(stamp, dict) else 0
     start = rospy.Time(secs if isinstance(secs, int) and 0 < secs < 2**32 else 1, 0)
     records: list[tuple[str, Any, Any]] = []
+    if case.msg_type != MSG_TYPE and case.msg_type not in TOPICS:  # it wrote the sidecar's states
+        raise BagError(
+            f"{crash}: its message type {case.msg_type!r} is none a campaign fuzzes "
+            f"({', '.join([*TOPICS, MSG_TYPE])}); replay says what it is"
+        )
     if case.msg_type == MSG_TYPE:
         from fuzzer.ros.scenario_bags import export_records
 

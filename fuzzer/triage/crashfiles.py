@@ -58,8 +58,9 @@ def load(path: Path, given: dict[str, Any], trust: bool, sessions: dict[RunConfi
             "written by RROSFuzz can be minimized (use -minimize_crash=1 for others)"
         )
     config = config_from(sidecar, sidecar_path(path), given, trust)
-    if config not in sessions:
-        sessions[config] = Session.open(config)
+    from fuzzer.triage.replay import session_for
+
+    session_for(path, config, sessions, "minimize")  # its error names the file and the sidecar
     try:
         raw = read_bytes(path)
         case = decode(raw)

@@ -102,7 +102,9 @@ def source_of(path: Path) -> str:
     return str(found) if found.exists() else "command line"
 
 
-def session_for(path: Path, config: RunConfig, cache: dict[RunConfig, Session]) -> Session:
+def session_for(
+    path: Path, config: RunConfig, cache: dict[RunConfig, Session], verb: str = "replay"
+) -> Session:
     """The session of ``config`` from ``cache``, opened (and kept there) if need be.
 
     Raises
@@ -115,7 +117,7 @@ def session_for(path: Path, config: RunConfig, cache: dict[RunConfig, Session]) 
             cache[config] = Session.open(config)
         except ConfigError as exc:
             raise ConfigError(
-                f"{path}: cannot replay under the configuration from {_phrase(source_of(path))}: {exc}"
+                f"{path}: cannot {verb} under the configuration from {_phrase(source_of(path))}: {exc}"
             ) from None
     return cache[config]
 
