@@ -25,7 +25,7 @@ from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
 from fuzzer.campaign_end import USAGE_EXIT, CampaignEnd
 from fuzzer.execution import guard
-from fuzzer.execution.session import RunConfig, Session, versions
+from fuzzer.execution.session import RunConfig, Session, tip_hint, versions
 from fuzzer.generation.corpus import prescan, write_bag_seeds
 from fuzzer.generation.initial import initial_seeds
 from fuzzer.input.libfuzzer_flags import DEFAULT_FLAGS, cut_seeds, libfuzzer_argv
@@ -109,7 +109,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
         reporting.info(options.drawn_note)
     child = os.environ.get(CHILD_ENV) == "1"
     if not session.reference.dof and not child:
-        reporting.warn(f"{session.urdf.name}: no joint moves its tip link; every input makes the same call")
+        reporting.warn(f"{session.urdf.name}: no joint moves its tip link; {tip_hint(session.urdf)}")
     if child:
         defer_to_next_input()  # a worker's SIGINT, in its start-up too, ends it at an input's start
         end_with_supervisor()  # a -jobs worker outlived a supervisor killed alone

@@ -85,18 +85,22 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             "(`fuzz_diff.py replay FILE` replays a file, `fuzz_diff.py show FILE` prints it)"
         )
     config, _ = config_from(args)
+    from fuzzer.artifacts.travel import CONFIGURATION
+
     created = [p for p in (*args.corpus, args.artifacts) if not p.exists()]
+    noted = os.path.lexists(args.artifacts / CONFIGURATION)
     try:
         return _campaign(flags, args, config)
     except (UsageError, ConfigError):
-        from fuzzer.artifacts.travel import CONFIGURATION
-
         for path in created:  # a refused campaign leaves no empty folder behind (nor its own records)
             with contextlib.suppress(OSError):
                 (path / CONFIGURATION).unlink(missing_ok=True)
                 (path / MARKERS).rmdir()
             with contextlib.suppress(OSError):
                 path.rmdir()
+        if not noted and args.artifacts not in created:  # nor its line in a folder that was there:
+            with contextlib.suppress(OSError):  # later campaigns warned of "crash files of a
+                (args.artifacts / CONFIGURATION).unlink(missing_ok=True)  # campaign" it never ran
         raise
 
 
@@ -248,10 +252,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"unrecognized arguments: {' '.join(extra)}")
         return campaign_main(flags, known)
     except FolderUnwritable as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
         return WRITE_FAILED_EXIT
     except (UsageError, ConfigError) as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(str(exc), reporting.LINES)}\n")
+        sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
         return 2
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()

@@ -133,6 +133,20 @@ def default_tip(urdf: Urdf) -> str:
     return link
 
 
+def deepest_links(urdf: Urdf, n: int = 4) -> list[str]:
+    """Up to ``n`` leaf links with the most movable joints above them, most first (then by name):
+    the tip links to suggest where :func:`default_tip` stops at a tie (Baxter's two arms)."""
+    depth = {urdf.root: 0}
+    stack = [urdf.root]
+    while stack:
+        link = stack.pop()
+        for j in urdf.child_joints[link]:
+            depth[j.child] = depth[link] + (j.type in MOVABLE)
+            stack.append(j.child)
+    leaves = [link for link in depth if not urdf.child_joints[link] and depth[link] > 0]
+    return sorted(leaves, key=lambda link: (-depth[link], link))[:n]
+
+
 def _check_joint(j: Joint) -> None:
     who = f"joint '{j.name}'"
     if j.type in ("floating", "planar"):

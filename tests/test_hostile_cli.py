@@ -532,6 +532,15 @@ def test_a_robot_with_no_joint_to_move_is_warned_of(tmp_path: Path) -> None:
     run = fuzz(str(tmp_path / "c"), "--op=fk", "-runs=5", f"--robot={robot}", f"--artifacts={tmp_path / 'a'}")
     assert run.returncode == 0, run.stderr[-2000:]
     assert "one.urdf: no joint moves its tip link; every input makes the same call" in run.stderr
+    assert "--tip-link" not in run.stderr, "no link to suggest: the robot has no joint"
+
+
+def test_a_tie_of_the_default_tip_rule_suggests_tip_links(tmp_path: Path) -> None:
+    """Baxter's two arms tie, so the default tip is its torso: 69,143 executions that tested
+    nothing read as a clean pass (a helper's probe). The warning names tip links to choose."""
+    run = fuzz(str(tmp_path / "c"), "--op=fk", "-runs=5", "--robot=baxter", f"--artifacts={tmp_path / 'a'}")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "nothing is tested; pass --tip-link l_gripper_l_finger_tip or " in run.stderr
 
 
 def test_show_into_a_reader_that_leaves_early_ends_with_141(tmp_path: Path) -> None:

@@ -62,6 +62,31 @@ def test_q_minus_q_away_from_the_boundary_stays_a_representation_divergence(w: f
     assert c.unit == "rad" and c.difference < 1e-6 and c.raw == pytest.approx(2 * s)
 
 
+def test_a_position_one_ulp_apart_past_float64_s_resolution_is_agreement() -> None:
+    """A helper's ``--no-filter`` campaign: PR2's torso at 6e12 m put pinocchio's tip at
+    6000000000000.791 and KDL's at 6000000000000.79, one ulp (0.000977 m) apart, the first the
+    correctly rounded value; it was a finding between correct implementations. Near the arm,
+    a 2e-6 m gap stays a divergence, and so does a real gap at that magnitude."""
+    quat = (0.0, 0.0, 0.0, 1.0)
+    z = 6000000000000.79
+    far = compare(
+        ok(position=(0.1, 0.2, z), orientation=quat),
+        ok(position=(0.1, 0.2, math.nextafter(z, math.inf)), orientation=quat),
+        TOL,
+    )
+    assert far.kind is Kind.AGREE
+    near = compare(
+        ok(position=(0.1, 0.2, 0.3), orientation=quat),
+        ok(position=(0.1, 0.2, 0.300002), orientation=quat),
+        TOL,
+    )
+    assert near.kind is Kind.VALUE and near.field == "position"
+    wrong = compare(
+        ok(position=(0.1, 0.2, z), orientation=quat), ok(position=(0.1, 0.2, z + 1.0), orientation=quat), TOL
+    )
+    assert wrong.kind is Kind.VALUE
+
+
 def test_continuous_joint_at_the_pi_boundary() -> None:
     near, other = math.pi - 1e-12, -math.pi + 1e-12
     a, b = ok(joint_values=(near, 0.1)), ok(joint_values=(other, 0.1))

@@ -61,6 +61,8 @@ def load_target(spec: str) -> Any:
         module = importlib.import_module(module_name)
     except Exception as exc:  # noqa: BLE001 - any import failure is reported the same way
         raise TargetError(f"target {spec!r}: cannot import {module_name}: {exc}") from None
+    except SystemExit as exc:  # a library that calls exit() on import ended the command without a word
+        raise TargetError(f"target {spec!r}: importing {module_name} called exit({exc.code!r})") from None
     impl = module
     if attribute is not None:
         try:
