@@ -98,7 +98,10 @@ contract accepts the URDF: ``JointModelMimic`` needs the mimic and master joints
 to have configuration spaces of one size, so a continuous joint (``nq = 2``)
 mimicking a revolute or prismatic one (``nq = 1``), or the reverse, cannot be
 built ("Mimicking and mimicked configuration spaces have different sizes"), even
-off the chain, since pinocchio builds the whole tree.
+off the chain, since pinocchio builds the whole tree. And a bug (FINDINGS.md, F-PIN-2):
+its URDF parser adds a mimic joint when its walk of the tree reaches it, and refuses
+one whose master it has not reached yet ("The parent joint of the mimic joint is not
+in the kinematic tree"), such as a sibling whose name sorts first (Romeo's fingers).
 """
 
 from __future__ import annotations

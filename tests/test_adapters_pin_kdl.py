@@ -454,6 +454,29 @@ def test_pinocchio_cannot_mimic_across_joint_sizes() -> None:
     assert np.max(np.abs(got - expected)) <= TOL
 
 
+def _mimic_siblings(master: str, mimic: str) -> str:
+    limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+    return (
+        '<robot name="r"><link name="a"/><link name="b"/><link name="c"/>'
+        f'<joint name="{master}" type="revolute"><parent link="a"/><child link="b"/>'
+        f'<axis xyz="0 0 1"/>{limit}</joint>'
+        f'<joint name="{mimic}" type="revolute"><parent link="a"/><child link="c"/>'
+        f'<axis xyz="0 0 1"/>{limit}'
+        f'<mimic joint="{master}" multiplier="2" offset="0"/></joint></robot>'
+    )
+
+
+def test_pinocchio_refuses_a_mimic_joint_whose_name_sorts_before_its_master_s() -> None:
+    """F-PIN-2 (FINDINGS.md): the same valid tree builds with master m and mimic s, and is
+    refused with master z and mimic a; native accepts both."""
+    impl = load("pinocchio")
+    for names in (("m", "s"), ("z", "a")):
+        assert native.RobotModel(_mimic_siblings(*names), "c").dof == 1
+    assert impl.RobotModel(_mimic_siblings("m", "s"), "c").dof == 1
+    with pytest.raises(URDFError, match="The parent joint of the mimic joint is not in the kinematic tree"):
+        impl.RobotModel(_mimic_siblings("z", "a"), "c")
+
+
 def test_absurd_ik_targets_do_not_escape() -> None:
     """1e308 targets make NaN iterates: NO_SOLUTION everywhere (the twin once raised LinAlgError there)."""
     path = robot_path("kinova")
