@@ -85,6 +85,13 @@ def test_a_position_one_ulp_apart_past_float64_s_resolution_is_agreement() -> No
         ok(position=(0.1, 0.2, z), orientation=quat), ok(position=(0.1, 0.2, z + 1.0), orientation=quat), TOL
     )
     assert wrong.kind is Kind.VALUE
+    for odd in (math.inf, math.nan):  # no magnitude: the tolerance alone, as before
+        gap = compare(
+            ok(position=(odd, 0.0, 1.0), orientation=quat),
+            ok(position=(1.0, 0.0, 1.0), orientation=quat),
+            TOL,
+        )
+        assert gap.kind is Kind.VALUE
 
 
 def test_continuous_joint_at_the_pi_boundary() -> None:
