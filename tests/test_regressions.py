@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import pytest
@@ -39,6 +40,10 @@ def test_regression(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         assert result.result is Result.SAME, f"{path.name}: {result.result} {result.detail}"
         assert result.evaluation is not None and result.evaluation.signature is not None
         assert result.evaluation.signature.key == sidecar["regression"]["signature"]
+        # the sidecar describes this file (the minimizer of 2026-11-22 kept the original
+        # input's call, outcomes and sha1 in eight minimized files; FINDINGS quoted them)
+        assert sidecar["sha1"] == hashlib.sha1(path.read_bytes()).hexdigest()
+        assert sidecar["difference"] == pytest.approx(result.evaluation.difference, rel=1e-9, abs=1e-15)
 
 
 def test_promote_refuses_contradicting_claims(tmp_path: Path) -> None:
