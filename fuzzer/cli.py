@@ -88,9 +88,17 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
     from fuzzer.artifacts.travel import CONFIGURATION
 
     created = [p for p in (*args.corpus, args.artifacts) if not p.exists()]
-    noted = os.path.lexists(args.artifacts / CONFIGURATION)
+    from fuzzer.artifacts.divlog import STATS
+
+    records = [name for name in (CONFIGURATION, STATS) if not os.path.lexists(args.artifacts / name)]
+    markers = not os.path.lexists(args.artifacts / MARKERS)
     try:
         return _campaign(flags, args, config)
+    except (OSError, ArtifactsUnwritable):  # a full disk: its line made later campaigns warn of
+        if CONFIGURATION in records and not any(args.artifacts.glob("crash-*")):  # "crash files of
+            with contextlib.suppress(OSError):  # a campaign on another configuration" it never ran
+                (args.artifacts / CONFIGURATION).unlink(missing_ok=True)
+        raise
     except (UsageError, ConfigError):
         for path in created:  # a refused campaign leaves no empty folder behind (nor its own records)
             with contextlib.suppress(OSError):
@@ -98,9 +106,13 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
                 (path / MARKERS).rmdir()
             with contextlib.suppress(OSError):
                 path.rmdir()
-        if not noted and args.artifacts not in created:  # nor its line in a folder that was there:
-            with contextlib.suppress(OSError):  # later campaigns warned of "crash files of a
-                (args.artifacts / CONFIGURATION).unlink(missing_ok=True)  # campaign" it never ran
+        if args.artifacts not in created:  # nor its records in a folder that was there (its line
+            for name in records:  # made later campaigns warn of "crash files of a campaign" it never ran)
+                with contextlib.suppress(OSError):
+                    (args.artifacts / name).unlink(missing_ok=True)
+            if markers:
+                with contextlib.suppress(OSError):
+                    (args.artifacts / MARKERS).rmdir()  # only when empty
         raise
 
 
@@ -163,6 +175,12 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
             "the others' choices (a probe's two jobs evaluated 259 of 995 divergent inputs twice); "
             "leave -seed out, and each job draws its own"
         )
+    malloc_limit = flag_value(tuple(flags), "-malloc_limit_mb")
+    if malloc_limit not in (None, "0") and not travel.is_child():
+        reporting.warn(
+            f"-malloc_limit_mb={malloc_limit} does nothing here: libFuzzer's malloc hooks need a "
+            "sanitizer's allocator, which Atheris' build has not; -rss_limit_mb limits memory (exit 71)"
+        )
     flags, drawn = drawn_seed(tuple(flags), tuple(args.corpus))  # after ours: it stays as it was
     drawn_note = (
         f"libFuzzer's -seed={drawn}: drawn for this campaign (given no -seed, or -seed=0); "
@@ -181,7 +199,7 @@ def _campaign(flags: Sequence[str], args: argparse.Namespace, config: Any) -> in
         raise UsageError(str(exc)) from None
     dictionary = flag_value(flags, "-dict")  # the last, as libFuzzer takes it
     if dictionary is not None:
-        dict_problem = file_problem(Path(dictionary))
+        dict_problem = "an empty path" if not dictionary else file_problem(Path(dictionary))  # not "."
         if dict_problem is not None:
             raise UsageError(f"-dict={dictionary}: {dict_problem}")
         try:  # libFuzzer refuses a bad one only after start-up, with an exit status of its own
@@ -239,6 +257,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             }[argv[0]]
             return handler(argv[1:])
         flags, rest = split_flags(argv)
+        from fuzzer.processes import flag_value
+
+        help_flag = flag_value(tuple(flags), "-help")
+        if help_flag is not None and help_flag.strip() not in ("", "0"):
+            return _libfuzzer_help()
         parser = campaign_parser()
         known, extra = parser.parse_known_args(rest)
         if not flags and known.corpus and all(p.is_file() for p in known.corpus):  # fuzz_diff.py CRASH...
@@ -279,6 +302,18 @@ def _show_main(argv: Sequence[str]) -> int:
     from fuzzer.triage.show import show_main
 
     return show_main(argv)
+
+
+def _libfuzzer_help() -> int:
+    """``-help=1``: libFuzzer's own flag list, and nothing else, as libFuzzer does (it ran the
+    dry run, wrote seeds and crash files, and needed a corpus first)."""
+    import atheris
+
+    sys.stdout.write("fuzz_diff.py passes these libFuzzer flags on (its own options: --help):\n")
+    sys.stdout.flush()
+    atheris.Setup([sys.argv[0] or "fuzz_diff.py", "-help=1"], lambda data: None)
+    atheris.Fuzz()
+    return 0
 
 
 def _export_bag_main(argv: Sequence[str]) -> int:

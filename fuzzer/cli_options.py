@@ -36,7 +36,7 @@ exit status of a campaign:
   0   no new divergence          1   new divergences (crash files written by this run)
   2   usage error, or libFuzzer's own error (the summary says so)
   70  a timeout (libFuzzer's -timeout_exitcode; also when a -fork/-jobs worker timed out)
-  71  out of memory (libFuzzer's -rss_limit_mb, -malloc_limit_mb)
+  71  out of memory (libFuzzer's -rss_limit_mb)
   74  a folder could not be written (a full disk, a read-only mount, a corpus folder
       removed during the campaign), with a message naming it and any divergent input it
       could not save

@@ -6,6 +6,7 @@ when one of these runs."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -214,6 +215,7 @@ def report_main(argv: Sequence[str]) -> int:
     if not args.directory.is_dir():
         raise UsageError(f"{args.directory}: not a folder")
     robots = _robots_by_digest(args.robot)
+    _unused_robots(args.directory, robots)
     output = args.output
     if output is None:
         output = args.directory / "report"
@@ -240,6 +242,27 @@ def _robots_by_digest(given: Sequence[str]) -> dict[str, str]:
     return out
 
 
+def _unused_robots(directory: Path, robots: dict[str, str]) -> None:
+    """Warn of a ``report --robot`` that no sidecar of ``directory`` records (it did nothing)."""
+    if not robots:
+        return
+    from fuzzer.artifacts.store import load_sidecar
+    from fuzzer.input.paths import crash_inputs
+
+    recorded = set()
+    try:
+        for path in crash_inputs([directory]):
+            sidecar = load_sidecar(path)
+            digest = sidecar.get("robot_sha256") if isinstance(sidecar, dict) else None
+            if isinstance(digest, str):
+                recorded.add(digest.lower())
+    except (ConfigError, OSError):
+        return  # the report says what it cannot read
+    for digest, robot in robots.items():
+        if digest not in recorded:
+            reporting.warn(f"--robot {robot}: no crash file here records its SHA-256; it is not used")
+
+
 def promote_main(argv: Sequence[str]) -> int:
     from fuzzer.triage.regressions import SUITE, PromoteError, promote
 
@@ -264,7 +287,7 @@ def promote_main(argv: Sequence[str]) -> int:
             trust = args.trust_sidecar
             done = promote(crash, args.fixed, args.note, args.suite, trust=trust, robot=args.robot)
         except PromoteError as exc:
-            reporting.out(reporting.shown(f"not promoted: {exc}"))
+            reporting.out(reporting.bounded(reporting.shown(f"not promoted: {exc}")))
             status = max(status, 1)
             continue
         reporting.out(reporting.shown(f"promoted {done.path} (expect: {done.expect})"))
@@ -308,6 +331,14 @@ def coverage_main(argv: Sequence[str]) -> int:
     from fuzzer.input.paths import prepare_folder
 
     # a path through a file said "Not a directory" and exited 74; read-only still exits 74
+    made = not args.html.exists()
     prepare_folder(args.html, "--html", writable=True)
-    reporting.out(measure(list(args.corpus), config, args.html).line())
+    try:
+        totals = measure(list(args.corpus), config, args.html)
+    except (ConfigError, OSError):
+        if made:  # a refused run leaves no empty folder behind
+            with contextlib.suppress(OSError):
+                args.html.rmdir()
+        raise
+    reporting.out(totals.line())
     return 0

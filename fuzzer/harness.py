@@ -295,9 +295,12 @@ class Harness(MutationStep):
         if lost is not None:
             text += (
                 f". The first input of the new divergence signature {key} could not be saved; "
-                f"its test case, to save as a file and replay:\n{lost.decode('utf-8', 'backslashreplace')}"
+                "its test case, to save as a file and replay, is the next line"
             )
         reporting.error(text)
+        if lost is not None:  # whole and on a line of its own: an error line is bounded and indented
+            sys.stderr.write(reporting.shown(lost.decode("utf-8", "backslashreplace")) + "\n")
+            sys.stderr.flush()
         return ArtifactsUnwritable(text)
 
     def _step_features(self, ev: Evaluation) -> None:

@@ -35,7 +35,7 @@ SUPERVISOR_ENV = "RROSFUZZ_SUPERVISOR"
 TIMEOUT_EXIT = 70
 """libFuzzer's -timeout_exitcode default."""
 OOM_EXIT = 71
-"""libFuzzer's status after an out-of-memory (``-rss_limit_mb``, ``-malloc_limit_mb``; no flag sets it)."""
+"""libFuzzer's status after an out-of-memory (``-rss_limit_mb``; no flag sets it)."""
 ERROR_EXIT = 77
 """libFuzzer's -error_exitcode default: a deadly signal, or ``--stop-on-divergence``."""
 PATH_FLAGS = (

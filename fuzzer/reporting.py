@@ -34,6 +34,14 @@ MESSAGE_LINES = 40
 """At most this many lines of a warning or error (a log's last lines are fewer)."""
 
 
+def bounded(line: str) -> str:
+    """``line`` with its middle left out (and counted) past ``MESSAGE_LINE_CHARS``."""
+    if len(line) <= MESSAGE_LINE_CHARS:
+        return line
+    half = MESSAGE_LINE_CHARS // 2
+    return f"{line[:half]} ... ({len(line) - 2 * half} characters left out) ... {line[-half:]}"
+
+
 def message(text: str) -> str:
     """A warning's or error's text for the terminal: unprintable characters escaped
     (:func:`shown`) but its own line breaks, each continuation line indented (so that a line
@@ -43,13 +51,7 @@ def message(text: str) -> str:
     lines = shown(text, LINES).split("\n")
     if len(lines) > MESSAGE_LINES:
         lines = [*lines[: MESSAGE_LINES - 1], f"... ({len(lines) - MESSAGE_LINES + 1} more lines)"]
-    bounded = []
-    for line in lines:
-        if len(line) > MESSAGE_LINE_CHARS:
-            half = MESSAGE_LINE_CHARS // 2
-            line = f"{line[:half]} ... ({len(line) - 2 * half} characters left out) ... {line[-half:]}"
-        bounded.append(line)
-    return "\n    ".join(bounded)
+    return "\n    ".join(map(bounded, lines))
 
 
 def warn(text: str) -> None:
@@ -288,4 +290,4 @@ def shown(text: str, keep: str = "") -> str:
 
 
 def verdict(path: str, text: str, detail: str = "") -> None:
-    out(shown(f"{path}: {text}" + (f" ({detail})" if detail else "")))
+    out(bounded(shown(f"{path}: {text}" + (f" ({detail})" if detail else ""))))

@@ -74,6 +74,7 @@ def test_coverage_refuses_what_it_cannot_use_with_a_clear_error(tmp_path: Path) 
     run = cli("coverage", str(corpus), "--msg-type", "std_msgs/String", "--html", "h1", cwd=tmp_path)
     assert run.returncode == 2 and "cannot use std_msgs/String" in run.stderr, run.stderr[-800:]
     assert "Traceback" not in run.stderr  # it was MappingError's traceback, exit 1
+    assert not (tmp_path / "h1").exists(), "a refused run leaves no empty --html folder"
     (tmp_path / "a-file").write_text("x")
     run = cli("coverage", str(corpus), "--html", "a-file/h", cwd=tmp_path)
     assert run.returncode == 2 and "a-file is a file" in run.stderr, run.stderr[-800:]  # it said 74
@@ -139,3 +140,33 @@ def test_a_target_whose_import_calls_exit_is_a_clear_error(tmp_path: Path) -> No
     run = cli("corpus", "--targets", "native,quitter:api", "-runs=1", cwd=tmp_path, extra_path=modules)
     assert run.returncode == 2, run.stderr[-800:]
     assert "target 'quitter:api': importing quitter called exit(3)" in run.stderr
+
+
+def test_help_1_prints_libfuzzer_s_flags_and_does_nothing_else(tmp_path: Path) -> None:
+    """``-help=1`` needed a corpus, and with one it wrote seeds, ran the dry run and wrote crash
+    files before libFuzzer printed its list."""
+    run = cli("-help=1", cwd=tmp_path)
+    assert run.returncode == 0 and "Usage:" in run.stderr and "max_len" in run.stderr, run.stderr[-800:]
+    run = cli("corpus", "-help=1", "--artifacts", "art", cwd=tmp_path)
+    assert run.returncode == 0 and "Usage:" in run.stderr
+    assert list(tmp_path.iterdir()) == [], "nothing is written"
+
+
+def test_malloc_limit_mb_is_said_to_do_nothing(tmp_path: Path) -> None:
+    run = cli("corpus", "-malloc_limit_mb=300", "-runs=0", "--artifacts", "art", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-800:]
+    assert "-malloc_limit_mb=300 does nothing here" in run.stderr
+
+
+def test_a_verdict_line_is_bounded(capsys: Any) -> None:
+    """A sidecar's 1.5 MB target name came back whole in "replayed with ... (the campaign's: ...)"."""
+    reporting.verdict(
+        "crash-x", "now agrees", "replayed with targets a,b (the campaign's: a," + "x" * 100_000 + ")"
+    )
+    line = capsys.readouterr().out
+    assert len(line) < 2 * reporting.MESSAGE_LINE_CHARS + 100 and "characters left out" in line
+
+
+def test_an_empty_dict_path_is_named_as_empty(tmp_path: Path) -> None:
+    run = cli("corpus", "-dict=", "-runs=0", "--artifacts", "art", cwd=tmp_path)
+    assert run.returncode == 2 and "-dict=: an empty path" in run.stderr, run.stderr[-800:]  # "is a folder"

@@ -25,6 +25,8 @@ def test_integer_flags_in_range_pass(flags: tuple[str, ...]) -> None:
         ("-seed=-3", "-seed takes an integer from 0"),
         ("-seed=4294967296", "to 4294967295"),
         ("-runs=-2", "-runs takes an integer from -1"),
+        ("-runs=4294967296", "-runs takes an integer from -1 to 2147483647"),  # libFuzzer ran 0
+        ("-use_cmp=abc", "-use_cmp takes an integer"),  # libFuzzer read 0: tracing off, silently
         ("-mutate_depth=0", "-mutate_depth takes an integer from 1"),
         ("-jobs", "-jobs takes an integer"),  # no value at all
         ("-jobs=", "-jobs takes an integer"),

@@ -100,6 +100,32 @@ def test_promote_into_a_suite_that_takes_no_file_exits_74(
         promote(known, fixed=False, suite=tmp_path, trust=True)
 
 
+def test_promote_leaves_no_crash_file_without_its_sidecar(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A suite with room for the crash file but not its sidecar kept the file alone (its test
+    then failed for want of a sidecar)."""
+    import errno
+    import os
+
+    from fuzzer.input.paths import FolderUnwritable
+    from fuzzer.triage import regressions
+
+    monkeypatch.chdir(ROOT)
+    known = next(p for p in FILES if load_sidecar(p)["regression"]["expect"] == "diverge")  # type: ignore[index]
+    write = regressions.atomic_write
+
+    def full_for_sidecars(path: Path, data: bytes) -> None:
+        if path.name.endswith(".json"):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        write(path, data)
+
+    monkeypatch.setattr(regressions, "atomic_write", full_for_sidecars)
+    with pytest.raises(FolderUnwritable, match="cannot hold the crash file and its sidecar"):
+        promote(known, fixed=False, suite=tmp_path, trust=True)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_replay_on_another_robot_file_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The sidecar's ``robot_sha256`` against today's file: a robot edited since the campaign
     made "now agrees" read as a fix, without a word (the URDF probe)."""
@@ -236,6 +262,8 @@ def test_a_replay_under_settings_other_than_the_campaign_s_names_them(
     assert "replayed with targets native,native (the campaign's: native,python)" in other.detail
     looser = replay_file(fixed, RunConfig(), {"tolerance": Tolerance(1e-3, 1e-3)}, trust=True)
     assert "tolerance 0.001 m / 0.001 rad (the campaign's: 1e-06 m / 1e-06 rad)" in looser.detail
+    tip = replay_file(fixed, RunConfig(), {"tip_link": "link_4"}, trust=True)
+    assert "tip link link_4 (the campaign's: the default)" in tip.detail  # another chain
     copy = tmp_path / fixed.name
     shutil.copyfile(fixed, copy)
     sidecar = load_sidecar(fixed)

@@ -551,7 +551,7 @@ def test_report_robot_replaces_a_relative_robot_path_by_its_sha256(
     car["config"]["robot"] = "my.urdf"
     car["robot_sha256"] = hashlib.sha256(urdf.read_bytes()).hexdigest()
     crash.with_name(crash.name + ".json").write_text(json.dumps(car))
-    monkeypatch.chdir(tmp_path)
+    monkeypatch.chdir(crash.parent)  # the file lies outside both the folder and the working one
     unresolved = "robot &#x27;my.urdf&#x27; is neither a shipped robot nor an existing file"
     assert unresolved in write_report(crash.parent, tmp_path / "r1", trust=True).read_text()
     digest = car["robot_sha256"]

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import stat
 from dataclasses import replace
 from pathlib import Path
@@ -156,7 +157,15 @@ def check_given_robot(robot: str, digest: object, source: Path) -> None:
     mine = robot_digest(robot)
     if mine is None:
         raise SidecarError(f"--robot {robot}: neither a shipped robot nor a readable file")
-    if isinstance(digest, str) and digest and mine != digest:
+    if digest is None or digest == "":
+        from fuzzer.reporting import warn
+
+        warn(f"{source}: its sidecar records no robot_sha256, so --robot {robot} is not checked")
+        return
+    if not isinstance(digest, str) or not re.fullmatch(r"[0-9a-fA-F]{64}", digest):
+        raise SidecarError(f"{source}: its sidecar's robot_sha256 is not a SHA-256 (64 hex digits)")
+    digest = digest.lower()
+    if mine != digest:
         raise SidecarError(
             f"--robot {robot}: not the robot file {source}'s campaign ran on (its SHA-256 "
             f"{mine[:12]} differs from the sidecar's robot_sha256 {digest[:12]})"

@@ -165,8 +165,8 @@ rounded value, and was a finding between two correct implementations."""
 
 
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
-    gap = math.sqrt(sum(_finite_gap(x, y) ** 2 for x, y in zip(a, b, strict=True)))
-    gap = gap if math.isfinite(gap) else math.inf
+    # hypot, not the square root of squares: a gap above 1.3e154 m raised OverflowError
+    gap = math.hypot(*(_finite_gap(x, y) for x, y in zip(a, b, strict=True)))
     # one comparison, not one per coordinate: each is a site the float tracer spends its budget on
     scale = max(map(abs, (*a, *b)), default=0.0)
     if not scale < math.inf:  # an infinity or a NaN: no magnitude to scale by

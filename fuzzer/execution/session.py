@@ -307,7 +307,6 @@ def same_robot(a: Any, b: Any, name: str) -> None:
         )
 
 
-@functools.cache
 def tip_hint(urdf: Path) -> str:
     """What a campaign on a chain without joints should do instead: the default tip rule stops
     at a tie (Baxter's two arms), and "0 divergences" of 69,143 executions that tested nothing
@@ -323,6 +322,7 @@ def tip_hint(urdf: Path) -> str:
     return f"every input makes the same call, and nothing is tested{choose}"
 
 
+@functools.cache
 def versions() -> dict[str, str]:
     """Versions worth recording with an artifact, looked up once per process (about 14 ms:
     package metadata and ``dpkg-query``). A campaign asks when it writes its first sidecar,

@@ -47,11 +47,12 @@ INT_FLAGS: dict[str, tuple[int, int]] = {
             "-minimize_crash", "-shrink", "-reduce_inputs", "-close_fd_mask", "-report_slow_units",
             "-prefer_small", "-only_ascii", "-use_counters", "-cross_over", "-detect_leaks", "-entropic",
             "-keep_seed", "-reload", "-error_exitcode", "-timeout_exitcode", "-ignore_crashes",
+            "-use_cmp", "-print_pcs", "-print_corpus_stats", "-use_memmem",
         ),
         (0, 2**31 - 1),
     ),
     "-seed": (0, 2**32 - 1),  # an unsigned int; 0 draws one
-    "-runs": (-1, 2**63 - 1),  # -1: no limit
+    "-runs": (-1, 2**31 - 1),  # -1: no limit; an int in libFuzzer (2**32 became 0 runs, silently)
     "-mutate_depth": (1, 2**31 - 1),
 }  # fmt: skip
 """libFuzzer's integer flags that a campaign checks before handing them over, with their ranges.

@@ -89,13 +89,14 @@ class Sessions:
     def get(
         self, config: Mapping[str, Any], source: Path = Path("sidecar"), digest: object = None
     ) -> Session | str:
-        if isinstance(digest, str) and digest in self.robots:
-            config = {**config, "robot": self.robots[digest]}
-        key = json.dumps(config, sort_keys=True, default=str)
+        given = {}
+        if isinstance(digest, str) and digest.lower() in self.robots:  # the user's file: not checked
+            given = {"robot": self.robots[digest.lower()]}  # against the folder, as --robot never is
+        key = json.dumps([config, given], sort_keys=True, default=str)
         if key not in self._cache:
             try:
                 validate_config(dict(config), source)
-                recorded = config_from({"config": dict(config)}, source, {}, self.trust)
+                recorded = config_from({"config": dict(config)}, source, given, self.trust)
                 self._cache[key] = Session.open(recorded)
             except SidecarError as exc:
                 self._cache[key] = str(exc)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import shlex
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -388,6 +389,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
         raise BagError(str(exc)) from None
     output = args.output or args.crash.with_name(args.crash.name + ".bag")
     topics = export_bag(args.crash, output, args.trust_sidecar, args.robot)
-    reporting.out(f"wrote {output}: {', '.join(topics)}")
-    reporting.out(f"play it: rosbag play {output}")
+    # a file name is shown escaped (a line break in it printed a line of its own) and quoted
+    reporting.out(reporting.bounded(reporting.shown(f"wrote {output}: {', '.join(topics)}")))
+    reporting.out(reporting.shown(f"play it: rosbag play {shlex.quote(str(output))}"))
     return 0

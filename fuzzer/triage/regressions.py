@@ -109,7 +109,8 @@ def promote(
             raise _cannot_hold(suite, exc) from None
         raise PromoteError(f"{crash}: its robot file cannot be kept in --suite {suite} ({exc})") from None
     try:
-        if not (target.exists() and target.samefile(crash)):  # promoted again (--fixed): in place
+        copied = not (target.exists() and target.samefile(crash))
+        if copied:  # not promoted again (--fixed) in place
             # written whole and renamed over the name: a symlink planted there is replaced, not
             # followed (shutil.copyfile wrote the crash file over whatever it pointed at)
             atomic_write(target, read_bytes(crash))
@@ -128,9 +129,15 @@ def promote(
         entry["config"] = {**sidecar["config"], "robot": _suite_name(kept, suite)}
         entry["robot_path"] = str(kept)
         entry["regression"]["robot_from"] = robot
+    elif robot != sidecar["config"].get("robot", robots.DEFAULT_ROBOT):  # --robot NAME, the same file:
+        entry["config"] = {**sidecar["config"], "robot": robot}  # the name replays from anywhere
+        entry["robot_path"] = str(robots.resolve(robot))  # (it kept a path relative to another folder)
+        entry["regression"]["robot_from"] = sidecar["config"].get("robot")
     try:
         atomic_write(sidecar_path(target), json.dumps(entry, indent=1, sort_keys=True).encode())
     except OSError as exc:
+        if copied:  # no crash file without its sidecar in the suite (its test would fail)
+            target.unlink(missing_ok=True)
         raise _cannot_hold(suite, exc) from None
     return Promoted(target, entry["regression"]["expect"])
 
@@ -139,7 +146,7 @@ def _cannot_hold(suite: Path, exc: OSError) -> PromoteError | FolderUnwritable:
     """The error for a suite folder that took no file: a read-only, full or foreign one exits 74
     for every file, as any folder that takes no file does (it exited 1, "not promoted"); a bad
     path (through a file) is this file's "not promoted"."""
-    message = f"--suite {suite}: cannot hold the crash file ({exc.strerror or exc})"
+    message = f"--suite {suite}: cannot hold the crash file and its sidecar ({exc.strerror or exc})"
     return FolderUnwritable(message) if exc.errno in WRITE_FAILURES else PromoteError(message)
 
 

@@ -233,11 +233,21 @@ def settings_changed(config: RunConfig, sidecar: dict[str, Any] | None) -> str:
     targets = recorded.get("targets", list(BUILTIN_TARGETS))
     if isinstance(targets, list) and tuple(targets) != config.targets:
         out.append(f"targets {','.join(config.targets)} (the campaign's: {','.join(map(str, targets))})")
-    for name in ("op", "transport"):
+    for name, label in (
+        ("op", "op"),
+        ("transport", "transport"),
+        ("tip_link", "tip link"),
+        ("max_steps", "max steps"),
+    ):
         was = recorded.get(name, RunConfig.__dataclass_fields__[name].default)
         now = getattr(config, name)
-        if isinstance(was, str) and was != now:
-            out.append(f"{name} {now} (the campaign's: {was})")
+        if isinstance(was, str | int | type(None)) and not isinstance(was, bool) and was != now:
+            out.append(
+                f"{label} {_or_default(now)} (the campaign's: {_or_default(was)})"
+            )  # another tip: another chain
+    msg_type = recorded.get("msg_type")
+    if isinstance(msg_type, str) and msg_type and msg_type != config.message_type:
+        out.append(f"message type {config.message_type} (the campaign's: {msg_type})")
     tolerance = recorded.get("tolerance")
     if isinstance(tolerance, dict):
         was_m, was_rad = tolerance.get("m"), tolerance.get("rad")
@@ -252,6 +262,10 @@ def settings_changed(config: RunConfig, sidecar: dict[str, Any] | None) -> str:
     if isinstance(filtering, bool) and filtering != config.filtering:
         out.append("--no-filter" if not config.filtering else "the filter on (the campaign's: --no-filter)")
     return ", ".join(out)
+
+
+def _or_default(value: object) -> str:
+    return "the default" if value is None else str(value)
 
 
 def scenario_lines(case: TestCase, evaluation: Evaluation, targets: tuple[str, ...]) -> tuple[str, ...]:
