@@ -85,6 +85,10 @@ def test_a_position_one_ulp_apart_past_float64_s_resolution_is_agreement() -> No
         ok(position=(0.1, 0.2, z), orientation=quat), ok(position=(0.1, 0.2, z + 1.0), orientation=quat), TOL
     )
     assert wrong.kind is Kind.VALUE
+    huge = compare(
+        ok(position=(0.0, 0.0, 1e200), orientation=quat), ok(position=(0.0, 0.0, 1.0), orientation=quat), TOL
+    )
+    assert huge.kind is Kind.VALUE  # the square of the gap raised OverflowError
     for odd in (math.inf, math.nan):  # no magnitude: the tolerance alone, as before
         gap = compare(
             ok(position=(odd, 0.0, 1.0), orientation=quat),

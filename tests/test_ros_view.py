@@ -148,3 +148,25 @@ def test_a_relative_robot_path_from_another_folder_is_given_again_with_robot(
     assert model.dof == 6
     with pytest.raises(ConfigError, match=r"--robot ur5: not the robot file .* SHA-256 .* differs"):
         load(crash, robot="ur5")
+
+
+def test_a_robot_digest_that_is_no_sha256_is_refused_and_a_missing_one_is_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``robot_sha256: 12345`` turned the ``--robot`` check off; an uppercase copy of the right
+    digest was refused as "differs"."""
+    import hashlib
+
+    from fuzzer.artifacts.trust import check_given_robot
+    from fuzzer.execution.session import ConfigError
+    from robot_api import robots
+
+    source = tmp_path / "crash-x.json"
+    with pytest.raises(ConfigError, match="robot_sha256 is not a SHA-256"):
+        check_given_robot("probot_anno", "12345", source)
+    with pytest.raises(ConfigError, match="robot_sha256 is not a SHA-256"):
+        check_given_robot("probot_anno", 12345, source)
+    digest = hashlib.sha256(robots.resolve("probot_anno").read_bytes()).hexdigest()
+    check_given_robot("probot_anno", digest.upper(), source)
+    check_given_robot("probot_anno", None, source)
+    assert "records no robot_sha256, so --robot probot_anno is not checked" in capsys.readouterr().err
