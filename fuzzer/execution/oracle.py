@@ -167,11 +167,14 @@ rounded value, and was a finding between two correct implementations."""
 def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
     # hypot, not the square root of squares: a gap above 1.3e154 m raised OverflowError
     gap = math.hypot(*(_finite_gap(x, y) for x, y in zip(a, b, strict=True)))
-    # one comparison, not one per coordinate: each is a site the float tracer spends its budget on
-    scale = max(map(abs, (*a, *b)), default=0.0)
-    if not scale < math.inf:  # an infinity or a NaN: no magnitude to scale by
-        scale = 0.0
-    limit = tol.metres + ROUNDING * scale
+    # one comparison, not one per coordinate: each is a site the float tracer spends its budget
+    # on; and the magnitude only for a gap past the tolerance (a move campaign's samples in this
+    # function: 1.4% without it, 1.9% with it computed for every pair)
+    limit = tol.metres
+    if gap > limit:
+        scale = max(map(abs, (*a, *b)), default=0.0)
+        if scale < math.inf:  # an infinity or a NaN: no magnitude to scale by
+            limit += ROUNDING * scale
     flip = any((x < 0) != (y < 0) and abs(x - y) > limit for x, y in zip(a, b, strict=True))
     return _FieldDiff("position", gap, gap, limit, flip, unit="m")
 
