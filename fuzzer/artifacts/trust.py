@@ -145,12 +145,13 @@ def sidecar_model(
 
 def check_given_robot(robot: str, digest: object, source: Path) -> None:
     """Refuse a ``--robot`` that is not the campaign's file: its SHA-256 against the sidecar's
-    ``robot_sha256`` (``digest``; no check when the sidecar records none).
+    ``robot_sha256`` (``digest``, either case; when the sidecar records none, a warning says
+    that nothing was checked).
 
     Raises
     ------
     SidecarError
-        The file does not resolve, or its SHA-256 differs.
+        The file does not resolve, the sidecar's digest is no SHA-256, or the SHA-256 differs.
     """
     from fuzzer.artifacts.manifest import robot_digest
 
