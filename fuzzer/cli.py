@@ -85,11 +85,10 @@ def campaign_main(flags: Sequence[str], args: argparse.Namespace) -> int:
             "(`fuzz_diff.py replay FILE` replays a file, `fuzz_diff.py show FILE` prints it)"
         )
     config, _ = config_from(args)
+    from fuzzer.artifacts.divlog import STATS
     from fuzzer.artifacts.travel import CONFIGURATION
 
     created = [p for p in (*args.corpus, args.artifacts) if not p.exists()]
-    from fuzzer.artifacts.divlog import STATS
-
     records = [name for name in (CONFIGURATION, STATS) if not os.path.lexists(args.artifacts / name)]
     markers = not os.path.lexists(args.artifacts / MARKERS)
     try:

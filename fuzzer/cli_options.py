@@ -151,6 +151,17 @@ def trust_option(parser: argparse.ArgumentParser, overrides: bool = True) -> Non
     )
 
 
+def campaign_robot_option(parser: argparse.ArgumentParser, kept: str = "") -> None:
+    """``--robot`` of the commands that read one crash file's robot (``promote``, ``export-bag``,
+    ``view``): the campaign's file, for a sidecar path relative to another working folder."""
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
+        f"another working folder; it must be the campaign's file (SHA-256){kept}",
+    )
+
+
 def campaign_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fuzz_diff.py",

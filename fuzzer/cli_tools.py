@@ -14,7 +14,14 @@ from typing import Any
 
 from fuzzer import reporting
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT
-from fuzzer.cli_options import UsageError, config_from, config_options, replay_parser, trust_option
+from fuzzer.cli_options import (
+    UsageError,
+    campaign_robot_option,
+    config_from,
+    config_options,
+    replay_parser,
+    trust_option,
+)
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import given_path
 
@@ -273,12 +280,7 @@ def promote_main(argv: Sequence[str]) -> int:
     parser.add_argument("--fixed", action="store_true", help="it is fixed: the targets must agree on it")
     parser.add_argument("--note", default="", help="why it is kept")
     parser.add_argument("--suite", type=given_path, default=SUITE, help=f"suite folder (default {SUITE})")
-    parser.add_argument(
-        "--robot",
-        default=None,
-        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
-        "another working folder; it must be the campaign's file (SHA-256), and is kept in the suite",
-    )
+    campaign_robot_option(parser, ", and is kept in the suite")
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     status = 0

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzer import reporting
-from fuzzer.cli_options import trust_option
+from fuzzer.cli_options import campaign_robot_option, trust_option
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import FolderUnwritable, PathError, check_output_file, file_problem, given_path
 from fuzzer.input.testcase import MAX_BYTES
@@ -372,12 +372,7 @@ def export_bag_main(argv: Sequence[str]) -> int:
     )
     parser.add_argument("crash", type=given_path)
     parser.add_argument("-o", "--output", type=given_path, help="the bag to write (default: CRASH.bag)")
-    parser.add_argument(
-        "--robot",
-        default=None,
-        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
-        "another working folder; it must be the campaign's file (SHA-256)",
-    )
+    campaign_robot_option(parser)
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     problem = file_problem(args.crash)

@@ -36,7 +36,7 @@ import numpy as np
 
 from fuzzer import reporting
 from fuzzer.artifacts.store import atomic_write
-from fuzzer.cli_options import trust_option
+from fuzzer.cli_options import campaign_robot_option, trust_option
 from fuzzer.execution.session import ConfigError
 from fuzzer.input.paths import check_output_file, file_problem, given_path
 from fuzzer.ros import env, processes
@@ -332,12 +332,7 @@ def view_main(argv: Sequence[str]) -> int:
     parser.add_argument(
         "--seconds", type=float, default=60.0, help="with --screenshot: the longest wait for both arms (60)"
     )
-    parser.add_argument(
-        "--robot",
-        default=None,
-        help="the campaign's URDF file (or robot name), when the sidecar's path was relative to "
-        "another working folder; it must be the campaign's file (SHA-256)",
-    )
+    campaign_robot_option(parser)
     trust_option(parser, overrides=False)
     args = parser.parse_args(argv)
     problem = file_problem(args.crash)
