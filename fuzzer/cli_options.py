@@ -49,6 +49,7 @@ exit status of a campaign:
 """
 
 MUTATORS = ("rrosfuzz", "weights", "libfuzzer")
+FORWARDED_SEED = "--generation-seed"  # --seed, in the argv of libFuzzer's child processes
 """``--mutator``'s choices (the benchmark drivers pass one on)."""
 
 
@@ -186,6 +187,9 @@ def campaign_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--seed", type=int, default=None, help="seed of the seed generation (default: -seed or 0)"
     )
+    # --seed as it is handed to libFuzzer's child processes: libFuzzer warns "did you mean
+    # '-seed=N'" on a --seed=N in its argv, as if ours were its own flag mistyped
+    parser.add_argument(FORWARDED_SEED, dest="seed", type=int, default=None, help=argparse.SUPPRESS)
     parser.add_argument(
         "--seeds-from-bag",
         type=given_path,
@@ -303,7 +307,6 @@ def forwarded_options(args: argparse.Namespace) -> tuple[str, ...]:
         "targets",
         "tolerance",
         "msg_type",
-        "seed",
         "progress_interval",
         "mutator",
         "transport",
@@ -312,6 +315,8 @@ def forwarded_options(args: argparse.Namespace) -> tuple[str, ...]:
         value = getattr(args, name)
         if value is not None:
             out.append(f"--{name.replace('_', '-')}={value}")
+    if args.seed is not None:
+        out.append(f"{FORWARDED_SEED}={args.seed}")
     out += [f"--msg-path={p}" for p in args.msg_path]
     out += [f"--artifacts={args.artifacts.resolve()}"]
     for flag in ("no_filter", "stop_on_divergence", "no_progress"):

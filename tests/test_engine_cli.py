@@ -187,6 +187,9 @@ def test_a_campaign_given_no_seed_prints_the_one_it_drew_and_that_seed_repeats_i
         said = re.findall(r"libFuzzer's -seed=(\d+): drawn for this campaign", run.stderr)
         if extra is None:
             assert said == []  # a seed given is a seed used
+            # the harness's --seed reaches libFuzzer's argv (for its child processes) in a form
+            # libFuzzer does not take for its own -seed mistyped
+            assert "did you mean" not in run.stderr, run.stderr[-2000:]
         else:
             assert len(said) == 1, run.stderr[-2000:]
             drawn.append(int(said[0]))

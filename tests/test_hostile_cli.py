@@ -179,6 +179,20 @@ def test_jobs_get_as_many_workers_and_absolute_paths(tmp_path: Path) -> None:
     assert not any(f.startswith("-reload") for f in argv)  # jobs share their corpus by rereading it
 
 
+def test_the_forwarded_options_parse_back_to_the_same_campaign() -> None:
+    """libFuzzer's child processes (``-jobs``, ``-fork``) rerun our command from the tokens of
+    ``forwarded_options``: they parse back to the same options, and none is a libFuzzer flag
+    name behind ``--`` (``--seed=3`` drew libFuzzer's "did you mean '-seed=3'")."""
+    from fuzzer.cli_options import campaign_parser, forwarded_options
+
+    parser = campaign_parser()
+    args = parser.parse_args(["corpus", "--seed", "3", "--op", "fk", "--robot", "ur5", "--seeds=7"])
+    tokens = forwarded_options(args)
+    assert not any(t.startswith("--seed=") for t in tokens), tokens
+    again = parser.parse_args(["corpus", *tokens])
+    assert (again.seed, again.op, again.robot, again.seeds) == (3, "fk", "ur5", 7)
+
+
 def test_a_single_process_does_not_reread_its_corpus(monkeypatch: pytest.MonkeyPatch) -> None:
     """``-reload=0`` for one process (its corpus has no other writer; the reread made runs of one
     command differ), the user's ``-reload`` kept, none with ``-fork`` or in a worker of one."""
