@@ -181,6 +181,7 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             corpus=None if left else folders[0],
             artifacts=artifacts,
             timeout_code=timeout_code,
+            close_fd_mask=int_flag(options.libfuzzer_flags, "-close_fd_mask", 0),
         )
         dry.first()  # before the seeds exist
         # until libFuzzer runs, an exit (a usage error such as seeds Hypothesis cannot draw, a full
@@ -319,6 +320,8 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
             entries = os.environ["PYTHONPATH"].split(os.pathsep)
             os.environ["PYTHONPATH"] = os.pathsep.join(os.path.abspath(e) if e else e for e in entries)
         os.chdir(artifacts)  # libFuzzer writes fuzz-<job>.log into the working folder
+    if int_flag(options.libfuzzer_flags, "-close_fd_mask", 0) & 2:
+        reporting.keep_terminal()  # libFuzzer silences the target's stderr, not the engine's lines
     if options.mutator == "libfuzzer":  # baseline: libFuzzer's own byte-level mutations of the JSON
         atheris.Setup(argv, test_one_input)
     else:

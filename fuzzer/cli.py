@@ -274,10 +274,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.error(f"unrecognized arguments: {' '.join(extra)}")
         return campaign_main(flags, known)
     except FolderUnwritable as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
+        reporting.terminal().write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
         return WRITE_FAILED_EXIT
     except (UsageError, ConfigError) as exc:
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
+        reporting.terminal().write(f"fuzz_diff.py: error: {reporting.message(str(exc))}\n")
         return 2
     except BrokenPipeError:  # `... | head`: the reader is gone; end quietly, like other tools
         _silence_stdout()
@@ -286,12 +286,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return WRITE_FAILED_EXIT
     except OSError as exc:  # a full disk or a read-only folder (a campaign's seeds, a tool's output)
         where = f"{exc.filename}: " if exc.filename else ""
-        sys.stderr.write(f"fuzz_diff.py: error: {reporting.shown(f'{where}{exc.strerror or exc}')}\n")
+        reporting.terminal().write(
+            f"fuzz_diff.py: error: {reporting.shown(f'{where}{exc.strerror or exc}')}\n"
+        )
         _silence_stdout()
         return WRITE_FAILED_EXIT
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM before libFuzzer runs (then Atheris ends it)
         term = terminated()
-        sys.stderr.write(f"fuzz_diff.py: {'terminated' if term else 'interrupted'}\n")
+        reporting.terminal().write(f"fuzz_diff.py: {'terminated' if term else 'interrupted'}\n")
         if job:  # in its start-up: the status of libFuzzer's interrupted job (a -fork parent stops)
             return INTERRUPTED_EXIT
         return TERM_EXIT if term else INT_EXIT

@@ -43,6 +43,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fuzzer import reporting
 from fuzzer.dry_harness import MakeHarness, evaluate, sweep
 from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session
@@ -165,6 +166,8 @@ class Stages:
         Where the first input goes as a ``timeout-`` file if it hangs (None: as ``corpus``).
     timeout_code : int
         ``-timeout_exitcode``.
+    close_fd_mask : int
+        libFuzzer's ``-close_fd_mask``: the target's stdout (1) and stderr (2) closed here too.
     """
 
     session: Session
@@ -176,6 +179,7 @@ class Stages:
     corpus: Path | None = None
     artifacts: Path | None = None
     timeout_code: int = TIMEOUT_EXIT
+    close_fd_mask: int = 0
     children: list[DryRun] = field(default_factory=list)
     _first_count: int = 0
     _literal_at: int = 0
@@ -343,7 +347,10 @@ class Stages:
             pending = guard.write_ahead(self.corpus, data)
         except OSError:
             return made, harness, parts, part
-        with guard.guarded(pending, data, self.artifacts or self.corpus, self.budget, self.timeout_code):
+        with (
+            guard.guarded(pending, data, self.artifacts or self.corpus, self.budget, self.timeout_code),
+            reporting.target_output_closed(self.close_fd_mask),
+        ):
             harness.test_one_input(data)
         return made, harness, parts, rest
 
@@ -367,7 +374,11 @@ class Stages:
         return self.timeout if self.timeout > 0 else DEFAULT_BUDGET
 
     def _launch(self, work: Callable[[], None]) -> None:
-        child = launch(work, self.budget)
+        def closed() -> None:
+            with reporting.target_output_closed(self.close_fd_mask):
+                work()
+
+        child = launch(closed, self.budget)
         if child is not None:
             self.children.append(child)
 

@@ -299,8 +299,8 @@ class Harness(MutationStep):
             )
         reporting.error(text)
         if lost is not None:  # whole and on a line of its own: an error line is bounded and indented
-            sys.stderr.write(reporting.shown(lost.decode("utf-8", "backslashreplace")) + "\n")
-            sys.stderr.flush()
+            reporting.terminal().write(reporting.shown(lost.decode("utf-8", "backslashreplace")) + "\n")
+            reporting.terminal().flush()
         return ArtifactsUnwritable(text)
 
     def _step_features(self, ev: Evaluation) -> None:

@@ -7,10 +7,11 @@ line redrawn in place on a terminal, a plain line every few seconds otherwise
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
@@ -21,9 +22,64 @@ LINES = "\n"
 """``shown``'s ``keep`` for a message whose line breaks are its own (a ROS log's last lines)."""
 
 
+_terminal: TextIO | None = None
+
+
+def terminal() -> TextIO:
+    """Where the engine's own lines go: stderr, or the copy of it that ``keep_terminal`` made."""
+    return _terminal or sys.stderr
+
+
+def keep_terminal() -> None:
+    """Keep the engine's lines on the terminal when libFuzzer's ``-close_fd_mask=2`` sends file
+    descriptor 2 to /dev/null to silence the target: a copy of stderr, as libFuzzer keeps one for
+    its own lines (its ``DupAndCloseStderr``). The summary was lost with the target's output."""
+    global _terminal
+    if _terminal is not None:
+        return
+    sys.stderr.flush()
+    try:
+        fd = os.dup(sys.stderr.fileno())
+    except (AttributeError, OSError, ValueError):  # no stderr, or not a file's (a test's capture)
+        return
+    _terminal = os.fdopen(
+        fd, "w", encoding=sys.stderr.encoding or "utf-8", errors="backslashreplace", buffering=1
+    )
+
+
+@contextlib.contextmanager
+def target_output_closed(mask: int) -> Iterator[None]:
+    """libFuzzer's ``-close_fd_mask`` where the target runs outside libFuzzer (the dry run):
+    stdout (``mask & 1``) and stderr (``mask & 2``) to /dev/null meanwhile, the engine's own
+    lines kept on the terminal (``keep_terminal``)."""
+    fds = [fd for fd in (1, 2) if mask & fd]
+    if not fds:
+        yield
+        return
+    if mask & 2:
+        keep_terminal()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    saved = [os.dup(fd) for fd in fds]
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        for fd in fds:
+            os.dup2(null, fd)
+        yield
+    finally:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        for fd, copy in zip(fds, saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(null)
+
+
 def info(text: str, stream: TextIO | None = None) -> None:
-    (stream or sys.stderr).write(f"{PREFIX} {text}\n")
-    (stream or sys.stderr).flush()
+    (stream or terminal()).write(f"{PREFIX} {text}\n")
+    (stream or terminal()).flush()
 
 
 MESSAGE_LINE_CHARS = 2000
@@ -55,14 +111,14 @@ def message(text: str) -> str:
 
 
 def warn(text: str) -> None:
-    sys.stderr.write(f"{PREFIX} warning: {message(text)}\n")
-    sys.stderr.flush()
+    terminal().write(f"{PREFIX} warning: {message(text)}\n")
+    terminal().flush()
 
 
 def error(text: str) -> None:
     """An error that ends the run (the caller sets the status)."""
-    sys.stderr.write(f"{PREFIX} error: {message(text)}\n")
-    sys.stderr.flush()
+    terminal().write(f"{PREFIX} error: {message(text)}\n")
+    terminal().flush()
 
 
 def out(text: str = "") -> None:
@@ -133,10 +189,11 @@ class Progress:
         self.enabled = enabled
         self._next = time.monotonic() + interval
         self._bar: Any = None
-        if enabled and sys.stderr.isatty():
+        if enabled and terminal().isatty():
             from tqdm import tqdm
 
             self._bar = tqdm(
+                file=terminal(),
                 total=total_seconds,
                 unit="s",
                 desc="starting",

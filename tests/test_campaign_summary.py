@@ -120,6 +120,20 @@ def test_a_merge_s_summary_adds_up_its_inner_process(tmp_path: Path) -> None:
     assert "totals over 1 child process(es)" in run.stderr
 
 
+def test_close_fd_mask_silences_the_target_not_the_summary(tmp_path: Path) -> None:
+    """``-close_fd_mask=2`` sends file descriptor 2 to /dev/null to silence the target; the
+    engine's summary went with it, while libFuzzer keeps its own lines on a copy of stderr."""
+    for mask in ("", "-close_fd_mask=2"):
+        run = fuzz(str(tmp_path / f"c{mask}"), "-runs=60", "-seed=1", f"--artifacts={tmp_path / f'a{mask}'}",
+                   "--targets=native,tests.plugins.faults:noisy", *([mask] if mask else []))  # fmt: skip
+        assert run.returncode == 0, run.stderr[-2000:]
+        assert "campaign summary" in run.stderr and "exit status 0" in run.stderr, run.stderr[-2000:]
+        libfuzzer_lines = "INFO: seed corpus:" in run.stderr
+        assert libfuzzer_lines, run.stderr[-2000:]
+        noise = run.stderr.count("noisy target says hello")
+        assert (noise == 0) if mask else (noise > 0), (mask, noise)
+
+
 def test_the_summary_counts_the_dry_run_apart(capsys: pytest.CaptureFixture[str]) -> None:
     dry = {"processes": 1, "execs": 40, "divergences": 3, "divergent": {"value": 2, "ill_conditioned": 1}}
     reporting.summary(Stats(), 0, "arts", ["c"], [], dry_run=dry)

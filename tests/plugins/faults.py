@@ -7,6 +7,7 @@ Each is the Python twin with one behaviour changed, exposed as an object with
 from __future__ import annotations
 
 import math
+import os
 from types import SimpleNamespace
 
 import python_impl
@@ -35,9 +36,19 @@ class _TightTolerance(python_impl.MoveGroup):
         self._tolerance = 1e-5
 
 
+class _Noisy(python_impl.MoveGroup):
+    """The twin, writing a line to file descriptor 2 on every read of the state (a target's own
+    output, which libFuzzer's ``-close_fd_mask=2`` silences)."""
+
+    def get_current_joint_values(self) -> list[float]:
+        os.write(2, b"noisy target says hello\n")
+        return super().get_current_joint_values()
+
+
 wrap_continuous = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_WrapToPositive)
 tight_tolerance = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_TightTolerance)
 not_a_target = SimpleNamespace(RobotModel=python_impl.RobotModel)
+noisy = SimpleNamespace(RobotModel=python_impl.RobotModel, MoveGroup=_Noisy)
 
 
 class _HangsBeyondThree(python_impl.MoveGroup):
