@@ -116,7 +116,8 @@ def pool(paths: list[Path]) -> tuple[list[dict[str, Any]], list[tuple[str, Run]]
 
 
 def _censored(value: float | None, budget: float) -> float:
-    return budget if value is None else value
+    """A time, a miss or a detection past the budget counted as the budget (as ``deep_stats``)."""
+    return budget if value is None else min(value, budget)
 
 
 def paired(a: list[float], b: list[float]) -> tuple[float, float, float, str]:
@@ -177,7 +178,10 @@ def report(
     )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for bug, pairs in by_bug.items():
-        found = [sum(r.detected_at is not None for r in side) for side in zip(*pairs, strict=True)]
+        found = [
+            sum(r.detected_at is not None and r.detected_at <= budget for r in side)
+            for side in zip(*pairs, strict=True)
+        ]
         for what in ("launch", "search", "start-up"):
             a, b = ([_value(r, what, budget) for r in side] for side in zip(*pairs, strict=True))
             p, diff, sooner, verdict = paired(a, b)

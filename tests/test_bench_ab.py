@@ -310,3 +310,11 @@ def test_the_paired_verdict_goes_the_way_the_signed_ranks_do() -> None:
     p, _, sooner, verdict = ab_table.paired(a, b)
     assert p < 0.05 and sooner > 0.5 and verdict == "slower"
     assert ab_table.paired(b, a)[3] == "faster"
+
+
+def test_a_detection_past_the_budget_counts_as_the_budget() -> None:
+    """As in the trial tables (``deep_stats.censored``): a pair's time is capped at the budget,
+    a miss counted as the budget; a detection at 10.4 s of a 10-s trial kept its 10.4."""
+    assert ab_table._censored(10.4, 10.0) == 10.0
+    assert ab_table._censored(None, 10.0) == 10.0
+    assert ab_table._censored(0.25, 10.0) == 0.25
