@@ -110,11 +110,13 @@ class ScenarioFacts:
 
 @dataclass(frozen=True)
 class PoseGoal:
-    """An active pose or position target: its link (None: the tip) and orientation
-    (None for a position target, whose orientation is the link's at planning time)."""
+    """An active pose or position target: its link (None: the tip), orientation (None for a
+    position target, whose orientation is the link's at planning time) and position (m; None
+    when the message has none the oracle can read)."""
 
     link: str | None
     orientation: tuple[float, ...] | None
+    position: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -152,6 +154,16 @@ def _orientation(message: dict[str, Any]) -> tuple[float, ...] | None:
         return None
 
 
+def _point(message: dict[str, Any], kind: str) -> tuple[float, ...] | None:
+    """A pose target's position, or a position target's point (m), if finite."""
+    try:
+        p = message["pose"]["position"] if kind == "pose_target" else message["point"]
+        point = tuple(float(p[k]) for k in "xyz")
+    except (KeyError, TypeError, ValueError, OverflowError):
+        return None
+    return point if all(math.isfinite(x) for x in point) else None
+
+
 def _last_row(outcome: Outcome, dof: int) -> tuple[float, ...] | None:
     positions = outcome.values.get("trajectory.positions", ())
     if dof <= 0 or not positions or len(positions) % dof:
@@ -178,9 +190,9 @@ def advance(ctx: Context, step: Step, outcome: Outcome, dof: int) -> Context:
     if kind in ("joint_target", "named_target"):
         return replace(after, joint_goal=outcome.values.get("joint_target"), pose_goal=None)
     if kind == "pose_target":
-        return replace(after, pose_goal=PoseGoal(_link(msg), _orientation(msg)))
+        return replace(after, pose_goal=PoseGoal(_link(msg), _orientation(msg), _point(msg, kind)))
     if kind == "position_target":
-        return replace(after, pose_goal=PoseGoal(_link(msg), None))
+        return replace(after, pose_goal=PoseGoal(_link(msg), None, _point(msg, kind)))
     if kind == "clear_pose_targets":
         return replace(after, pose_goal=None)
     if kind in ("plan", "cartesian_path"):

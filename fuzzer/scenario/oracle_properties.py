@@ -18,6 +18,10 @@ limits                   scaling                                                
                          step began in (MoveIt plans from the current state)
 plan.goal                /plan with a joint goal: the last point is the goal         rad (m)
 go.goal                  /go with a joint goal: the state after it is the goal       rad (m)
+go.pose_goal,            /go, /plan with a pose or position goal: the link at the     m or rad
+plan.pose_goal           goal's position (and orientation) in the state after it (the
+                         plan's last point), within ``REACH_SLACK`` plus what the goal
+                         tolerance moves it by
 execute.last_point       /execute of a plan: the state after it is its last point    rad (m)
 =======================  ==========================================================  ============
 
@@ -39,7 +43,7 @@ from fuzzer.execution import oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
 from fuzzer.scenario.steps import ScenarioCall
-from robot_api.constants import ACCELERATION_LIMIT
+from robot_api.constants import ACCELERATION_LIMIT, IK_EPS
 
 RELATIVE_SLACK = 1e-9
 ABSOLUTE_SLACK = 1e-12
@@ -135,7 +139,9 @@ def check_trajectory(
         start = _equal(target, f"{kind}.start", tuple(positions[0].tolist()), before.state, before, facts)
         if start is not None:
             return start
-    if kind == "plan" and before.pose_goal is None and before.joint_goal is not None:
+    if kind == "plan" and before.pose_goal is not None:
+        return _reaches_pose(target, "plan.pose_goal", tuple(positions[-1].tolist()), before, facts)
+    if kind == "plan" and before.joint_goal is not None:
         return _equal(target, "plan.goal", tuple(positions[-1].tolist()), before.joint_goal, before, facts)
     return None
 
@@ -161,6 +167,72 @@ def _equal(
     return _worst(target, field_name, excess, "rad", facts)
 
 
+REACH_SLACK = 2.0 * math.sqrt(3.0) * IK_EPS
+"""How far (m, rad) a link may be from a pose goal its target reports reached, before the goal
+tolerance's share: IK stops once every component of the error twist is within ``IK_EPS``
+(``sqrt(3) IK_EPS`` in all), doubled for the FK of the reference target against the target's own."""
+
+LEVER_STEP = 1e-6
+"""The joint step (rad, m) of the finite differences in ``_lever``."""
+
+
+def _turn(q: Sequence[float], r: Sequence[float]) -> float | None:
+    """The angle (rad) between two orientations (x, y, z, w), or None if either is no rotation."""
+    a, b = np.asarray(q, dtype=float), np.asarray(r, dtype=float)
+    na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+    if not (math.isfinite(na) and math.isfinite(nb)) or na == 0.0 or nb == 0.0:
+        return None
+    a, b = a / na, b / nb
+    w = abs(float(np.dot(a, b)))  # cos of half the angle between them (q and -q are one rotation)
+    return 2.0 * math.atan2(math.sqrt(max(0.0, 1.0 - min(w, 1.0) ** 2)), w)
+
+
+def _lever(facts: ScenarioFacts, state: Sequence[float], link: str | None) -> tuple[float, float]:
+    """How far the link moves (m, rad) when every joint moves by 1 (first order, summed over
+    the joints): what a stop within the goal tolerance of the IK answer moves it by, per unit of
+    that tolerance. Finite differences of the reference target's FK."""
+    assert facts.forward is not None
+    base_p, base_q = facts.forward(state, link)
+    metres = radians = 0.0
+    for j in range(len(state)):
+        moved = list(state)
+        moved[j] += LEVER_STEP
+        p, q = facts.forward(moved, link)
+        metres += math.dist(p, base_p) / LEVER_STEP
+        radians += (_turn(q, base_q) or 0.0) / LEVER_STEP
+    return metres, radians
+
+
+def _reaches_pose(
+    target: str, field_name: str, state: Sequence[float], before: Context, facts: ScenarioFacts
+) -> Comparison | None:
+    """A pose or position goal its target reports reached: the link within ``REACH_SLACK`` plus
+    what the goal tolerance moves it by (``_lever``) of the goal's position and orientation."""
+    goal = before.pose_goal
+    if goal is None or goal.position is None or facts.forward is None or len(state) != len(facts.joints):
+        return None
+    if not all(math.isfinite(x) for x in state):
+        return None  # the joint-limit checks name a non-finite state
+    try:
+        position, orientation = facts.forward(state, goal.link)
+    except Exception:  # noqa: BLE001 - a link the reference model does not know: no verdict here
+        return None
+    gap = math.dist(position, goal.position)
+    turn = (_turn(orientation, goal.orientation) or 0.0) if goal.orientation is not None else 0.0
+    if gap <= REACH_SLACK and turn <= REACH_SLACK:
+        return None
+    metres, radians = _lever(facts, state, goal.link)
+    tol = before.goal_tolerance * (1.0 + RELATIVE_SLACK) + ABSOLUTE_SLACK
+    over_m = gap - (REACH_SLACK + 2.0 * tol * metres)  # 2: the first order's margin
+    over_rad = turn - (REACH_SLACK + 2.0 * tol * radians)
+    if over_m <= 0.0 and over_rad <= 0.0:
+        return None
+    joints = range(len(facts.joints))
+    if over_m >= over_rad:
+        return _violation(target, field_name, over_m, "m", joints)
+    return _violation(target, field_name, over_rad, "rad", joints)
+
+
 def check_step(
     kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts, target: str
 ) -> Comparison | None:
@@ -172,7 +244,9 @@ def check_step(
     state = outcome.values.get("joint_values")
     if state is None:
         return None
-    if kind == "go" and before.pose_goal is None and before.joint_goal is not None:
+    if kind == "go" and before.pose_goal is not None:
+        return _reaches_pose(target, "go.pose_goal", state, before, facts)
+    if kind == "go" and before.joint_goal is not None:
         return _equal(target, "go.goal", state, before.joint_goal, before, facts)
     if kind == "execute" and before.last_plan is not None:
         return _equal(target, "execute.last_point", state, before.last_plan, before, facts)
