@@ -9,6 +9,7 @@ file; the marker must not appear).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -118,6 +119,25 @@ def _both(*edits: Callable[[dict[str, Any]], None]) -> Callable[[dict[str, Any]]
             one(sidecar)
 
     return edit
+
+
+def _unrunnable(tmp: Path) -> Path:
+    """AGREE with its positions made a string (an input the tools skip), its sidecar's sha1 its own."""
+    crash = copy_crash(tmp)
+    case = json.loads(crash.read_bytes())
+    case["message"]["position"] = "not a list"
+    crash.write_text(json.dumps(case))
+    side = crash.with_name(crash.name + ".json")
+    sidecar = json.loads(side.read_text())
+    sidecar["sha1"] = hashlib.sha1(crash.read_bytes()).hexdigest()
+    side.write_text(json.dumps(sidecar))
+    return crash
+
+
+def _sidecar_of(crash: Path) -> dict[str, Any]:
+    sidecar: dict[str, Any] = json.loads(crash.with_name(crash.name + ".json").read_text())
+    sidecar.pop("regression", None)
+    return sidecar
 
 
 def sidecar_row(edit: Callable[[dict[str, Any]], Any], message: str) -> Callable[[Path], Row]:
@@ -297,6 +317,41 @@ ROWS: dict[str, Callable[[Path], Row]] = {
         [str(shutil.copyfile(AGREE, t / "crash-plain"))], 0, "no sidecar"
     ),
     # -- sidecar schema -------------------------------------------------------------------------
+    # another input's sidecar beside a crash file: replay said "now agrees" of a file that never
+    # diverged, report drew one input's steps beside another's re-run
+    "sidecar-of-another-input": sidecar_row(lambda _: _sidecar_of(DIVERGE), "the sidecar of another input"),
+    "minimize-sidecar-of-another-input": lambda t: Row(
+        ["minimize", str(copy_crash(t, edit=lambda _: _sidecar_of(DIVERGE))), "-o", str(t / "m")],
+        2,
+        "the sidecar of another input",
+    ),
+    "promote-sidecar-of-another-input": lambda t: Row(
+        ["promote", str(copy_crash(t, edit=lambda _: _sidecar_of(DIVERGE))), "--suite", str(t / "s")],
+        1,
+        "the sidecar of another input",
+        stream="stdout",
+    ),
+    # an input the tools skip (here: a joint state whose positions are not a list) is not a bug
+    # that went away: minimize said "does not diverge ... now" and promote's two answers each
+    # pointed at the other flag, the reason left out
+    "minimize-skipped-input": lambda t: Row(
+        ["minimize", str(_unrunnable(t)), "-o", str(t / "m")],
+        1,
+        r"not minimized: skipped \(",
+        stream="stdout",
+    ),
+    "promote-skipped-input": lambda t: Row(
+        ["promote", str(_unrunnable(t)), "--suite", str(t / "s")],
+        1,
+        r"skipped \(.*only a test case that runs",
+        stream="stdout",
+    ),
+    "promote-fixed-skipped-input": lambda t: Row(
+        ["promote", str(_unrunnable(t)), "--fixed", "--suite", str(t / "s")],
+        1,
+        r"skipped \(.*only a test case that runs",
+        stream="stdout",
+    ),
     "sidecar-without-config": sidecar_row(_drop("config"), "'config' is missing"),
     "sidecar-without-signature": sidecar_row(_drop("signature"), "'signature' is missing"),
     "sidecar-config-list": sidecar_row(_set("config", []), "'config' must be an object"),

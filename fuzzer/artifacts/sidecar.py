@@ -10,6 +10,7 @@ is :mod:`fuzzer.artifacts.trust`'s. The same rules apply to a corpus manifest
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import math
 import stat
 from collections.abc import Callable
@@ -106,7 +107,33 @@ def read_sidecar(crash: Path) -> dict[str, Any] | None:
             )
     data = read_json_file(path)
     validate(data, path)
+    _of_this_file(crash, path, data)
     return data
+
+
+HASHED_BYTES = 16 * 1024 * 1024
+"""A crash file larger than this is not hashed against its sidecar (the tools refuse it anyway)."""
+
+
+def _of_this_file(crash: Path, path: Path, data: dict[str, Any]) -> None:
+    """The sidecar's ``sha1`` (the input it describes) is the crash file's. A sidecar beside
+    another input (copied, renamed, or the crash file edited) was read as this file's: replay
+    said "now agrees" of a file that never diverged, and report drew one input's steps beside
+    another's re-run."""
+    recorded = data.get("sha1")
+    if not isinstance(recorded, str):
+        return  # an older sidecar, or a hand-made one: nothing to check against
+    try:
+        if crash.stat().st_size > HASHED_BYTES:
+            return
+        actual = hashlib.sha1(crash.read_bytes()).hexdigest()
+    except OSError:
+        return  # the tool that reads the file names the problem
+    if actual != recorded.lower():
+        raise SidecarError(
+            f"{path}: the sidecar of another input (its sha1 {recorded[:12]}, this file's {actual[:12]}): "
+            "it does not describe this file; move it away to use the file without it"
+        )
 
 
 def _leads_somewhere(link: Path) -> bool:

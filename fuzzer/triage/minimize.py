@@ -168,7 +168,10 @@ class Minimizer:
             was fixed, or replayed under other targets or tolerances): every candidate would be
             measured against a signature the input itself no longer has.
         """
-        current = self._key(case)
+        first = self.session.evaluator().evaluate(case, history=self.history)
+        if first.verdict != Verdict.EVALUATED:  # as replay says it: not that the bug is gone
+            raise ValueError(f"skipped ({first.verdict}: {first.reason}): nothing to minimize")
+        current: str | None = first.signature.key if first.signature is not None else None
         if current is None:
             now = "" if key is None else f"with its signature {key[:12]} or any other "
             raise ValueError(f"the input does not diverge {now}now: nothing to minimize")

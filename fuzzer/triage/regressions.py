@@ -92,6 +92,9 @@ def promote(
             "the suite keeps a divergence that reproduces its own signature, or a fixed one that "
             "agrees: replay it, and promote a crash file of the signature it has now"
         )
+    if result.result is Result.SKIPPED:  # neither fixed nor a divergence: each pointed at the other
+        said = f"{crash}: {result.result} ({result.detail})"
+        raise PromoteError(f"{said}; only a test case that runs can be kept")
     if fixed and result.result is not Result.AGREES:
         raise PromoteError(f"{crash}: {result.result}; it is not fixed yet (promote it without --fixed)")
     if not fixed and result.result is not Result.SAME:
