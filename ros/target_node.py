@@ -38,6 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--urdf", required=True)
     parser.add_argument("--name", required=True)
     parser.add_argument("--tip-link")
+    parser.add_argument("--engine", help="the engine's node name: requests from other nodes are ignored")
     args = parser.parse_args(argv)
     rospy = env.import_module("rospy")
     std_msgs = env.import_module("std_msgs.msg")
@@ -56,7 +57,14 @@ def main(argv: list[str] | None = None) -> int:
         rospy.sleep(1.0)
         return 1
     requests: queue.Queue[Any] = queue.Queue()
-    rospy.Subscriber(f"{topic}/request", std_msgs.String, requests.put, queue_size=10)
+
+    def take(message: Any) -> None:
+        """A request of the engine's (the ROS graph may be shared: any node may publish here)."""
+        header = getattr(message, "_connection_header", None) or {}
+        if args.engine is None or header.get("callerid") == args.engine:
+            requests.put(message)
+
+    rospy.Subscriber(f"{topic}/request", std_msgs.String, take, queue_size=10)
     facts = {
         "pid": os.getpid(),
         "spec": args.spec,

@@ -7,11 +7,13 @@ import math
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from fuzzer.execution.records import Status
+from fuzzer.execution.records import Outcome, Status
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import FkCall, IkCall, MoveCall
 from fuzzer.input.testcase import TestCase
@@ -92,6 +94,20 @@ def test_dead_and_silent_nodes_are_crashes_and_restarted(transport, monkeypatch:
         runner.node.stop()
 
 
+def test_a_node_shut_down_from_outside_is_started_again_and_asked_again(transport, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``rosnode kill`` of a target (a clean exit, status 0) was a crash file and exit 1."""
+    from fuzzer.ros import node
+
+    runner = transport.RosRunner.create(FAULTY, robots.resolve(robots.DEFAULT_ROBOT), None)
+    Path(node.context().master.log_dir, "rrosfuzz-exited-once").unlink(missing_ok=True)  # an earlier run's
+    try:
+        outcome = runner.run(FkCall((faulty.EXIT_ONCE, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        assert outcome.status == Status.OK and runner.node.restarts == 1
+        assert "exited with status 0 during an input" in capsys.readouterr().err
+    finally:
+        runner.node.stop()
+
+
 def test_a_node_that_cannot_start_again_keeps_its_outcome_then_stops(
     transport, monkeypatch: pytest.MonkeyPatch
 ) -> None:  # type: ignore[no-untyped-def]
@@ -117,6 +133,56 @@ def test_a_node_that_cannot_start_again_keeps_its_outcome_then_stops(
         assert said == "its ROS node exited; the ROS master at http://x does not answer"
     finally:
         runner.node.stop()
+
+
+def test_other_nodes_on_a_target_s_topics_are_ignored_and_named(transport, capsys) -> None:  # type: ignore[no-untyped-def]
+    """The ROS graph may be shared. A node that answered every request first, with the tool at
+    (9, 9, 9), had its answers taken as the target's (2,459 divergences in a 30-s campaign of a
+    probe); one malformed answer ended the campaign with a traceback; garbage on ``ready`` was
+    logged 2,078 times in 20 s. Here the forger is this process's own node: not the target's."""
+    from fuzzer.ros import env, node
+
+    urdf = robots.resolve(robots.DEFAULT_ROBOT)
+    runner = transport.RosRunner.create("python", urdf, None)
+    local = Runner.create("python", urdf, None)
+    target = runner.node
+    rospy, std_msgs = node.context().rospy, env.import_module("std_msgs.msg")
+    forger = rospy.Publisher(f"{target.topic}/response", std_msgs.String, queue_size=100)
+    forged = Outcome(Status.OK, values={"position": (9.0, 9.0, 9.0), "orientation": (0.0, 0.0, 0.0, 1.0)})
+
+    def forge(message: Any) -> None:
+        ident = int(message.data.split("\n", 1)[0])
+        forger.publish(std_msgs.String(transport.encode(ident, {"outcome": forged.to_json()})))
+        forger.publish(std_msgs.String(transport.encode(ident + 1, {"outcome": {"status": "bogus"}})))
+
+    listener = rospy.Subscriber(f"{target.topic}/request", std_msgs.String, forge, queue_size=100)
+    try:
+        deadline = time.monotonic() + 10
+        while forger.get_num_connections() < 1 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert forger.get_num_connections() >= 1
+        for call in CALLS:
+            assert runner.run(call) == local.run(call), call
+        assert f"publishes on {target.topic}/response" in capsys.readouterr().err
+        ready = target._ready
+
+        from types import SimpleNamespace
+
+        garbage = SimpleNamespace(data="not json", _connection_header={"callerid": target.node_name})
+        target._on_ready(garbage)  # the node's own name, and still no JSON: ignored, no traceback
+        assert target._ready == ready
+    finally:
+        listener.unregister()
+        forger.unregister()
+        runner.node.stop()
+
+
+def test_a_malformed_answer_is_a_crash_outcome(transport) -> None:  # type: ignore[no-untyped-def]
+    for answer in ({"id": 1}, {"id": 1, "outcome": {"status": "bogus"}}, {"id": 1, "outcome": [1]}):
+        outcome = transport.outcome_of(answer)
+        assert (outcome.status, outcome.error) == (Status.CRASHED, "BadAnswer"), answer
+    ok = transport.outcome_of({"id": 1, "outcome": {"status": "rejected", "code": 1}})
+    assert ok.status == Status.REJECTED and ok.error
 
 
 def test_protocol_encoding_round_trips_and_refuses_garbage(transport) -> None:  # type: ignore[no-untyped-def]
@@ -269,3 +335,25 @@ def test_transport_option_is_checked(tmp_path: Path) -> None:
         capture_output=True, text=True, timeout=60, cwd=ROOT, check=False,
     )  # fmt: skip
     assert run.returncode == 2 and "--transport" in run.stderr
+    # ros_tf answers through ROS already: its node failed in rospy's init_node, named as the target's
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz_diff.py"), str(tmp_path / "c"), "--op", "fk", "--transport", "ros",
+         "--targets", "native,ros_tf", f"--artifacts={tmp_path / 'a'}", "-runs=1"],
+        capture_output=True, text=True, timeout=60, cwd=ROOT, check=False,
+    )  # fmt: skip
+    assert run.returncode == 2 and "use it with --transport inprocess" in run.stderr, run.stderr[-1500:]
+
+
+def test_a_master_uri_that_answers_nothing_is_said(monkeypatch: pytest.MonkeyPatch, capsys) -> None:  # type: ignore[no-untyped-def]
+    """One who meant to join their own master (to watch, to record) was given a private one
+    without a word; a URI that is none (``http://[::1``) was blamed on the target's model."""
+    from fuzzer.ros import processes
+
+    monkeypatch.setattr(
+        processes, "start_master", lambda log_dir: processes.Master("http://127.0.0.1:1/", log_dir)
+    )
+    for uri in ("http://[::1", "http://127.0.0.1:9/", "ftp://x"):
+        monkeypatch.setenv("ROS_MASTER_URI", uri)
+        assert not processes.master_answers(uri, timeout=0.5)
+        assert processes.join_or_start_master(str(Path.cwd())).uri == "http://127.0.0.1:1/"
+        assert f"ROS_MASTER_URI={uri!r}: no ROS master answers there" in capsys.readouterr().err

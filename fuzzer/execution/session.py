@@ -176,6 +176,12 @@ class Session:
         scenario = config.op == "scenario"
         if scenario and config.transport == "ros":
             raise ConfigError("--transport ros with --op scenario is not supported yet")
+        if config.transport == "ros" and "ros_tf" in config.targets:
+            raise ConfigError(
+                "--targets ros_tf already answers through ROS (robot_state_publisher and tf2 on the "
+                "campaign's master): use it with --transport inprocess (its node cannot run inside "
+                "another target node)"
+            )
         max_steps_of(config.max_steps)
         try:
             urdf = robots.resolve(config.robot)

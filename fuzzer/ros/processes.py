@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fuzzer import reporting
 from fuzzer.ros import env
 
 PR_SET_PDEATHSIG = 1
@@ -150,7 +151,7 @@ def master_answers(uri: str, timeout: float = 2.0) -> bool:
     transport = _TimeoutTransport(timeout)
     try:
         answer: Any = xmlrpc.client.ServerProxy(uri, transport=transport).getPid("/rrosfuzz")
-    except (OSError, xmlrpc.client.Error):
+    except (OSError, ValueError, xmlrpc.client.Error):  # ValueError: not a URI ("http://[::1")
         return False
     return isinstance(answer, list) and len(answer) == 3 and answer[0] == 1
 
@@ -223,4 +224,10 @@ def join_or_start_master(log_dir: str | None = None) -> Master:
     log_dir = log_folder(log_dir)
     if uri and master_answers(uri):
         return Master(uri if uri.endswith("/") else uri + "/", log_dir)
-    return start_master(log_dir)
+    master = start_master(log_dir)
+    if uri:  # someone who meant to join their master (to watch, to record) should know
+        reporting.warn(
+            f"ROS_MASTER_URI={uri!r}: no ROS master answers there, so the campaign runs on a master "
+            f"of its own at {master.uri} (nodes on yours will not see it)"
+        )
+    return master

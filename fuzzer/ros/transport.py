@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 import python_impl
+from fuzzer import reporting
 from fuzzer.execution import dead_zone
 from fuzzer.execution.records import Outcome, Status
 from fuzzer.input.mapping import Call, call_to_json
@@ -70,6 +71,10 @@ REQUEST_TIMEOUT = 20.0
 """Seconds a node may take to answer one test case (libFuzzer's -timeout is 20 s too)."""
 START_TIMEOUT = 60.0
 """Seconds a node may take to start (Python, numpy, the target's import, its model)."""
+MASTER_CHECK_SECONDS = 1.0
+"""While a node starts, how often the engine asks whether the master still answers: a node
+cannot register without it, and a restart waited ``START_TIMEOUT`` (past libFuzzer's
+``-timeout``: a timeout file and a thread dump, not the documented exit 2)."""
 PING_SECONDS = 0.25
 """How long one handshake ping waits for its answer before the next one is sent."""
 
@@ -140,6 +145,20 @@ def decode(text: str) -> dict[str, Any]:
     return data
 
 
+def outcome_of(answer: dict[str, Any]) -> Outcome:
+    """The outcome a node's answer carries; a malformed one is a ``crashed:BadAnswer`` outcome
+    (one ended the campaign with a traceback, exit 77). A rejection with the contract's code
+    only (the C++ node) gets its class's name (``robot_api.errors.error_class``)."""
+    try:
+        outcome = Outcome.from_json(answer["outcome"])
+    except (KeyError, TypeError, ValueError, RecursionError) as exc:
+        said = f"the target's node answered what is not an outcome ({type(exc).__name__}: {exc})"
+        return Outcome(Status.CRASHED, "BadAnswer", None, said[:500])
+    if outcome.status == Status.REJECTED and not outcome.error and outcome.code is not None:
+        outcome = Outcome(outcome.status, error_class(outcome.code).__name__, outcome.code, outcome.message)
+    return outcome
+
+
 def build_cpp_node() -> Path:
     """Build the C++ node (``ros/cpp``) into ``build/ros-cpp`` if needed; its path.
 
@@ -182,12 +201,43 @@ class TargetNode:
     _ready: dict[str, Any] | None = None
     _changed: threading.Condition = field(default_factory=threading.Condition)
     _topics: list[Any] = field(default_factory=list)
+    _pending: set[int] = field(default_factory=set)
+    _foreign: dict[str, str] = field(default_factory=dict)
+    """The first node of another name heard on each of this node's topics (``from_node``)."""
+    _warned: set[str] = field(default_factory=set)
     lost: str | None = None
     """Why the node could not be started again after it died (``lost_reason``), else None."""
 
     @property
     def topic(self) -> str:
         return f"/rrosfuzz/{self.name}"
+
+    @property
+    def node_name(self) -> str:
+        """The node's ROS name (``rospy.init_node``/``ros::init`` in ``ros/``)."""
+        return f"/rrosfuzz_{self.name}"
+
+    def _from_node(self, message: Any, topic: str) -> bool:
+        """Whether a message on one of this node's topics was published by this node. The ROS
+        graph may be shared: any node may publish there, and a well-formed answer of another
+        was taken as the target's (its values in the crash files, the campaign's findings)."""
+        header = getattr(message, "_connection_header", None) or {}
+        caller = header.get("callerid") if isinstance(header, dict) else None
+        if caller == self.node_name:
+            return True
+        with self._changed:
+            self._foreign.setdefault(topic, str(caller))
+        return False
+
+    def _warn_foreign(self) -> None:
+        """Say (once per topic, from the campaign's thread) that another node publishes here."""
+        for topic, caller in list(self._foreign.items()):
+            if topic not in self._warned:
+                self._warned.add(topic)
+                reporting.warn(
+                    f"--transport ros: {caller} publishes on {self.topic}/{topic}, which is the target "
+                    f"node {self.node_name}'s: its messages are ignored (the ROS graph is shared)"
+                )
 
     def start(self) -> None:
         """Start the node and wait until it is ready and connected.
@@ -209,8 +259,9 @@ class TargetNode:
             ]
         with self._changed:
             self._ready = None
+        engine = ["--engine", str(ros.name)]  # the node takes requests from this node only
         if self.spec == "native":
-            argv = [str(build_cpp_node()), "--urdf", self.urdf, "--name", self.name]
+            argv = [str(build_cpp_node()), "--urdf", self.urdf, "--name", self.name, *engine]
         else:
             argv = [
                 sys.executable,
@@ -221,6 +272,7 @@ class TargetNode:
                 self.urdf,
                 "--name",
                 self.name,
+                *engine,
             ]
         if self.tip_link is not None:
             argv += ["--tip-link", self.tip_link]
@@ -230,16 +282,23 @@ class TargetNode:
         }
         self.process = processes.spawn(f"target-{self.name}", argv, environment, ros.master.log_dir)
         deadline = time.monotonic() + START_TIMEOUT
-        ready = False
+        ready, master_gone = False, False
+        next_check = time.monotonic() + MASTER_CHECK_SECONDS
         with self._changed:
             while not ready and self.process.alive() and time.monotonic() < deadline:
                 if self._ready is not None and self._ready.get("error"):
                     break
+                if time.monotonic() > next_check:  # a node cannot start without the master
+                    next_check = time.monotonic() + MASTER_CHECK_SECONDS
+                    if not processes.master_answers(ros.master.uri):
+                        master_gone = True
+                        break
                 if self._ready is None or self._ready.get("pid") != self.process.pid:
                     self._changed.wait(0.05)
                     continue
                 ready = self._ping()
             self._answers.clear()
+            self._pending.clear()
         if self._ready is not None and self._ready.get("error"):
             self.process.stop()
             raise NodeStartError(f"target {self.spec!r} as a ROS node: {self._ready['error']}")
@@ -250,10 +309,13 @@ class TargetNode:
             why = (
                 f"exited (status {status}) before it was ready"
                 if exited
+                else "could not register"
+                if master_gone
                 else f"did not start in {START_TIMEOUT} s"
             )
             master = ros.master.uri
-            gone = "" if processes.master_answers(master) else f"; the ROS master at {master} does not answer"
+            answers = not master_gone and processes.master_answers(master)
+            gone = "" if answers else f"; the ROS master at {master} does not answer"
             raise NodeStartError(
                 f"target {self.spec!r}: its ROS node {why}{gone}; log:\n{self.process.log_tail()}"
             )
@@ -263,31 +325,47 @@ class TargetNode:
         subscription to the request topic is connected; a stale connection count is not proof)."""
         std_msgs = env.import_module("std_msgs.msg")
         ident = next(self._ids)
+        self._pending.add(ident)
         self._request.publish(std_msgs.String(encode(ident, {"op": "ping"})))
         until = time.monotonic() + PING_SECONDS
         while ident not in self._answers and time.monotonic() < until:
             self._changed.wait(0.02)
+        self._pending.discard(ident)
         return ident in self._answers
 
     def _on_ready(self, message: Any) -> None:
+        if not self._from_node(message, "ready"):
+            return
+        try:
+            ready = json.loads(message.data)
+        except (TypeError, ValueError, RecursionError):
+            return  # not the node's (it writes JSON): nothing to wait for
+        if not isinstance(ready, dict):
+            return
         with self._changed:
-            self._ready = json.loads(message.data)
+            self._ready = ready
             self._changed.notify_all()
 
     def _on_response(self, message: Any) -> None:
+        if not self._from_node(message, "response"):
+            return
         try:
             answer = decode(message.data)
             ident = answer["id"]
-        except ValueError:
+        except (TypeError, ValueError, RecursionError):
             return
         with self._changed:
-            self._answers[ident] = answer
-            self._changed.notify_all()
+            if ident in self._pending:  # an answer to nothing asked is no answer (nor kept)
+                self._answers[ident] = answer
+                self._changed.notify_all()
 
-    def request(self, payload: dict[str, Any]) -> Outcome:
+    def request(self, payload: dict[str, Any], again: bool = False) -> Outcome:
         """Send one request and wait for its answer; a dead or silent node is a crash outcome,
         and so is a node that could not be started again (``lost``: ``NodeLost``; the campaign
-        stops after the input, ``lost_reason``)."""
+        stops after the input, ``lost_reason``). A node that exits with status 0 while it runs a
+        request was shut down from outside (``rosnode kill``, another node taking its name: a
+        crash file with exit 1 before): said, started again, and the request sent once more
+        (``again``); a target that exits 0 twice is a crash outcome."""
         if self.process is None or not self.process.alive():
             if self.lost is None:
                 self._restart_or_lose()
@@ -298,15 +376,25 @@ class TargetNode:
         ident = next(self._ids)
         deadline = time.monotonic() + REQUEST_TIMEOUT
         with self._changed:
+            self._pending.add(ident)
             self._request.publish(std_msgs.String(encode(ident, payload)))
             while ident not in self._answers:
                 if not self.process.alive():
                     status = self.process.popen.returncode
+                    self._pending.discard(ident)
                     self._restart_or_lose()
+                    if status == 0 and not again and self.lost is None:
+                        reporting.warn(
+                            f"--transport ros: the target node {self.node_name} exited with status 0 "
+                            "during an input, as a node shut down from outside does (rosnode kill, or "
+                            "another node taking its name); it was started again and the input sent again"
+                        )
+                        return self.request(payload, again=True)
                     return Outcome(
                         Status.CRASHED, "NodeDied", None, f"the target's ROS node died (status {status})"
                     )
                 if time.monotonic() > deadline:
+                    self._pending.discard(ident)
                     self._restart_or_lose()
                     return Outcome(
                         Status.CRASHED,
@@ -315,13 +403,11 @@ class TargetNode:
                         f"no answer from the target's node in {REQUEST_TIMEOUT} s",
                     )
                 self._changed.wait(0.05)
+            self._pending.discard(ident)
             answer = self._answers.pop(ident)
-        outcome = Outcome.from_json(answer["outcome"])
-        if outcome.status == Status.REJECTED and not outcome.error and outcome.code is not None:
-            outcome = Outcome(
-                outcome.status, error_class(outcome.code).__name__, outcome.code, outcome.message
-            )
-        return outcome
+        if self._foreign:
+            self._warn_foreign()
+        return outcome_of(answer)
 
     def _restart_or_lose(self) -> None:
         """Start the node again; if it cannot be, keep why (``lost``), so that the outcome of this
@@ -339,6 +425,7 @@ class TargetNode:
         self.restarts += 1
         with self._changed:
             self._answers.clear()
+            self._pending.clear()
         self.start()
 
     def stop(self) -> None:

@@ -160,9 +160,14 @@ struct Node {
   std::optional<std::string> tip;
   std::shared_ptr<Model> model;
   ros::Publisher response;
+  std::string engine;  // the engine's node name (--engine): requests of other nodes are ignored
 
-  // Called by ros::spin() on this (the only) thread, one request at a time.
-  void on_request(const std_msgs::String::ConstPtr& message) { serve_one(message->data); }
+  // Called by ros::spin() on this (the only) thread, one request at a time. The ROS graph may be
+  // shared: any node may publish on the request topic.
+  void on_request(const ros::MessageEvent<std_msgs::String const>& event) {
+    if (!engine.empty() && event.getPublisherName() != engine) return;
+    serve_one(event.getMessage()->data);
+  }
 
   json answer(const json& request) {
     try {
@@ -213,7 +218,8 @@ std::string argument(int argc, char** argv, const std::string& name, bool requir
     if (argv[i] == name) return argv[i + 1];
   }
   if (required) {
-    std::fprintf(stderr, "usage: rrosfuzz_native_node --urdf FILE --name NAME [--tip-link LINK]\n");
+    std::fprintf(stderr,
+                 "usage: rrosfuzz_native_node --urdf FILE --name NAME [--tip-link LINK] [--engine NODE]\n");
     std::exit(2);
   }
   return "";
@@ -227,6 +233,7 @@ int main(int argc, char** argv) {
   node.urdf = argument(argc, argv, "--urdf", true);
   const std::string tip = argument(argc, argv, "--tip-link", false);
   if (!tip.empty()) node.tip = tip;
+  node.engine = argument(argc, argv, "--engine", false);
   ros::init(argc, argv, "rrosfuzz_" + name, ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
   ros::NodeHandle handle;
   const std::string topic = "/rrosfuzz/" + name;
