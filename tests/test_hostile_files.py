@@ -134,6 +134,19 @@ def _unrunnable(tmp: Path) -> Path:
     return crash
 
 
+def _report_of_another_input(tmp: Path) -> Row:
+    """The report said "libFuzzer wrote this file itself" of a file whose sidecar it could not use."""
+    art = copy_crash(tmp, edit=lambda _: _sidecar_of(DIVERGE)).parent
+    row = Row(["report", str(art), "-o", str(tmp / "out")], 0, "")
+
+    def page_says_why(run: subprocess.CompletedProcess[str]) -> None:
+        page = (tmp / "out" / "report.html").read_text()
+        assert "its sidecar was not used (damaged sidecar:" in page and "libFuzzer wrote this" not in page
+
+    row.checks.append(page_says_why)
+    return row
+
+
 def _sidecar_of(crash: Path) -> dict[str, Any]:
     sidecar: dict[str, Any] = json.loads(crash.with_name(crash.name + ".json").read_text())
     sidecar.pop("regression", None)
@@ -320,6 +333,13 @@ ROWS: dict[str, Callable[[Path], Row]] = {
     # another input's sidecar beside a crash file: replay said "now agrees" of a file that never
     # diverged, report drew one input's steps beside another's re-run
     "sidecar-of-another-input": sidecar_row(lambda _: _sidecar_of(DIVERGE), "the sidecar of another input"),
+    "triage-sidecar-of-another-input": lambda t: Row(
+        ["triage", str(copy_crash(t, edit=lambda _: _sidecar_of(DIVERGE)).parent)],
+        0,
+        "crash without sidecar \\(damaged sidecar: .*the sidecar of another input",
+        stream="stdout",
+    ),
+    "report-sidecar-of-another-input": _report_of_another_input,
     "minimize-sidecar-of-another-input": lambda t: Row(
         ["minimize", str(copy_crash(t, edit=lambda _: _sidecar_of(DIVERGE))), "-o", str(t / "m")],
         2,

@@ -107,7 +107,7 @@ def read_sidecar(crash: Path) -> dict[str, Any] | None:
             )
     data = read_json_file(path)
     validate(data, path)
-    _of_this_file(crash, path, data)
+    of_this_file(crash, path, data)
     return data
 
 
@@ -115,7 +115,7 @@ HASHED_BYTES = 16 * 1024 * 1024
 """A crash file larger than this is not hashed against its sidecar (the tools refuse it anyway)."""
 
 
-def _of_this_file(crash: Path, path: Path, data: dict[str, Any]) -> None:
+def of_this_file(crash: Path, path: Path, data: dict[str, Any]) -> None:
     """The sidecar's ``sha1`` (the input it describes) is the crash file's. A sidecar beside
     another input (copied, renamed, or the crash file edited) was read as this file's: replay
     said "now agrees" of a file that never diverged, and report drew one input's steps beside

@@ -94,13 +94,18 @@ def _bucket(index: int, view: BucketView, arm: ArmView | None, steps: str = "") 
     if view.minimized:
         files += f"<br>minimized: <code>{esc(view.minimized)}</code>"
     if not view.has_sidecar:
+        if view.note:  # a sidecar beside it that could not be used (damaged, another input's...)
+            why = f"its sidecar was not used ({esc(view.note)})"
+            said = "<p>Replay names what is wrong with the sidecar. "
+        else:
+            why = "there is no sidecar to record them"
+            said = "<p>libFuzzer wrote this file itself: a target died (native crash) or hung (timeout). "
         return (
             f"<article class='bucket'>{title}<dl class='facts'>"
             f"<dt>file</dt><dd>{files} ({view.size:,} bytes)</dd>"
             f"<dt>replay</dt><dd><code>{esc(view.replay)}</code> plus the campaign's options (--robot, --op, "
-            "--targets): there is no sidecar to record them.</dd></dl>"
-            f"<p>libFuzzer wrote this file itself: a target died (native crash) or hung (timeout). "
-            f"First bytes:</p><pre>{esc(view.preview) or '(empty)'}</pre></article>"
+            f"--targets): {why}.</dd></dl>"
+            f"{said}First bytes:</p><pre>{esc(view.preview) or '(empty)'}</pre></article>"
         )
     sig = view.signature or {}
     sig_rows = "".join(

@@ -9,6 +9,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from fuzzer.artifacts.store import sidecar_path
 from fuzzer.report.records import _int, _number
 from fuzzer.triage.pipeline import Bucket
 
@@ -84,6 +85,8 @@ class BucketView:
     """The call the sidecar recorded (``kind``: MoveCall, FkCall or IkCall)."""
     preview: str = ""
     """First bytes of a file without sidecar."""
+    note: str = ""
+    """Why a file that has a sidecar beside it is shown without one (triage's note)."""
 
     @property
     def has_sidecar(self) -> bool:
@@ -136,7 +139,8 @@ def bucket_view(bucket: Bucket) -> BucketView:
                 head = handle.read(240)
         except OSError:
             head = b""
-        return replace(common, preview=head.decode("utf-8", errors="replace"))
+        note = bucket.note if sidecar_path(path).exists() or sidecar_path(path).is_symlink() else ""
+        return replace(common, preview=head.decode("utf-8", errors="replace"), note=note)
     testcase = sidecar.get("testcase") if isinstance(sidecar.get("testcase"), dict) else {}
     assert isinstance(testcase, dict)
     outcomes = tuple(o for o in map(OutcomeView.parse, sidecar.get("outcomes") or []) if o is not None)

@@ -144,7 +144,7 @@ def _artifacts(directory: Path) -> list[Path]:
 def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
     """The validated sidecar of an artifact (None and why when it has no usable one)."""
     from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
-    from fuzzer.artifacts.sidecar import SidecarError, validate
+    from fuzzer.artifacts.sidecar import SidecarError, of_this_file, validate
     from fuzzer.artifacts.store import oversized, sidecar_path
     from fuzzer.input.paths import contained
     from fuzzer.reporting import warn
@@ -160,6 +160,7 @@ def _sidecar(directory: Path, path: Path) -> tuple[dict[str, Any] | None, str]:
         return None, "no readable sidecar"
     try:
         validate(sidecar, side)
+        of_this_file(path, side, sidecar)
     except SidecarError as exc:
         return None, f"damaged sidecar: {exc}"
     return sidecar, ""
