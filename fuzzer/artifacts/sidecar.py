@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import math
+import re
 import stat
 from collections.abc import Callable
 from pathlib import Path
@@ -121,8 +122,8 @@ def of_this_file(crash: Path, path: Path, data: dict[str, Any]) -> None:
     said "now agrees" of a file that never diverged, and report drew one input's steps beside
     another's re-run."""
     recorded = data.get("sha1")
-    if not isinstance(recorded, str):
-        return  # an older sidecar, or a hand-made one: nothing to check against
+    if not isinstance(recorded, str) or not re.fullmatch(r"[0-9a-fA-F]{40}", recorded):
+        return  # an older sidecar, or a hand-made one without a digest: nothing to check against
     try:
         if crash.stat().st_size > HASHED_BYTES:
             return
