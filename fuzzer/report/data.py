@@ -31,7 +31,7 @@ from fuzzer.artifacts.divlog import DIVERGENCES, STATS
 from fuzzer.artifacts.travel import CONFIGURATION
 from fuzzer.input import untrusted_json
 from fuzzer.report.buckets import BucketView, bucket_view
-from fuzzer.report.records import Divergence, Process, Snapshot, processes, read_records
+from fuzzer.report.records import Divergence, Process, Snapshot, parsed_records, processes
 from fuzzer.report.tables import (
     CloserRow,
     Differences,
@@ -352,16 +352,14 @@ def gather(directory: Path) -> ReportData:
         notes.append(
             f"{len(outside)} symbolic link(s) in the folder lead outside it and were ignored: {names}."
         )
-    div_records, div_skipped = (
-        read_records(directory / DIVERGENCES) if directory / DIVERGENCES not in outside else ([], 0)
+    lines, div_skipped = (
+        parsed_records(directory / DIVERGENCES, Divergence.parse)
+        if directory / DIVERGENCES not in outside
+        else ([], 0)
     )
-    stat_records, stat_skipped = (
-        read_records(directory / STATS) if directory / STATS not in outside else ([], 0)
+    snaps, stat_skipped = (
+        parsed_records(directory / STATS, Snapshot.parse) if directory / STATS not in outside else ([], 0)
     )
-    lines = [d for d in map(Divergence.parse, div_records) if d is not None]
-    snaps = [s for s in map(Snapshot.parse, stat_records) if s is not None]
-    div_skipped += len(div_records) - len(lines)
-    stat_skipped += len(stat_records) - len(snaps)
     for name, n in ((DIVERGENCES, div_skipped), (STATS, stat_skipped)):
         if n:
             notes.append(f"{n} malformed line(s) of {name} were skipped.")
