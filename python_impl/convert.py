@@ -1,8 +1,9 @@
 """Argument checking at the twin's boundary (docs/api.md, "Arguments").
 
 A real number is an ``int`` (not ``bool``), a ``float``, or any object whose type
-defines ``__float__`` and is not ``str``/``bytes``/``bytearray`` (numpy scalars,
-``Decimal``, ``Fraction``); whatever its ``__float__`` raises is INVALID_ARGUMENT. A joint
+defines ``__float__`` and is not ``str``/``bytes``/``bytearray`` (``Decimal``, ``Fraction``);
+a numpy scalar or 0-d array only of an integer or float dtype (not bool, complex or object);
+whatever its ``__float__`` raises is INVALID_ARGUMENT. A joint
 vector is a ``list``/``tuple`` of real numbers, read once as ``tuple()`` reads it before its items
 are converted, or a 1-D integer/float ndarray (a masked array with masked entries is refused).
 Anything else is INVALID_ARGUMENT.
@@ -33,6 +34,8 @@ def is_real(value: Any) -> bool:
         return False
     if isinstance(value, np.generic):  # a numpy scalar is real by its dtype, as an array is
         return value.dtype.kind in _REAL_KINDS
+    if isinstance(value, np.ndarray):  # a 0-d array is a number of its dtype; others are not numbers
+        return value.ndim == 0 and value.dtype.kind in _REAL_KINDS
     return isinstance(value, int | float) or hasattr(t, "__float__")
 
 

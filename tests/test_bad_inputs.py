@@ -135,6 +135,26 @@ TABLE = [
         "InvalidInputError",
         E.INVALID_ARGUMENT,
     ),
+    # a 0-d array is a number of its dtype (sixty-third session: one of bool or object dtype was
+    # read as 1.0 / its object's float in both twins; a 1-element 1-D array is no number)
+    (
+        "fk-numpy-0d-bool-value",
+        lambda i: i.RobotModel(ROBOT).forward_kinematics([np.array(True)] * 6),
+        "InvalidInputError",
+        E.INVALID_ARGUMENT,
+    ),
+    (
+        "fk-numpy-0d-object-value",
+        lambda i: i.RobotModel(ROBOT).forward_kinematics([np.array(0.5, dtype=object)] + [0.0] * 5),
+        "InvalidInputError",
+        E.INVALID_ARGUMENT,
+    ),
+    (
+        "fk-numpy-1-element-array-value",
+        lambda i: i.RobotModel(ROBOT).forward_kinematics([np.array([0.5])] + [0.0] * 5),
+        "InvalidInputError",
+        E.INVALID_ARGUMENT,
+    ),
     (
         "fk-none-value",
         lambda i: i.RobotModel(ROBOT).forward_kinematics([None] * 6),
@@ -728,9 +748,11 @@ def test_a_refused_go_changes_nothing(impl) -> None:  # type: ignore[no-untyped-
 
 
 GOOD_REALS = [0.5, 1, np.float32(0.5), np.float64(0.5), np.int64(1), np.uint8(1), Decimal("0.5"), Fraction(1, 2)]
+GOOD_REALS += [np.array(0.5), np.array(3, dtype=np.int16)]  # 0-d arrays of a real dtype
+GOOD_IDS = [type(v).__name__ + (f"-{v.dtype}" if isinstance(v, np.ndarray) else "") for v in GOOD_REALS]
 
 
-@pytest.mark.parametrize("value", GOOD_REALS, ids=[type(v).__name__ for v in GOOD_REALS])
+@pytest.mark.parametrize("value", GOOD_REALS, ids=GOOD_IDS)
 def test_real_numbers_of_every_kind_are_accepted(value) -> None:  # type: ignore[no-untyped-def]
     for impl in (native, python_impl):
         pose = impl.RobotModel(ROBOT).forward_kinematics([value] * 6)

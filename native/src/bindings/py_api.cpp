@@ -67,7 +67,9 @@ bool is_real(py::handle h) {
   PyObject* o = h.ptr();
   if (PyFloat_CheckExact(o) || PyLong_CheckExact(o)) return true;
   if (PyBool_Check(o) || PyUnicode_Check(o) || PyBytes_Check(o) || PyByteArray_Check(o)) return false;
-  if (py::isinstance(h, handles->generic)) {  // a numpy scalar is real by its dtype, as an array is
+  const bool scalar = py::isinstance(h, handles->generic);
+  if (scalar || py::isinstance(h, handles->ndarray)) {  // a numpy scalar or 0-d array: by its dtype
+    if (!scalar && h.attr("ndim").cast<long>() != 0) return false;  // an array is no number
     const char kind = h.attr("dtype").attr("kind").cast<std::string>().at(0);
     return kind == 'f' || kind == 'i' || kind == 'u';
   }
