@@ -91,16 +91,22 @@ COV_MODULE = $$(ls $(CURDIR)/$(COV_BUILD)/_native*.so)
 MUTATOR_SHIM := $(COV_BUILD)/librrosfuzz_mutator_shim.so
 FUZZ_ARGS ?= corpus/ -max_total_time=60
 
+## LD_PRELOAD splits its list at spaces, and these recipes name absolute paths: a checkout in a
+## path with a space is refused with a word (CMake failed on "Cannot run the interpreter").
+NO_SPACE = @case "$(CURDIR)" in *" "*) echo "make $@: $(CURDIR) has a space in its path, which LD_PRELOAD cannot take; use a clone in a path without spaces (make run and make test work in this one)" >&2; exit 2;; esac
+
 native-cov: setup
+	$(NO_SPACE)
 	scripts/apt-ensure.sh clang libclang-rt-14-dev
 	$(PY) -m pip install -q "pybind11>=2.12"
 	cmake -S . -B $(COV_BUILD) -DRROSFUZZ_COVERAGE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DCMAKE_CXX_COMPILER=clang++ -DPython_EXECUTABLE=$(CURDIR)/$(PY) \
+	  -DCMAKE_CXX_COMPILER=clang++ -DPython_EXECUTABLE="$(CURDIR)/$(PY)" \
 	  -Dpybind11_DIR=$$($(PY) -m pybind11 --cmakedir) > /dev/null
 	cmake --build $(COV_BUILD) -j2
 	cc -shared -fPIC -O2 -Wall -o $(MUTATOR_SHIM) native/coverage/mutator_shim.c -ldl
 
 fuzz-native: native-cov
+	$(NO_SPACE)
 	LD_PRELOAD="$(ATHERIS_PRELOAD) $(CURDIR)/$(MUTATOR_SHIM)" ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
 	  $(PY) fuzz_diff.py $(FUZZ_ARGS)
 
@@ -110,6 +116,7 @@ FUZZ_URDF_DIR ?= build/fuzz-urdf
 FUZZ_URDF_ARGS ?= -max_total_time=600 -timeout=30
 .PHONY: fuzz-urdf
 fuzz-urdf: native-cov
+	$(NO_SPACE)
 	mkdir -p $(FUZZ_URDF_DIR)/corpus
 	LD_PRELOAD=$(ATHERIS_PRELOAD) ASAN_OPTIONS=detect_leaks=0 RROSFUZZ_NATIVE_MODULE=$(COV_MODULE) \
 	  $(PY) tests/fuzz_urdf_loader.py $(FUZZ_URDF_ARGS) -artifact_prefix=$(CURDIR)/$(FUZZ_URDF_DIR)/ \

@@ -30,8 +30,19 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 echo "setup: installing the project into $VENV (native build in build/)"
 # constraints.txt: the tested versions of every package (pyproject.toml has the supported ranges)
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -c constraints.txt \
+# pip's own status, not grep's (grep -v finds nothing to print when all is well): an interrupted
+# or failed install went on to the import check, which then blamed the native module
+# (pipefail: the pipeline's status is pip's)
+if "$VENV/bin/python" -m pip install -q --disable-pip-version-check -c constraints.txt \
   -e ".[${RROSFUZZ_EXTRAS:-test,adapters,engines}]" 2>&1 \
-  | grep -v "is ignored: it is neither a file nor a directory" || true
+  | { grep -v "is ignored: it is neither a file nor a directory" || true; }; then
+  status=0
+else
+  status=$?
+fi
+if [ "$status" -ne 0 ]; then
+  echo "setup: pip install into $VENV failed or was interrupted (status $status): its output is above; run the same command again" >&2
+  exit "$status"
+fi
 "$VENV/bin/python" -c "import native, python_impl" \
   || { echo "setup: the install did not produce an importable native module" >&2; exit 1; }
