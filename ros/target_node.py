@@ -29,7 +29,7 @@ from fuzzer.execution.records import Outcome, Status
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import CallError, call_from_json
 from fuzzer.ros import env
-from fuzzer.ros.transport import decode, encode
+from fuzzer.ros.protocol import decode, encode
 
 
 def main(argv: list[str] | None = None) -> int:
