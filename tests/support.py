@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import os
 import subprocess
@@ -44,6 +46,16 @@ def fuzz(
         timeout=timeout,
         check=False,
     )
+
+
+def sidecar_describes(crash: Path) -> Path:
+    """Make the sidecar beside ``crash`` describe the file as it is now (its ``sha1``): a test that
+    edits a crash file keeps its sidecar, which the tools refuse as another input's otherwise."""
+    side = crash.with_name(crash.name + ".json")
+    data = json.loads(side.read_text())
+    data["sha1"] = hashlib.sha1(crash.read_bytes()).hexdigest()
+    side.write_text(json.dumps(data))
+    return crash
 
 
 def python(program: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:

@@ -397,6 +397,9 @@ def test_minimize_says_a_file_that_kills_its_process_is_libfuzzers_to_minimize(t
     _move_case(crash, 3.1)
     crash.with_name(crash.name + ".json").write_bytes(sidecar.read_bytes())
     from tests.support import fuzz as plain  # minimize takes no --no-progress
+    from tests.support import sidecar_describes
+
+    sidecar_describes(crash)  # another input's sidecar, made this file's
 
     run = plain("minimize", str(crash), "--targets=native,tests.plugins.faults:aborts")
     assert run.returncode == 1, (run.returncode, run.stderr[-2000:])

@@ -10,6 +10,7 @@ from typing import Any
 
 from fuzzer import reporting
 from fuzzer.input.testcase import TestCase
+from tests.support import sidecar_describes
 from tests.test_hostile_files import AGREE, cli, copy_crash
 
 
@@ -90,10 +91,12 @@ def test_export_bag_refuses_a_message_not_of_its_type_or_of_no_type_we_fuzz(tmp_
     crash = copy_crash(tmp_path)
     message = json.loads(AGREE.read_text())["message"]
     crash.write_bytes(TestCase("sensor_msgs/JointState", {**message, "header": 5}).encode())
+    sidecar_describes(crash)
     run = cli("export-bag", str(crash), "-o", str(tmp_path / "a.bag"), cwd=tmp_path)
     assert run.returncode == 2 and "is not a sensor_msgs/JointState" in run.stderr, run.stderr[-800:]
     assert "Traceback" not in run.stderr  # a header of 5 was an AttributeError's traceback
     crash.write_bytes(TestCase("os/system", message).encode())
+    sidecar_describes(crash)
     run = cli("export-bag", str(crash), "-o", str(tmp_path / "b.bag"), cwd=tmp_path)
     assert run.returncode == 2 and "'os/system' is none a campaign fuzzes" in run.stderr, run.stderr[-800:]
     assert not (tmp_path / "b.bag").exists(), "a bag of the sidecar's states alone was written"
