@@ -9,7 +9,6 @@ file; the marker must not appear).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import re
@@ -22,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+
+from tests.support import sidecar_describes
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = str(ROOT / "fuzz_diff.py")
@@ -127,11 +128,7 @@ def _unrunnable(tmp: Path) -> Path:
     case = json.loads(crash.read_bytes())
     case["message"]["position"] = "not a list"
     crash.write_text(json.dumps(case))
-    side = crash.with_name(crash.name + ".json")
-    sidecar = json.loads(side.read_text())
-    sidecar["sha1"] = hashlib.sha1(crash.read_bytes()).hexdigest()
-    side.write_text(json.dumps(sidecar))
-    return crash
+    return sidecar_describes(crash)
 
 
 def _report_of_another_input(tmp: Path) -> Row:

@@ -85,12 +85,8 @@ def test_a_signature_the_budget_cut_short_is_not_re_run_for_a_later_input() -> N
     assert later.kind is Kind.VALUE and later.unchecked.startswith(SEEN_BEFORE)
 
 
-def test_a_divergence_the_re_runs_explain_is_re_run_every_time() -> None:
-    """At the band's edge a 1e-9 nudge moves the answer: the difference is ill-conditioned, never
-    a finding whose later inputs could skip the re-runs. (The verdict is the faulty twin's own
-    ``go.pose_goal`` violation since the sixty-third session: it reports the goal reached at its
-    start, and a violation wins over an explained difference; the re-runs still run each time.)"""
-    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+def nudges_of(ev: evaluate.Evaluator) -> list[Any]:
+    """The nudges of ``ev``'s nudged re-runs from now on, in order (a spy on ``run_both``)."""
     nudged: list[Any] = []
     run_both = ev.run_both
 
@@ -100,6 +96,16 @@ def test_a_divergence_the_re_runs_explain_is_re_run_every_time() -> None:
         return run_both(call, seeds, runners, nudge)
 
     ev.run_both = spy  # type: ignore[method-assign]
+    return nudged
+
+
+def test_a_divergence_the_re_runs_explain_is_re_run_every_time() -> None:
+    """At the band's edge a 1e-9 nudge moves the answer: the difference is ill-conditioned, never
+    a finding whose later inputs could skip the re-runs. (The verdict is the faulty twin's own
+    ``go.pose_goal`` violation since the sixty-third session: it reports the goal reached at its
+    start, and a violation wins over an explained difference; the re-runs still run each time.)"""
+    ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
+    nudged = nudges_of(ev)
     for _ in range(2):
         before = len(nudged)
         c = ev.evaluate(seed_band_go(0.3), validated=True).comparison
@@ -149,15 +155,7 @@ def test_a_divergence_explained_again_takes_fewer_re_runs_and_the_same_verdict()
     """The second input an ill-conditioning re-run explains starts with that re-run: one nudged
     run, where the first input took more; the verdict is the one a new evaluator gives."""
     ev = evaluator("scenario", "benchmarks.zoo.deep:ik_seed_band")
-    nudged: list[Any] = []
-    run_both = ev.run_both
-
-    def spy(call, seeds=(None, None), runners=None, nudge=None):  # type: ignore[no-untyped-def]
-        if nudge is not None:
-            nudged.append(nudge)
-        return run_both(call, seeds, runners, nudge)
-
-    ev.run_both = spy  # type: ignore[method-assign]
+    nudged = nudges_of(ev)
     first = ev.evaluate(seed_band_go(0.3), validated=True).comparison
     runs_first = len(nudged)
     later = ev.evaluate(seed_band_go(0.3), validated=True).comparison

@@ -37,14 +37,7 @@ def read_records(path: Path) -> tuple[list[dict[str, Any]], int]:
     records : list of dict
     skipped : int
     """
-    records: list[dict[str, Any]] = []
-    skipped = 0
-    for record in untrusted_json.jsonl_records(path):
-        if isinstance(record, dict):
-            records.append(record)
-        else:
-            skipped += 1
-    return records, skipped
+    return parsed_records(path, dict)
 
 
 def parsed_records(path: Path, parse: Callable[[Mapping[str, Any]], T | None]) -> tuple[list[T], int]:
