@@ -46,7 +46,7 @@ from pathlib import Path
 from benchmarks import cli, journal, sweeps
 from benchmarks.bench_zoo import ALL_ENGINES, RESULTS, Run, run_one
 from benchmarks.deep_stats import Mode, markdown, plot
-from benchmarks.zoo import DEEP, ZOO, Bug
+from benchmarks.zoo import DEEP, UNTUNED, ZOO, Bug
 from benchmarks.zoo_tables import ROOT, replace_section
 
 MARKS = ("<!-- bench_deep:begin -->", "<!-- bench_deep:end -->")
@@ -62,8 +62,9 @@ SECTIONS = {
     ),
 }
 """Modes with a BENCHMARKS.md section of their own: (marks, title); the others use MARKS, TITLE."""
-BUGS: dict[str, Bug] = {b.name: b for b in (*DEEP, *ZOO)}
-"""The bugs this benchmark runs, by name: the deep ones, then the shallow zoo."""
+BUGS: dict[str, Bug] = {b.name: b for b in (*DEEP, *ZOO, *UNTUNED)}
+"""The bugs this benchmark runs, by name: the deep ones, the shallow zoo, then the bugs the
+engine was not tuned on (``--bugs`` only; no mode runs them)."""
 
 
 MODES = {

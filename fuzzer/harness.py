@@ -99,6 +99,7 @@ class Harness(MutationStep):
             self.on_exec()
             return
         seen, signatures = len(self.features.seen), len(self.stats.signatures)
+        nearer = self.float_tracer.known if self.float_tracer is not None else 0
         first = self.stats.first_input is None
         self._execute(case, data, trusted)
         if self.sources is not None and self._credit is not None and self._credit == data:
@@ -109,6 +110,8 @@ class Harness(MutationStep):
             self.sources.reward(case.strategy, paid)
         compared = self.float_tracer.compared if self.float_tracer is not None else None
         new = len(self.features.seen) > seen
+        if self.sources is not None and self.float_tracer is not None and self.float_tracer.known > nearer:
+            self.sources.offer(case)  # a comparison nearer its flip: a preferred parent of the walk
         if self.i2s is not None and compared is not None and new:
             self.i2s.offer(data, compared.sites_of(digest(data)))  # input-to-state (fuzzer.selection.i2s)
         if self.sweep is not None and self.sweep.due():
@@ -129,6 +132,8 @@ class Harness(MutationStep):
         evaluation = self.evaluator.evaluate(case, validated=trusted)
         if compared is not None:
             compared.end(digest(data))  # what this input compared, for when it is mutated
+        if self.sources is not None:
+            self.sources.learn(evaluation.call, evaluation.outcomes)  # the walk's configurations
         if evaluation.verdict != Verdict.MALFORMED:
             self._remember(data, case)
         if evaluation.verdict == Verdict.FILTERED:

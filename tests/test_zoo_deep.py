@@ -14,7 +14,7 @@ import native
 import python_impl
 from benchmarks import bench_deep, deep_stats
 from benchmarks.bench_zoo import Run
-from benchmarks.zoo import DEEP, STATEFUL, ZOO, deep
+from benchmarks.zoo import DEEP, STATEFUL, UNTUNED, ZOO, deep
 from fuzzer.execution.records import UNCOUNTED, Comparison
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.execution.tolerance import default_tolerance
@@ -420,7 +420,7 @@ def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp
     mode = bench_deep.MODES["zoo"]
     assert mode.bugs == tuple(b.name for b in ZOO) and (mode.trials, mode.budget) == (10, 10.0)
     assert mode.engines == ("full", "libfuzzer", "paper", "hypothesis", "uniform")
-    assert list(bench_deep.BUGS) == [b.name for b in (*DEEP, *ZOO)]
+    assert list(bench_deep.BUGS) == [b.name for b in (*DEEP, *ZOO, *UNTUNED)]
     assert sorted(["silent_clamp", "tight_relation", "cached_pose"], key=bench_deep._bug_order) == [
         "tight_relation",
         "silent_clamp",

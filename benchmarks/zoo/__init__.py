@@ -34,10 +34,12 @@ class Bug:
     module: str = "bugs"
     """The module of the variant: ``bugs`` (one call shows them) or ``stateful`` (they need a
     live group: a second call, or a look at a trajectory)."""
+    package: str = "benchmarks.zoo"
+    """The package of ``module`` (``benchmarks`` for ``UNTUNED``'s ``untuned_bugs``)."""
 
     @property
     def target(self) -> str:
-        return f"benchmarks.zoo.{self.module}:{self.variant or self.name}"
+        return f"{self.package}.{self.module}:{self.variant or self.name}"
 
     @property
     def is_control(self) -> bool:
@@ -335,5 +337,50 @@ CONTROLS: tuple[Bug, ...] = _controls()
 """The control on every op and robot configuration a zoo bug uses, ``fk`` on every known
 robot (example-robot-data's included), ``ik`` on the default arm, UR5, Panda, Kinova and
 xArm7, and ``scenario`` on UR5."""
+
+UNTUNED: tuple[Bug, ...] = tuple(
+    Bug(name, description, source, op, package="benchmarks", module="untuned_bugs")
+    for name, description, source, op in (
+        (
+            "gated_band",
+            "joint_4 offset (1 mrad) in a band 0.2% of its range wide at e/10 of it, only with joint_2 < 0",
+            "a per-direction compensation table with one bad cell (helper's own class, sixty-third session)",
+            "move",
+        ),
+        (
+            "sum_band_orient",
+            "flange roll wrong (1 mrad) when joint_1 + joint_6 is within 3.4e-3 rad of pi/7",
+            "a 'tool yaw' shortcut combining base and flange angles (helper's own class)",
+            "fk",
+        ),
+        (
+            "floor_clamp",
+            "the tool point's z clamped to -0.098683 m inside FK (a workspace floor)",
+            "a table height applied inside forward kinematics (helper's own class)",
+            "fk",
+        ),
+        (
+            "second_go_sign",
+            "joint_4's goal negated on a group's second go() only",
+            "a direction flag toggled per move instead of per joint (helper's own class)",
+            "scenario",
+        ),
+        (
+            "ik_ball",
+            "IK reports NO_SOLUTION for goals within 2.54 cm of a point inside the workspace",
+            "a spurious singularity guard around one workspace point (helper's own class)",
+            "ik",
+        ),
+        (
+            "folded_corner",
+            "FK 1 mm high with joint_3 > 3.6 and joint_5 > 3.7 rad (both past pi)",
+            "a wrong 'folded' branch past pi on two joints (helper's own class)",
+            "move",
+        ),
+    )
+)
+"""The six bugs a helper planted without having seen the engine (``benchmarks/untuned_bugs.py``;
+BENCHMARKS.md, "Bugs the engine was not tuned on"), on the default arm; ``bench_ab`` races
+engines on them by name like the zoo's."""
 
 BY_NAME = {bug.name: bug for bug in (*ZOO, CONTROL, *CONTROLS)}

@@ -88,9 +88,9 @@ class MutationStep:
             taken = self.i2s.take(rng) if self.i2s is not None and partner is None else None
             queued, focus = taken if taken is not None else (None, None)  # an input and the site it aims at
             parent = self._parent(queued or data, rng, partner is None and queued is None, True, focus)
-            fresh = self._fresh(parent, rng) if queued is None else None
+            origin, fresh = self._fresh(parent, rng) if queued is None else (parent, None)
             if fresh is not None:
-                return self._emit(parent.child(*fresh), parent, max_size, data)
+                return self._emit(origin.child(*fresh), origin, max_size, data)
             ctx = self.context
             ctx.rng = rng
             splice = str(getattr(self.crossover_message, "lineage_name", "splice"))
@@ -136,12 +136,15 @@ class MutationStep:
             return TestCase(base.msg_type, base.message, base.sequence, "repair", ("repair",), 1)
         return case
 
-    def _fresh(self, parent: TestCase, rng: random.Random) -> Made:
-        """A fresh input (space-filling or aligned) made from ``parent`` and its lineage name,
-        when the source bandit picks one."""
+    def _fresh(self, parent: TestCase, rng: random.Random) -> tuple[TestCase, Made]:
+        """When the source bandit picks a source other than mutation: the input it starts from
+        (``parent``, or the walk's own choice) and the fresh input (space-filling, aligned or
+        walked) with its lineage name; else ``parent`` and None."""
         if self.sources is None:
-            return None
-        return self.sources.make(self.sources.source.choose(rng), parent.message, rng)
+            return parent, None
+        arm = self.sources.source.choose(rng)
+        origin = self.sources.parent(arm, parent, rng)
+        return origin, self.sources.make(arm, origin.message, rng)
 
     def _other_parent(self, rng: random.Random) -> TestCase:
         """A second parent for a mutator that uses one (``uses_other``, the scenario mutator's

@@ -105,6 +105,12 @@ class FloatCompareTracer:
         self._build()
 
     @property
+    def known(self) -> int:
+        """Float-comparison features seen so far (an input that raises it brought some
+        comparison nearer its flip than any input before)."""
+        return len(self._counters)
+
+    @property
     def traced(self) -> int:
         """Float comparisons traced so far (every input's)."""
         return self._spent + self._given - self._left()

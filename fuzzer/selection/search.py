@@ -1,5 +1,6 @@
 """What the full engine's search is made of, beside libFuzzer (issue 11): the bandits over input
-sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sources``), the
+sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sources``; for
+``ik`` the joint-space walk of goals, ``fuzzer.generation.walk``), the
 float-comparison tracer (``fuzzer.selection.floatcmp``) with the thresholds it learns for the
 ``compared`` mutator (``fuzzer.selection.compared``), the queue of new inputs for that mutator
 (``fuzzer.selection.i2s``) and, for ``fk`` in process, the batched sweeps
@@ -37,7 +38,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     from fuzzer.selection.bandit import Bandit
     from fuzzer.selection.compared import ComparedValues
     from fuzzer.selection.i2s import I2SQueue
-    from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, Sources
+    from fuzzer.selection.state import ALIGNED, MUTATE, SPACEFILL, WALK, Sources
 
     config = session.config
     weights: dict[str, float] = dict(mutators.WEIGHTS)
@@ -53,17 +54,19 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
     facts = session.facts()
     stream = SpaceFill(facts.lower, facts.upper, seed=seed)
     first_round = len(probes(facts.lower, facts.upper, rounds=1))
+    walk = _walk(session, facts) if config.op == "ik" else None
     maker = partial(
         fresh_inputs,
         config.op,
         config.message_type,
         joint_names=facts.joint_names,
-        reachable=facts.reachable,
+        reachable=facts.reachable if walk is None else walk.recording(facts.reachable),
         max_steps=config.max_steps,
     )
     fresh = maker(stream, boundary=Boundary(facts.lower, facts.upper, start=min(seeded, first_round)))
     aligned = maker(Aligned(facts.lower, facts.upper, seed=seed + ALIGNED_SEED), name=ALIGNED)
-    sources = Sources(Bandit((MUTATE, SPACEFILL, ALIGNED)), Bandit(tuple(weights), weights), fresh, aligned)
+    arms = (MUTATE, SPACEFILL, ALIGNED) if walk is None else (MUTATE, SPACEFILL, ALIGNED, WALK)
+    sources = Sources(Bandit(arms), Bandit(tuple(weights), weights), fresh, aligned, walk)
     arm = "seq_compared" if config.op == "scenario" else "compared"
     search: dict[str, Any] = {
         "sources": sources,
@@ -80,3 +83,17 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
             seed=seed + SWEEP_SEED,
         )
     return search
+
+
+def _walk(session: Session, facts: Any) -> Any:
+    """The ``walk`` source of an ``ik`` campaign (``fuzzer.generation.walk``), on the first
+    target's forward kinematics of any link."""
+    from fuzzer.generation.walk import Walk
+
+    model = session.reference
+
+    def pose_of(values: tuple[float, ...], link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        pose = model.forward_kinematics(list(values), link)
+        return tuple(map(float, pose.position)), tuple(map(float, pose.orientation))
+
+    return Walk(session.config.message_type, facts.lower, facts.upper, pose_of)

@@ -10,9 +10,13 @@ import time
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fuzzer.selection.bandit import Bandit
+
+if TYPE_CHECKING:
+    from fuzzer.generation.walk import Walk
+    from fuzzer.input.testcase import TestCase
 
 POOL_SIZE = 64
 
@@ -39,6 +43,9 @@ pi/2 or at a limit (``fuzzer.generation.spacefill.Aligned``), where joint axes l
 MUTATE = "mutate"
 """The arm of a mutated (or crossed-over) corpus input."""
 
+WALK = "walk"
+"""The arm (and lineage name) of an IK goal moved through joint space (``fuzzer.generation.walk``)."""
+
 Made = tuple[dict[str, Any], str] | None
 """A fresh input's message and lineage name, or None (the source does not apply)."""
 Maker = Callable[[dict[str, Any], random.Random], Made]
@@ -51,8 +58,9 @@ class Sources:
     coverage features or new divergence signatures (``fuzzer.selection.bandit``): ``source``
     between a fresh space-filling input (``spacefill``: the next configuration of the Sobol
     stream put into the parent by ``fresh``), a fresh aligned configuration (``aligned``, by
-    ``aligned``) and a mutated corpus input (``mutate``); then, for a mutation, ``mutators``
-    over the registered mutators by name.
+    ``aligned``), for ``--op ik`` the parent's goal moved through joint space (``walk``, by
+    ``walk``) and a mutated corpus input (``mutate``); then, for a mutation, ``mutators`` over
+    the registered mutators by name.
 
     Attributes
     ----------
@@ -67,12 +75,16 @@ class Sources:
         mutates).
     aligned : callable like ``fresh``, optional
         A copy of the parent carrying the next aligned configuration, named ``aligned``.
+    walk : Walk, optional
+        ``--op ik``: the parent with its goal moved through joint space, named ``walk`` (None
+        when the parent's configuration is not known); it learns configurations from each run.
     """
 
     source: Bandit
     mutators: Bandit
     fresh: Maker
     aligned: Maker | None = None
+    walk: Walk | None = None
 
     def make(self, arm: str, message: dict[str, Any], rng: random.Random) -> Made:
         """A fresh input from the source ``arm`` (None for ``mutate``, or when not applicable)."""
@@ -80,12 +92,29 @@ class Sources:
             return self.fresh(message, rng)
         if arm == ALIGNED and self.aligned is not None:
             return self.aligned(message, rng)
+        if arm == WALK and self.walk is not None:
+            return self.walk.make(message, rng)
         return None
+
+    def parent(self, arm: str, case: TestCase, rng: random.Random) -> TestCase:
+        """The parent source ``arm`` makes its input from: ``case`` (libFuzzer's), or for
+        ``walk`` sometimes one of the newest inputs that were new coverage."""
+        return self.walk.parent(case, rng) if arm == WALK and self.walk is not None else case
+
+    def learn(self, call: Any, outcomes: Any) -> None:
+        """After an input ran: what its outcomes tell the sources (the walk's configurations)."""
+        if self.walk is not None:
+            self.walk.learn(call, outcomes)
+
+    def offer(self, case: TestCase) -> None:
+        """An input whose run was new coverage (the walk's preferred parents)."""
+        if self.walk is not None:
+            self.walk.offer(case)
 
     def reward(self, strategy: str, paid: bool) -> None:
         """Credit the arms that made an input whose last step was ``strategy``."""
         source = strategy.partition(":")[0]
-        if source in (SPACEFILL, ALIGNED):
+        if source in (SPACEFILL, ALIGNED, WALK):
             self.source.reward(source, paid)
             return
         self.source.reward(MUTATE, paid)

@@ -1,0 +1,175 @@
+"""A walk of IK goals through joint space: a pose goal moved by moving the configuration it is
+the pose of, so that the moved goal stays reachable.
+
+Mutating a pose goal's fields moves it off the set of poses the arm can take: a position moved
+a few centimetres with the orientation kept is, for a 6-joint arm, mostly a pose no
+configuration reaches, and an IK fault there shows as nothing (both targets fail). Session 63's
+untuned bug ``ik_ball`` (IK fails for goals within 2.54 cm of a point of the workspace;
+BENCHMARKS.md, "Bugs the engine was not tuned on") is such a region: the float tracer led the
+search into the ball, but by poses KDL could not reach either, so only the space-filling
+inputs' share found it.
+
+:class:`Walk` is a source of the bandit over input sources (``fuzzer.selection.state.Sources``,
+arm ``walk``) for ``--op ik``. It keeps, per pose goal, a configuration whose pose it is: the
+configuration a space-filling or aligned input was made from (:meth:`Walk.recording` wraps the
+robot's forward kinematics that makes them), the one a walk made, or the first target's IK
+solution when it converged (:meth:`Walk.learn`). :meth:`Walk.make` moves the parent's
+configuration (one joint, two, or all of them, by a normal step whose size is drawn
+log-uniformly between ``STEP_SHARES`` of each joint's range, clamped to the limits) and gives
+the pose of the moved configuration, of the same link, in a copy of the parent: a goal near
+the parent's and reachable. With the float tracer's distance-to-flip features, a walk climbs
+toward a branch on the goal's position through reachable goals only. A parent with no known
+configuration is not walked (the harness mutates it instead).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections import OrderedDict, deque
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from fuzzer.execution.records import Outcome, Status
+from fuzzer.generation.spacefill import Reachable, configuration_message, finite_box
+from fuzzer.input.mapping import MAPPINGS, IkCall
+from fuzzer.input.testcase import TestCase
+from fuzzer.selection.state import WALK, Made
+
+CAPACITY = 4096
+"""Pose goals whose configuration is kept (the least recently used are forgotten)."""
+STEP_SHARES = (1e-4, 0.3)
+"""A step's standard deviation lies between these shares of a joint's range (log-uniformly)."""
+ONE_JOINT, TWO_JOINTS = 0.5, 0.25
+"""How often a step moves one joint, two joints; otherwise it moves every joint."""
+FRONTIER = 8
+"""The newest walkable inputs whose run was new coverage, kept as preferred parents."""
+FRONTIER_CHANCE = 0.5
+"""How often a walk starts from one of them instead of libFuzzer's parent."""
+
+Key = tuple[tuple[float, ...], tuple[float, ...], str | None]
+PoseOf = Callable[[tuple[float, ...], str | None], tuple[tuple[float, ...], tuple[float, ...]]]
+"""Forward kinematics of a configuration for a link (None: the group's tip): (position, orientation)."""
+
+
+class Walk:
+    """The ``walk`` source of an ``ik`` campaign (the module's docstring says what it does).
+
+    Parameters
+    ----------
+    msg_type : str
+        The campaign's message type (``geometry_msgs/PoseStamped`` or ``geometry_msgs/Pose``).
+    lower, upper : sequence of float, length dof
+        Joint limits (rad, m); an infinite bound (continuous joint) becomes -pi / pi.
+    pose_of : callable (values, link) -> (position, orientation)
+        The robot's forward kinematics (m; quaternion x, y, z, w).
+    capacity : int
+        How many pose goals' configurations are kept.
+    """
+
+    def __init__(
+        self,
+        msg_type: str,
+        lower: Sequence[float],
+        upper: Sequence[float],
+        pose_of: PoseOf,
+        capacity: int = CAPACITY,
+    ) -> None:
+        self.msg_type = msg_type
+        self.lower, self.upper = finite_box(lower, upper)
+        self.pose_of = pose_of
+        self.capacity = capacity
+        self._known: OrderedDict[Key, tuple[float, ...]] = OrderedDict()
+        self.frontier: deque[TestCase] = deque(maxlen=FRONTIER)
+
+    def __len__(self) -> int:
+        return len(self._known)
+
+    def note(
+        self,
+        position: Sequence[float],
+        orientation: Sequence[float],
+        link: str | None,
+        values: Sequence[float],
+    ) -> None:
+        """Remember that ``values`` puts ``link`` at (``position``, ``orientation``)."""
+        key = (tuple(map(float, position)), tuple(map(float, orientation)), link)
+        self._known[key] = tuple(map(float, values))
+        self._known.move_to_end(key)
+        while len(self._known) > self.capacity:
+            self._known.popitem(last=False)
+
+    def recording(self, reachable: Reachable) -> Reachable:
+        """``reachable`` (forward kinematics of the group's tip), remembering each configuration
+        by the pose it gives: the space-filling and aligned sources' goals become walkable."""
+
+        def recorded(values: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+            position, orientation = reachable(values)
+            self.note(position, orientation, None, values)
+            return position, orientation
+
+        return recorded
+
+    def learn(self, call: Any, outcomes: Sequence[Outcome]) -> None:
+        """After an input ran: the first target's IK solution of ``call`` when it converged."""
+        if not isinstance(call, IkCall) or not outcomes or outcomes[0].status is not Status.OK:
+            return
+        values = outcomes[0].values.get("joint_values", ())
+        if len(values) == len(self.lower) and all(map(math.isfinite, values)):
+            self.note(call.position, call.orientation, call.link, values)
+
+    def offer(self, case: TestCase) -> None:
+        """An input whose run was new coverage: one of the preferred parents when its goal's
+        configuration is known (the newest ``FRONTIER`` are kept)."""
+        if self.configuration(case.message) is not None:
+            self.frontier.append(case)
+
+    def parent(self, case: TestCase, rng: random.Random) -> TestCase:
+        """The input to walk from: libFuzzer's parent ``case`` or, ``FRONTIER_CHANCE`` of the
+        time, one of the newest walkable inputs that were new coverage. libFuzzer draws its
+        parent from the whole corpus, so a climb toward a branch (each step closer is a new
+        float-comparison feature) went on from its last step about once per corpus size of walks."""
+        if self.frontier and rng.random() < FRONTIER_CHANCE:
+            return rng.choice(self.frontier)
+        return case
+
+    def configuration(self, message: dict[str, Any]) -> tuple[tuple[float, ...], str | None] | None:
+        """The known configuration of ``message``'s goal and the goal's link, or None."""
+        try:
+            call = MAPPINGS[("ik", self.msg_type)](message)
+            if not isinstance(call, IkCall):
+                return None
+            key = (tuple(map(float, call.position)), tuple(map(float, call.orientation)), call.link)
+        except (KeyError, TypeError, ValueError, AttributeError):
+            return None
+        values = self._known.get(key)
+        if values is None:
+            return None
+        self._known.move_to_end(key)
+        return values, call.link
+
+    def step(self, values: Sequence[float], rng: random.Random) -> tuple[float, ...]:
+        """``values`` with one, two or all joints moved by a normal step, inside the limits."""
+        q = list(values)
+        draw = rng.random()
+        count = 1 if draw < ONE_JOINT else 2 if draw < ONE_JOINT + TWO_JOINTS else len(q)
+        share = math.exp(rng.uniform(math.log(STEP_SHARES[0]), math.log(STEP_SHARES[1])))
+        for j in rng.sample(range(len(q)), min(count, len(q))):
+            lo, hi = float(self.lower[j]), float(self.upper[j])
+            q[j] = min(max(q[j] + rng.gauss(0.0, share * (hi - lo)), lo), hi)
+        return tuple(q)
+
+    def make(self, message: dict[str, Any], rng: random.Random) -> Made:
+        """A copy of ``message`` whose goal is the pose of its known configuration moved by
+        :meth:`step` (named ``walk``); None when its configuration is not known."""
+        known = self.configuration(message)
+        if known is None:
+            return None
+        values, link = known
+        moved = self.step(values, rng)
+        position, orientation = self.pose_of(moved, link)
+        if not all(map(math.isfinite, (*position, *orientation))):
+            return None
+        self.note(position, orientation, link, moved)
+        out = configuration_message(self.msg_type, message, moved, (), lambda _: (position, orientation))
+        return None if out is None else (out, WALK)
