@@ -99,7 +99,6 @@ class Harness(MutationStep):
             self.on_exec()
             return
         seen, signatures = len(self.features.seen), len(self.stats.signatures)
-        nearer = self.float_tracer.known if self.float_tracer is not None else 0
         first = self.stats.first_input is None
         self._execute(case, data, trusted)
         if self.sources is not None and self._credit is not None and self._credit == data:
@@ -110,8 +109,9 @@ class Harness(MutationStep):
             self.sources.reward(case.strategy, paid)
         compared = self.float_tracer.compared if self.float_tracer is not None else None
         new = len(self.features.seen) > seen
-        if self.sources is not None and self.float_tracer is not None and self.float_tracer.known > nearer:
-            self.sources.offer(case)  # a comparison nearer its flip: a preferred parent of the walk
+        if self.sources is not None and self.float_tracer is not None:
+            for site in self.float_tracer.nearer:  # where it came nearest a flip: walked on from
+                self.sources.offer(site, case)
         if self.i2s is not None and compared is not None and new:
             self.i2s.offer(data, compared.sites_of(digest(data)))  # input-to-state (fuzzer.selection.i2s)
         if self.sweep is not None and self.sweep.due():

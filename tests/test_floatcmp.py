@@ -38,6 +38,26 @@ def test_float_comparisons_of_instrumented_code_are_traced_with_their_distance()
         atheris._trace_cmp = tracer.inner
 
 
+def test_nearer_names_the_sites_an_input_brought_nearer_their_flip_than_any_before() -> None:
+    """``nearer`` (the walk's preferred parents, ``fuzzer.generation.walk``): per input, the
+    sites whose distance reached a smaller exponent than every earlier input's, on either side."""
+    module = _instrumented()
+    tracer = FloatCompareTracer(Features(enabled=False))
+    try:
+        runs = []
+        for x, y in ((0.5, 1.0), (0.6, 1.0), (0.07, 1.0), (0.07, 2.5), (0.5, 1.0), (0.0617, 1.0), (0.061, 9.0)):
+            tracer.install()  # the harness's call before each input: a fresh list
+            module.branch(x, y)
+            runs.append(list(tracer.nearer))
+        x_site, y_site = runs[0]
+        # (0.6, 1.0): 1.2 vs 0.1234 is farther and y's gap is the same; (0.07, 1.0): x nearer;
+        # (0.07, 2.5): y nearer; (0.5, 1.0): nothing new; (0.0617, 1.0): x's gap 0 exactly;
+        # (0.061, 9.0): x flipped (its gap larger again), y is past 3 and farther
+        assert runs[1:] == [[], [x_site], [y_site], [], [x_site], []]
+    finally:
+        atheris._trace_cmp = tracer.inner
+
+
 def test_install_is_idempotent_and_follows_a_swap() -> None:
     calls: list[tuple[object, ...]] = []
 

@@ -225,36 +225,44 @@ def _cases(walk: Walk, count: int) -> list[TestCase]:
     return [TestCase(STAMPED, _goal_of(record, (i / 100.0,)), 0, "t", (f"c{i}",)) for i in range(count)]
 
 
-def test_the_walk_starts_half_the_time_from_the_newest_inputs_that_came_nearer_a_flip() -> None:
+def test_the_walk_starts_half_the_time_from_the_input_nearest_a_site_s_flip() -> None:
     walk = Walk(STAMPED, (-1.0,), (1.0,), lambda v, link: ((v[0], 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
     far = configuration_message(
         STAMPED, HEADER, (0.5,), (), lambda v: ((9.0, 9.0, 9.0), (0.0, 0.0, 0.0, 1.0))
     )
     unknown = TestCase(STAMPED, far, 0, "t", ("far",))  # type: ignore[arg-type]
     rng = random.Random(0)
-    walk.offer(unknown)
+    walk.offer(3, unknown)
     assert not walk.frontier and walk.parent(unknown, rng) is unknown
-    cases = _cases(walk, FRONTIER + 4)
-    for case in cases:
-        walk.offer(case)
-    assert [id(c) for c in walk.frontier] == [id(c) for c in cases[-FRONTIER:]]
-    picks = [walk.parent(unknown, rng) for _ in range(2000)]
+    cases = _cases(walk, 12)
+    for i, case in enumerate(cases):
+        walk.offer(i % 3, case)  # each site's nearest so far is the last offered for it
+    assert {site: id(c) for site, c in walk.frontier.items()} == {
+        0: id(cases[9]),
+        1: id(cases[10]),
+        2: id(cases[11]),
+    }
+    picks = [walk.parent(unknown, rng) for _ in range(3000)]
     own = sum(p is unknown for p in picks)
-    assert 900 < own < 1100
-    newest = {id(c) for c in cases[-FRONTIER:]}
-    assert {id(p) for p in picks if p is not unknown} == newest
+    assert 1350 < own < 1650
+    by_site = [sum(p is cases[9 + k] for p in picks) for k in range(3)]
+    assert all(400 < n < 600 for n in by_site)  # the sites drawn uniformly
+    for site in range(FRONTIER + 5):
+        walk.offer(100 + site, cases[0])
+    assert len(walk.frontier) == FRONTIER and 0 not in walk.frontier and 100 + FRONTIER + 4 in walk.frontier
 
 
 class _Nearer:
-    """A float tracer whose every input (``grows``) or none brings a comparison nearer its flip."""
+    """A float tracer whose every input came nearer the flip of site 7 (``grows``), or none did."""
 
     compared = None
 
     def __init__(self, grows: bool) -> None:
-        self.known, self.grows = 0, grows
+        self.nearer: list[int] = []
+        self.grows = grows
 
     def install(self) -> None:
-        self.known += self.grows
+        self.nearer[:] = [7] if self.grows else []
 
 
 def test_the_harness_offers_the_walk_what_came_nearer_and_walks_on_from_it(tmp_path: Path) -> None:
@@ -267,16 +275,19 @@ def test_the_harness_offers_the_walk_what_came_nearer_and_walks_on_from_it(tmp_p
             source, Bandit(tuple(mutators.WEIGHTS), mutators.WEIGHTS), lambda m, r: None, None, walk
         )
         h.float_tracer = _Nearer(grows)  # type: ignore[assignment]
+        walkable = []
         for seed in h.seeds:
             h.test_one_input(seed.encode())
-        assert bool(walk.frontier) == grows
+            if walk.configuration(seed.message) is not None:
+                walkable.append(seed)
+        assert walkable
+        assert list(walk.frontier) == ([7] if grows else [])
         if not grows:
             continue
-        assert all(walk.configuration(c.message) is not None for c in walk.frontier)
-        lineages = {tuple(c.lineage) for c in walk.frontier}
+        assert walk.frontier[7] == walkable[-1]  # the last one to come nearer (decoded again)
         stranger = TestCase(STAMPED, h.seeds[0].message, 0, "t", ("stranger",))
         made = [decode(h.mutate(stranger.encode(), 4096, s)) for s in range(40)]
-        # walked from the libFuzzer parent (when its goal is known) or from the frontier, whose
-        # lineage the child carries
-        from_frontier = [c for c in made if c.strategy == WALK and tuple(c.lineage[:-1]) in lineages]
-        assert from_frontier and all(c.lineage[-1] == WALK for c in made if c.strategy == WALK)
+        # walked from the frontier's input, whose lineage the child carries, or from the parent
+        walked = [c for c in made if c.strategy == WALK]
+        assert any(tuple(c.lineage[:-1]) == walkable[-1].lineage for c in walked)
+        assert all(c.lineage[-1] == WALK for c in walked)

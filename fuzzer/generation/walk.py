@@ -17,16 +17,21 @@ solution when it converged (:meth:`Walk.learn`). :meth:`Walk.make` moves the par
 configuration (one joint, two, or all of them, by a normal step whose size is drawn
 log-uniformly between ``STEP_SHARES`` of each joint's range, clamped to the limits) and gives
 the pose of the moved configuration, of the same link, in a copy of the parent: a goal near
-the parent's and reachable. With the float tracer's distance-to-flip features, a walk climbs
-toward a branch on the goal's position through reachable goals only. A parent with no known
-configuration is not walked (the harness mutates it instead).
+the parent's and reachable. A parent with no known configuration is not walked (the harness
+mutates it instead).
+
+Half the walks start from libFuzzer's parent; the other half from the walkable input that came
+nearest the flip of a float comparison (``FloatCompareTracer.nearer``), a site drawn uniformly
+(:meth:`Walk.offer`, :meth:`Walk.parent`). So a walk climbs toward a branch on the goal's
+position (each step nearer is a new float-comparison feature) through reachable goals only,
+from its best step so far.
 """
 
 from __future__ import annotations
 
 import math
 import random
-from collections import OrderedDict, deque
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -42,10 +47,11 @@ STEP_SHARES = (1e-4, 0.3)
 """A step's standard deviation lies between these shares of a joint's range (log-uniformly)."""
 ONE_JOINT, TWO_JOINTS = 0.5, 0.25
 """How often a step moves one joint, two joints; otherwise it moves every joint."""
-FRONTIER = 8
-"""The newest walkable inputs whose run was new coverage, kept as preferred parents."""
+FRONTIER = 1024
+"""Float-comparison sites whose nearest walkable input is kept (the least recently improved
+are forgotten)."""
 FRONTIER_CHANCE = 0.5
-"""How often a walk starts from one of them instead of libFuzzer's parent."""
+"""How often a walk starts from the nearest input of a site instead of libFuzzer's parent."""
 
 Key = tuple[tuple[float, ...], tuple[float, ...], str | None]
 PoseOf = Callable[[tuple[float, ...], str | None], tuple[tuple[float, ...], tuple[float, ...]]]
@@ -80,7 +86,8 @@ class Walk:
         self.pose_of = pose_of
         self.capacity = capacity
         self._known: OrderedDict[Key, tuple[float, ...]] = OrderedDict()
-        self.frontier: deque[TestCase] = deque(maxlen=FRONTIER)
+        self.frontier: OrderedDict[int, TestCase] = OrderedDict()
+        """Per float-comparison site, the walkable input that came nearest its flip."""
 
     def __len__(self) -> int:
         return len(self._known)
@@ -118,19 +125,24 @@ class Walk:
         if len(values) == len(self.lower) and all(map(math.isfinite, values)):
             self.note(call.position, call.orientation, call.link, values)
 
-    def offer(self, case: TestCase) -> None:
-        """An input whose run was new coverage: one of the preferred parents when its goal's
-        configuration is known (the newest ``FRONTIER`` are kept)."""
+    def offer(self, site: int, case: TestCase) -> None:
+        """``case`` came nearer the flip of float comparison ``site`` than any input before
+        (``FloatCompareTracer.nearer``): that site's preferred parent, when its goal's
+        configuration is known."""
         if self.configuration(case.message) is not None:
-            self.frontier.append(case)
+            self.frontier[site] = case
+            self.frontier.move_to_end(site)
+            while len(self.frontier) > FRONTIER:
+                self.frontier.popitem(last=False)
 
     def parent(self, case: TestCase, rng: random.Random) -> TestCase:
         """The input to walk from: libFuzzer's parent ``case`` or, ``FRONTIER_CHANCE`` of the
-        time, one of the newest walkable inputs that were new coverage. libFuzzer draws its
-        parent from the whole corpus, so a climb toward a branch (each step closer is a new
-        float-comparison feature) went on from its last step about once per corpus size of walks."""
+        time, the input nearest the flip of a site drawn uniformly. libFuzzer draws its parent
+        from the whole corpus (hundreds of inputs), so a climb toward a branch on the goal went
+        on from its last step only about once per corpus size of walks; an ``ik`` campaign
+        on a plugged-in target has about 15 sites."""
         if self.frontier and rng.random() < FRONTIER_CHANCE:
-            return rng.choice(self.frontier)
+            return self.frontier[rng.choice(list(self.frontier))]
         return case
 
     def configuration(self, message: dict[str, Any]) -> tuple[tuple[float, ...], str | None] | None:

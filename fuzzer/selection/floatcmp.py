@@ -97,18 +97,17 @@ class FloatCompareTracer:
         """Comparison sites that compared a float at least once."""
         self._counters: dict[tuple[int, ...], int] = {}
         """Each feature key seen so far and its counter (-1 with the features disabled)."""
+        self._nearest: dict[int, int] = {}
+        """Per site, the smallest exponent of ``|a - b|`` seen so far (either side)."""
+        self.nearer: list[int] = []
+        """The sites the current input brought nearer their flip than any input before (a
+        smaller exponent; reset by :meth:`install`): ``fuzzer.generation.walk`` walks on from it."""
         self._spent = 0
         """Float comparisons traced before the last :meth:`install`."""
         self._given = budget
         self.guard: Callable[..., Any] = make_guard(None, compared)
         """Compares as ``COMPARE_OP`` would; the pairs Atheris traces go through ``inner``."""
         self._build()
-
-    @property
-    def known(self) -> int:
-        """Float-comparison features seen so far (an input that raises it brought some
-        comparison nearer its flip than any input before)."""
-        return len(self._counters)
 
     @property
     def traced(self) -> int:
@@ -126,6 +125,7 @@ class FloatCompareTracer:
             self.guard = make_guard(current, self.compared)
             self._build()
         self._given = self.budget if budget is None else budget
+        self.nearer.clear()
         self._set_left(self._given)
         if current is not None:
             self.module._trace_cmp = self.trace if self._given > 0 else self.guard
@@ -134,6 +134,7 @@ class FloatCompareTracer:
         """Make ``trace`` (and its budget's accessors) around the current guard and ``inner``."""
         features, module, guard, compared = self.features, self.module, self.guard, self.compared
         counters, sites, swap = self._counters, self.sites, self.inner is not None
+        nearest, nearer = self._nearest, self.nearer
         floats, numbers, ops, shift, equality = _FLOATS, _NUMBERS, _OPS, _OPID_SHIFT, _EQUALITY
         done = compared.done if compared is not None else None
         watch = compared.watch if compared is not None else None
@@ -159,6 +160,9 @@ class FloatCompareTracer:
                 counters[key] = features.counter(key) if features.enabled else -1
                 sites.add(site)
                 features.hit_ids((key,))
+                if exponent < nearest.get(site, high + 2):  # only a new key can be nearer
+                    nearest[site] = exponent
+                    nearer.append(site)
             elif branch is not None:
                 branch(counter)
             left -= 1

@@ -98,7 +98,7 @@ class Sources:
 
     def parent(self, arm: str, case: TestCase, rng: random.Random) -> TestCase:
         """The parent source ``arm`` makes its input from: ``case`` (libFuzzer's), or for
-        ``walk`` sometimes one of the newest inputs that were new coverage."""
+        ``walk`` sometimes the input nearest a float comparison's flip."""
         return self.walk.parent(case, rng) if arm == WALK and self.walk is not None else case
 
     def learn(self, call: Any, outcomes: Any) -> None:
@@ -106,10 +106,11 @@ class Sources:
         if self.walk is not None:
             self.walk.learn(call, outcomes)
 
-    def offer(self, case: TestCase) -> None:
-        """An input whose run was new coverage (the walk's preferred parents)."""
+    def offer(self, site: int, case: TestCase) -> None:
+        """An input that came nearer the flip of float comparison ``site`` than any before
+        (the walk's preferred parents)."""
         if self.walk is not None:
-            self.walk.offer(case)
+            self.walk.offer(site, case)
 
     def reward(self, strategy: str, paid: bool) -> None:
         """Credit the arms that made an input whose last step was ``strategy``."""
