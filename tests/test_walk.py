@@ -110,16 +110,18 @@ def test_a_step_never_leaves_any_box(box: list[tuple[float, float]], seed: int) 
         assert all(lo <= v <= hi and math.isfinite(v) for v, lo, hi in zip(q, lower, upper, strict=True))
 
 
-def test_learns_only_a_converged_first_target_s_finite_solution() -> None:
+def _stamped(position: tuple[float, ...], orientation: tuple[float, ...], link: str = "") -> dict[str, Any]:
+    pose = configuration_message("geometry_msgs/Pose", {}, (), (), lambda _: (position, orientation))
+    return {"header": {**HEADER["header"], "frame_id": link}, "pose": pose}
+
+
+def test_learns_only_a_converged_first_target_s_answer_that_reaches_the_goal() -> None:
     session = _ik_session()
     walk = _walk(session, session.facts())
-    position, orientation = (0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 1.0)
-    message = {
-        **HEADER,
-        "pose": configuration_message("geometry_msgs/Pose", {}, (), (), lambda _: (position, orientation)),
-    }
+    q = (0.1, -0.2, 0.3, 0.4, -0.5, 0.6)
+    position, orientation = walk.pose_of(q, None)
+    message = _stamped(position, orientation)
     call = IkCall(position, orientation)
-    q = (0.1,) * 6
     ok, failed = (
         Outcome(Status.OK, values={"joint_values": q}),
         Outcome(Status.FAILED, values={"joint_values": q}),
@@ -129,18 +131,63 @@ def test_learns_only_a_converged_first_target_s_finite_solution() -> None:
     walk.learn(call, (Outcome(Status.OK, values={"joint_values": (math.nan,) * 6}), ok))
     walk.learn(call, (Outcome(Status.OK, values={"joint_values": (0.1,) * 5}), ok))
     walk.learn(call, ())
+    # a first target that claims success wrongly: its answer's pose is 2e-4 m or rad away
+    for lie in ((0.1, -0.2, 0.3, 0.4, -0.5, 0.6002), (0.1002, -0.2, 0.3, 0.4, -0.5, 0.6)):
+        walk.learn(call, (Outcome(Status.OK, values={"joint_values": lie}), ok))
+    walk.learn(IkCall((10**400, 0.0, 0.0), orientation), (ok, ok))  # an int too large for a float
+    walk.learn(IkCall(position, orientation, "no_such_link"), (ok, ok))
     assert len(walk) == 0 and walk.make(message, random.Random(0)) is None
-    walk.learn(call, (ok, failed))
-    assert walk.configuration(message) == (q, None)
-    linked = {**message, "header": {**HEADER["header"], "frame_id": "link_3"}}
-    assert walk.configuration(linked) is None  # another link's goal
-    walk.learn(IkCall(position, orientation, "link_3"), (ok, ok))
+    near = (0.1, -0.2, 0.3, 0.4, -0.5, 0.60001)  # within LEARN_SLACK, as KDL stops short
+    walk.learn(call, (Outcome(Status.OK, values={"joint_values": near}), failed))
+    assert walk.configuration(message) == (near, None)
+    lp, lo = walk.pose_of(q, "link_3")
+    linked = _stamped(lp, lo, "link_3")
+    assert walk.configuration(linked) is None
+    walk.learn(IkCall(lp, lo, "link_3"), (ok, ok))
     made = walk.make(linked, random.Random(0))
     assert made is not None and made[0]["header"]["frame_id"] == "link_3"
     known = walk.configuration(made[0])
     assert known is not None
     expected = session.reference.forward_kinematics(list(known[0]), "link_3")
     assert _pose(made[0]) == (tuple(expected.position), tuple(expected.orientation))
+
+
+def test_a_walk_moves_only_the_joints_before_the_goal_s_link_and_never_gives_the_goal_again() -> None:
+    """Probe B (sixty-fourth session): every walk of a ``base_link`` goal, and about half of
+    those of ``link_1`` and ``link_2`` goals, gave the parent's goal again (a joint after the
+    link moved); a boundary probe's configuration, just past a limit, stayed past it."""
+    session = _ik_session()
+    walk = _walk(session, session.facts())
+    assert walk.movers(None) == tuple(range(6)) and walk.movers("link_2") == (0, 1)
+    assert walk.movers("base_link") == () and walk.movers("no_such_link") == ()
+    q = (0.1, -0.2, 0.3, 0.4, -0.5, 0.6)
+    for link, moving in (("link_1", 1), ("link_2", 2), ("link_4", 4), (None, 6)):
+        here = walk.pose_of(q, link)
+        goal = _stamped(here[0], here[1], link or "")
+        walk.note(here[0], here[1], link, q)
+        for s in range(100):
+            made = walk.make(goal, random.Random(s))
+            assert made is not None and _pose(made[0]) != _pose(goal)
+            values = walk.configuration(made[0])
+            assert values is not None and values[0][moving:] == q[moving:]
+    at_base = walk.pose_of(q, "base_link")
+    base = _stamped(at_base[0], at_base[1], "base_link")
+    walk.note(at_base[0], at_base[1], "base_link", q)
+    assert walk.make(base, random.Random(0)) is None
+    past = (walk.lower[0] - 1e-4, *q[1:])  # a boundary probe's configuration
+    assert all(walk.step(past, random.Random(s), (5,))[0] == walk.lower[0] for s in range(20))
+
+
+def test_space_filling_goals_are_the_tip_s_and_walked_goals_keep_their_link() -> None:
+    """Probe B: a space-filling or aligned goal kept its parent's ``frame_id`` but carried the
+    tip's pose, asking another link to reach it (mostly out of reach)."""
+    tip = ((0.1, 0.2, 0.3), (0.0, 0.0, 0.0, 1.0))
+    parent = _stamped((9.0, 9.0, 9.0), (0.0, 0.0, 0.0, 1.0), "joint_6")
+    made = configuration_message(STAMPED, parent, (0.0,), (), lambda _: tip)
+    assert made is not None and made["header"]["frame_id"] == "" and _pose(made) == tip
+    kept = configuration_message(STAMPED, parent, (0.0,), (), lambda _: tip, frame=None)
+    assert kept is not None and kept["header"]["frame_id"] == "joint_6"
+    assert parent["header"]["frame_id"] == "joint_6"  # a copy
 
 
 def test_malformed_parents_are_not_walked_and_old_goals_are_forgotten() -> None:

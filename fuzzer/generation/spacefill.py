@@ -218,12 +218,16 @@ def configuration_message(
     values: tuple[float, ...],
     joint_names: Sequence[str],
     reachable: Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]] | None = None,
+    frame: str | None = "",
 ) -> dict[str, Any] | None:
     """A copy of ``base`` (a message of ``msg_type``) carrying configuration ``values``.
 
     Returns None for a message type without a joint-space or pose field (the source then does
     not apply). A JointState keeps its other fields, with ``name`` set to the robot's joints in
-    order when it held names.
+    order when it held names. A PoseStamped gets ``frame`` as its ``header.frame_id``, the
+    link whose goal it is (default "": the group's tip, whose pose ``reachable`` gives; a
+    parent's other link asked to reach the tip's pose was mostly out of reach); None keeps the
+    parent's.
     """
     out = copy.deepcopy(base)
     if msg_type == "sensor_msgs/JointState":
@@ -243,6 +247,8 @@ def configuration_message(
     }
     if msg_type == "geometry_msgs/PoseStamped":
         out["pose"] = pose
+        if frame is not None and isinstance(out.get("header"), dict):
+            out["header"]["frame_id"] = frame
         return out
     out.update(pose)
     return out

@@ -47,6 +47,9 @@ STEP_SHARES = (1e-4, 0.3)
 """A step's standard deviation lies between these shares of a joint's range (log-uniformly)."""
 ONE_JOINT, TWO_JOINTS = 0.5, 0.25
 """How often a step moves one joint, two joints; otherwise it moves every joint."""
+LEARN_SLACK = 1e-4
+"""How far (m, rad) the forward kinematics of a converged IK answer may put the link from the
+goal for the answer to be learned as the goal's configuration (KDL stops within about 1.7e-5)."""
 FRONTIER = 1024
 """Float-comparison sites whose nearest walkable input is kept (the least recently improved
 are forgotten)."""
@@ -88,6 +91,7 @@ class Walk:
         self._known: OrderedDict[Key, tuple[float, ...]] = OrderedDict()
         self.frontier: OrderedDict[int, TestCase] = OrderedDict()
         """Per float-comparison site, the walkable input that came nearest its flip."""
+        self._movers: dict[str | None, tuple[int, ...]] = {}
 
     def __len__(self) -> int:
         return len(self._known)
@@ -118,12 +122,21 @@ class Walk:
         return recorded
 
     def learn(self, call: Any, outcomes: Sequence[Outcome]) -> None:
-        """After an input ran: the first target's IK solution of ``call`` when it converged."""
+        """After an input ran: the first target's IK solution of ``call`` when it converged
+        and its forward kinematics puts the link at the goal (within ``LEARN_SLACK``: a target
+        that claims success wrongly is what this fuzzer looks for)."""
         if not isinstance(call, IkCall) or not outcomes or outcomes[0].status is not Status.OK:
             return
-        values = outcomes[0].values.get("joint_values", ())
-        if len(values) == len(self.lower) and all(map(math.isfinite, values)):
-            self.note(call.position, call.orientation, call.link, values)
+        values = tuple(outcomes[0].values.get("joint_values", ()))
+        if len(values) != len(self.lower) or not all(map(math.isfinite, values)):
+            return
+        try:
+            position, orientation = self.pose_of(values, call.link)
+            goal = tuple(map(float, call.position)), tuple(map(float, call.orientation))
+        except Exception:  # noqa: BLE001 - a target's error or a huge number: nothing learned
+            return
+        if _apart(position, orientation, *goal) <= LEARN_SLACK:
+            self.note(*goal, call.link, values)
 
     def offer(self, site: int, case: TestCase) -> None:
         """``case`` came nearer the flip of float comparison ``site`` than any input before
@@ -147,41 +160,92 @@ class Walk:
 
     def configuration(self, message: dict[str, Any]) -> tuple[tuple[float, ...], str | None] | None:
         """The known configuration of ``message``'s goal and the goal's link, or None."""
-        try:
-            call = MAPPINGS[("ik", self.msg_type)](message)
-            if not isinstance(call, IkCall):
-                return None
-            key = (tuple(map(float, call.position)), tuple(map(float, call.orientation)), call.link)
-        except (KeyError, TypeError, ValueError, AttributeError):
+        key = self._key(message)
+        if key is None:
             return None
         values = self._known.get(key)
         if values is None:
             return None
         self._known.move_to_end(key)
-        return values, call.link
+        return values, key[2]
 
-    def step(self, values: Sequence[float], rng: random.Random) -> tuple[float, ...]:
-        """``values`` with one, two or all joints moved by a normal step, inside the limits."""
-        q = list(values)
+    def _key(self, message: dict[str, Any]) -> Key | None:
+        """``message``'s goal as a key of the known configurations, or None (not a goal)."""
+        try:
+            call = MAPPINGS[("ik", self.msg_type)](message)
+            if not isinstance(call, IkCall):
+                return None
+            return (tuple(map(float, call.position)), tuple(map(float, call.orientation)), call.link)
+        except (KeyError, TypeError, ValueError, AttributeError, OverflowError):
+            return None
+
+    def movers(self, link: str | None) -> tuple[int, ...]:
+        """The joints that move ``link`` (those before it in the chain), found once per link by
+        moving each joint from the middle of the limits: a walk of a joint after the link
+        gave its parent's goal again (every walk of a ``base_link`` goal)."""
+        if link not in self._movers:
+            middle = [(lo + hi) / 2.0 for lo, hi in zip(self.lower, self.upper, strict=True)]
+            try:
+                here = self.pose_of(tuple(middle), link)
+                found = []
+                for j, (lo, hi) in enumerate(zip(self.lower, self.upper, strict=True)):
+                    moved = list(middle)
+                    moved[j] = lo + 0.75 * (hi - lo)
+                    if self.pose_of(tuple(moved), link) != here:
+                        found.append(j)
+                self._movers[link] = tuple(found)
+            except Exception:  # noqa: BLE001 - a link a target refuses: nothing to walk
+                self._movers[link] = ()
+        return self._movers[link]
+
+    def step(
+        self, values: Sequence[float], rng: random.Random, joints: Sequence[int] | None = None
+    ) -> tuple[float, ...]:
+        """``values`` inside the limits (a boundary probe's configuration lies just past one)
+        with one, two or all of ``joints`` (default: every joint) moved by a normal step,
+        clamped to the limits."""
+        q = [min(max(float(v), lo), hi) for v, lo, hi in zip(values, self.lower, self.upper, strict=True)]
+        pool = range(len(q)) if joints is None else joints
         draw = rng.random()
-        count = 1 if draw < ONE_JOINT else 2 if draw < ONE_JOINT + TWO_JOINTS else len(q)
+        count = 1 if draw < ONE_JOINT else 2 if draw < ONE_JOINT + TWO_JOINTS else len(pool)
         share = math.exp(rng.uniform(math.log(STEP_SHARES[0]), math.log(STEP_SHARES[1])))
-        for j in rng.sample(range(len(q)), min(count, len(q))):
+        for j in rng.sample(pool, min(count, len(pool))):
             lo, hi = float(self.lower[j]), float(self.upper[j])
             q[j] = min(max(q[j] + rng.gauss(0.0, share * (hi - lo)), lo), hi)
         return tuple(q)
 
     def make(self, message: dict[str, Any], rng: random.Random) -> Made:
         """A copy of ``message`` whose goal is the pose of its known configuration moved by
-        :meth:`step` (named ``walk``); None when its configuration is not known."""
-        known = self.configuration(message)
-        if known is None:
+        :meth:`step` in the joints that move its link (named ``walk``); None when its
+        configuration is not known, no joint moves its link, or the step gives its goal again."""
+        key = self._key(message)
+        values = None if key is None else self._known.get(key)
+        if key is None or values is None:
             return None
-        values, link = known
-        moved = self.step(values, rng)
+        self._known.move_to_end(key)
+        link = key[2]
+        joints = self.movers(link)
+        if not joints:
+            return None
+        moved = self.step(values, rng, joints)
         position, orientation = self.pose_of(moved, link)
-        if not all(map(math.isfinite, (*position, *orientation))):
+        if not all(map(math.isfinite, (*position, *orientation))) or (position, orientation) == key[:2]:
             return None
         self.note(position, orientation, link, moved)
-        out = configuration_message(self.msg_type, message, moved, (), lambda _: (position, orientation))
+        out = configuration_message(
+            self.msg_type, message, moved, (), lambda _: (position, orientation), frame=None
+        )
         return None if out is None else (out, WALK)
+
+
+def _apart(
+    position: Sequence[float],
+    orientation: Sequence[float],
+    goal_position: Sequence[float],
+    goal_orientation: Sequence[float],
+) -> float:
+    """The larger of the distance (m) and the rotation angle (rad) between two poses."""
+    dot = abs(sum(a * b for a, b in zip(orientation, goal_orientation, strict=True)))
+    norms = math.sqrt(sum(a * a for a in orientation) * sum(b * b for b in goal_orientation))
+    angle = 2.0 * math.acos(min(1.0, dot / norms)) if norms > 0.0 else math.inf
+    return max(math.dist(position, goal_position), angle)
