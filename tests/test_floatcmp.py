@@ -45,7 +45,8 @@ def test_nearer_names_the_sites_an_input_brought_nearer_their_flip_than_any_befo
     tracer = FloatCompareTracer(Features(enabled=False))
     try:
         runs = []
-        for x, y in ((0.5, 1.0), (0.6, 1.0), (0.07, 1.0), (0.07, 2.5), (0.5, 1.0), (0.0617, 1.0), (0.061, 9.0)):
+        inputs = ((0.5, 1.0), (0.6, 1.0), (0.07, 1.0), (0.07, 2.5), (0.5, 1.0), (0.0617, 1.0), (0.061, 9.0))
+        for x, y in inputs:
             tracer.install()  # the harness's call before each input: a fresh list
             module.branch(x, y)
             runs.append(list(tracer.nearer))
