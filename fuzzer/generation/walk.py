@@ -13,9 +13,10 @@ inputs' share found it.
 arm ``walk``) for ``--op ik``. It keeps, per pose goal, a configuration whose pose it is: the
 configuration a space-filling or aligned input was made from (:meth:`Walk.recording` wraps the
 robot's forward kinematics that makes them), the one a walk made, or the first target's IK
-solution when it converged (:meth:`Walk.learn`). :meth:`Walk.make` moves the parent's
-configuration (one joint, two, or all of them, by a normal step whose size is drawn
-log-uniformly between ``STEP_SHARES`` of each joint's range, clamped to the limits) and gives
+solution when it converged and reaches the goal (:meth:`Walk.learn`). :meth:`Walk.make` moves
+the parent's configuration (one, two or all of the joints before the goal's link, by a normal
+step whose size is drawn log-uniformly between ``STEP_SHARES`` of each joint's range, clamped
+to the limits) and gives
 the pose of the moved configuration, of the same link, in a copy of the parent: a goal near
 the parent's and reachable. A parent with no known configuration is not walked (the harness
 mutates it instead).
