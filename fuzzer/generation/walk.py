@@ -161,14 +161,18 @@ class Walk:
 
     def configuration(self, message: dict[str, Any]) -> tuple[tuple[float, ...], str | None] | None:
         """The known configuration of ``message``'s goal and the goal's link, or None."""
+        found = self._lookup(message)
+        return None if found is None else (found[1], found[0][2])
+
+    def _lookup(self, message: dict[str, Any]) -> tuple[Key, tuple[float, ...]] | None:
+        """``message``'s goal as a key and its known configuration (now the most recently
+        used), or None."""
         key = self._key(message)
-        if key is None:
-            return None
-        values = self._known.get(key)
-        if values is None:
+        values = None if key is None else self._known.get(key)
+        if key is None or values is None:
             return None
         self._known.move_to_end(key)
-        return values, key[2]
+        return key, values
 
     def _key(self, message: dict[str, Any]) -> Key | None:
         """``message``'s goal as a key of the known configurations, or None (not a goal)."""
@@ -219,11 +223,10 @@ class Walk:
         """A copy of ``message`` whose goal is the pose of its known configuration moved by
         :meth:`step` in the joints that move its link (named ``walk``); None when its
         configuration is not known, no joint moves its link, or the step gives its goal again."""
-        key = self._key(message)
-        values = None if key is None else self._known.get(key)
-        if key is None or values is None:
+        found = self._lookup(message)
+        if found is None:
             return None
-        self._known.move_to_end(key)
+        key, values = found
         link = key[2]
         joints = self.movers(link)
         if not joints:
