@@ -2,8 +2,9 @@
 
 * ``pairs_apart`` / ``apart_rows`` compare only the joint vectors that differ as numbers beyond
   the tolerance; the answer must be that of ``joints_apart`` on every pair.
-* ``records.floats`` keeps a step's trajectory as a read-only array beside its tuple; the tuple
-  must stay a tuple in every way that counts (equality, hash, repr, JSON).
+* ``records.floats`` keeps a step's trajectory as a read-only float64 array only; it must still
+  behave as a tuple of floats in every way that counts (equality, hash, repr, iteration, JSON
+  through ``Outcome.to_json``), without a Python float per value.
 * ``oracle_timing.reference_duration`` remembers its answers, keyed by the bits of its inputs.
 * ``compare_step`` gives the single-call oracle's verdict on a step's statuses and pose values.
 """
@@ -12,6 +13,8 @@ from __future__ import annotations
 
 import json
 import math
+import tracemalloc
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -99,16 +102,35 @@ def test_floats_is_a_tuple_in_every_way_that_counts() -> None:
     source = np.array([[0.1, -0.0], [math.inf, 2.5]])
     made = floats(source)
     plain = (0.1, -0.0, math.inf, 2.5)
-    assert isinstance(made, Floats) and isinstance(made, tuple)
-    assert made == plain and plain == made and hash(made) == hash(plain)
-    assert repr(made) == repr(plain) and json.dumps(made) == json.dumps(plain)
+    assert isinstance(made, Floats) and isinstance(made, Sequence) and not isinstance(made, tuple)
+    assert made == plain and plain == made and hash(made) == hash(plain) and made == floats(plain)
+    assert made != list(plain) and made != (0.1, -0.0, math.inf) and made != (0.1, 0.0, math.inf, 2.6)
+    assert repr(made) == repr(plain) and len(made) == 4 and list(made) == list(plain)
+    assert all(type(x) is float for x in made) and type(made[3]) is float and made[-1] == 2.5
+    assert made[1:3] == plain[1:3] and made + (1.0,) == plain + (1.0,) and (1.0,) + made == (1.0, *plain)  # noqa: RUF005
     assert {plain: 1}[made] == 1
     assert Outcome(Status.OK, values={"v": made}) == Outcome(Status.OK, values={"v": plain})
+    data = Outcome(Status.OK, values={"v": made}).to_json()
+    assert json.dumps(data["values"]) == json.dumps({"v": list(plain)})
+    assert Outcome.from_json(json.loads(json.dumps(data))) == Outcome(Status.OK, values={"v": plain})
     source[0, 0] = 9.0  # the target's array changing later changes nothing kept
-    assert made[0] == 0.1 and as_array(made)[0] == 0.1
+    assert made[0] == 0.1 and as_array(made)[0] == 0.1 and np.asarray(made)[0] == 0.1
     with pytest.raises(ValueError, match="read-only"):
         as_array(made)[0] = 1.0
     assert np.signbit(as_array(made)[1])  # -0.0 kept as it is
+
+
+def test_a_long_trajectory_is_kept_without_a_python_float_per_value() -> None:
+    # a 60,001-point plan of 6 joints, as a plan at acceleration scaling 3.75e-5 gives: kept as a
+    # tuple of Python floats beside its array it took 32 bytes more per value (BENCHMARKS.md, "Memory")
+    rows = np.linspace(0.0, 1.0, 60_001 * 6)
+    tracemalloc.start()
+    try:
+        made = floats(rows)
+        kept, _ = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert len(made) == rows.size and kept < rows.nbytes + 4096
 
 
 def test_as_array_reads_any_tuple_of_floats() -> None:

@@ -36,6 +36,7 @@ earlier ones), so the same bug is reported on the same field.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status
@@ -100,8 +101,8 @@ def _near_pi(x: float, tol: float) -> bool:
 
 
 def _joint_diff(
-    a: tuple[float, ...],
-    b: tuple[float, ...],
+    a: Sequence[float],
+    b: Sequence[float],
     prismatic: tuple[bool, ...],
     tol: Tolerance,
     continuous: tuple[bool, ...] = (),
@@ -164,7 +165,7 @@ only where the tolerance is below float64's resolution: a prismatic joint at 6e1
 rounded value, and was a finding between two correct implementations."""
 
 
-def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
+def _position_diff(a: Sequence[float], b: Sequence[float], tol: Tolerance) -> _FieldDiff:
     # hypot, not the square root of squares: a gap above 1.3e154 m raised OverflowError
     gap = math.hypot(*(_finite_gap(x, y) for x, y in zip(a, b, strict=True)))
     # one comparison, not one per coordinate: each is a site the float tracer spends its budget
@@ -179,7 +180,7 @@ def _position_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -
     return _FieldDiff("position", gap, gap, limit, flip, unit="m")
 
 
-def rotation_distance(a: tuple[float, ...], b: tuple[float, ...]) -> float:
+def rotation_distance(a: Sequence[float], b: Sequence[float]) -> float:
     """Rotation angle (rad) between two unit quaternions, q and -q being one rotation."""
     minus = math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True)))
     plus = math.sqrt(sum((x + y) ** 2 for x, y in zip(a, b, strict=True)))
@@ -188,7 +189,7 @@ def rotation_distance(a: tuple[float, ...], b: tuple[float, ...]) -> float:
     return distance if math.isfinite(distance) else math.inf
 
 
-def _orientation_diff(a: tuple[float, ...], b: tuple[float, ...], tol: Tolerance) -> _FieldDiff:
+def _orientation_diff(a: Sequence[float], b: Sequence[float], tol: Tolerance) -> _FieldDiff:
     raw = max((_finite_gap(x, y) for x, y in zip(a, b, strict=True)), default=0.0)
     if raw == 0.0:  # the same numbers, non-finite ones too: one rotation, whatever it is
         return _FieldDiff("orientation", 0.0, 0.0, tol.radians, False)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import enum
 import hashlib
 import json
+from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -24,30 +25,75 @@ class Status(enum.StrEnum):
     """Raised anything else: a robustness bug in the target."""
 
 
-class Floats(tuple[float, ...]):
-    """A flat tuple of Python floats that keeps them as a read-only float64 array too
-    (``array``): the scenario oracle reads trajectories as arrays, and making an array of a long
-    tuple again costs about as much as making the tuple did. Equal, hashed and printed as a
-    tuple; :func:`floats` makes one, :func:`as_array` reads any tuple of floats as an array."""
+class Floats(Sequence[float]):
+    """A flat, read-only sequence of floats kept only as a float64 array (``array``): equal to,
+    hashed and printed as the tuple of its values, which it makes only when asked (iterating,
+    comparing, hashing). A scenario's trajectory may have 60,001 points: kept as a tuple of
+    Python floats beside its array, one plan's four fields took 47 MB per target instead of 11,
+    and memory freed after such an input stayed with the process (BENCHMARKS.md, "Memory").
+    :func:`floats` makes one, :func:`as_array` reads any sequence of floats as an array."""
 
+    __slots__ = ("array",)
     array: np.ndarray
 
+    def __init__(self, array: np.ndarray) -> None:
+        self.array = array
 
-def floats(values: Any) -> tuple[float, ...]:
-    """Any array-like of reals as a flat tuple of Python floats (row-major), which keeps its
-    values as a read-only float64 array (a copy: the target's own array may change)."""
+    def __len__(self) -> int:
+        return int(self.array.size)
+
+    @overload
+    def __getitem__(self, index: int) -> float: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[float, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> float | tuple[float, ...]:
+        if isinstance(index, slice):
+            return tuple(self.array[index].tolist())
+        return float(self.array[index])
+
+    def __iter__(self) -> Iterator[float]:
+        return iter(self.array.tolist())
+
+    def __array__(self, dtype: Any = None, copy: bool | None = None) -> np.ndarray:
+        return self.array if dtype is None else self.array.astype(dtype)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Floats | tuple):
+            return tuple(self) == tuple(other)
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return repr(tuple(self))
+
+    def __add__(self, other: tuple[float, ...]) -> tuple[float, ...]:
+        return tuple(self) + tuple(other)
+
+    def __radd__(self, other: tuple[float, ...]) -> tuple[float, ...]:
+        return tuple(other) + tuple(self)
+
+
+def floats(values: Any) -> Floats:
+    """Any array-like of reals as a flat :class:`Floats` (row-major): a read-only float64 copy
+    (the target's own array may change)."""
     array = np.array(values, dtype=np.float64).ravel()
     array.flags.writeable = False
-    out = Floats(array.tolist())
-    out.array = array
-    return out
+    return Floats(array)
 
 
 def as_array(values: Any) -> np.ndarray:
-    """``values`` (a tuple of floats, or any array-like of reals) as a float64 array: the
-    read-only array a :class:`Floats` keeps, else a new one (``np.asarray``)."""
+    """``values`` (a :class:`Floats`, a tuple of floats, or any array-like of reals) as a
+    float64 array: the read-only array a :class:`Floats` keeps, else a new one (``np.asarray``)."""
     array = getattr(values, "array", None)
     return array if isinstance(array, np.ndarray) else np.asarray(values, dtype=float)
+
+
+def _listed(values: Sequence[float]) -> list[float]:
+    return values.array.tolist() if isinstance(values, Floats) else list(values)
 
 
 @dataclass(frozen=True)
@@ -63,7 +109,7 @@ class Outcome:
         ``ErrorCode`` value for REJECTED.
     message : str
         Exception text (never compared).
-    values : dict of str to tuple of float
+    values : dict of str to sequence of float
         Compared quantities: ``joint_values`` (rad, m), ``position`` (m), ``orientation`` (x, y, z, w);
         for a scenario step also its return values and trajectory (docs/engine.md, "Scenarios").
     steps : tuple of Outcome
@@ -75,7 +121,7 @@ class Outcome:
     error: str = ""
     code: int | None = None
     message: str = ""
-    values: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    values: dict[str, Sequence[float]] = field(default_factory=dict)
     steps: tuple[Outcome, ...] = ()
 
     @property
@@ -91,7 +137,7 @@ class Outcome:
             "error": self.error,
             "code": self.code,
             "message": self.message,
-            "values": {k: list(v) for k, v in self.values.items()},
+            "values": {k: _listed(v) for k, v in self.values.items()},
         }
         if self.steps:
             data["steps"] = [step.to_json() for step in self.steps]

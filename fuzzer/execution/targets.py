@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -127,7 +128,7 @@ class Runner:
                 group.set_joint_value_target(list(call.names), list(call.positions))
             moved = group.go()
             pose = group.get_current_pose()
-            values = {
+            values: dict[str, Sequence[float]] = {
                 "joint_values": tuple(map(float, group.get_current_joint_values())),
                 "position": tuple(map(float, pose.position)),
                 "orientation": tuple(map(float, pose.orientation)),

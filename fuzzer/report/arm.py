@@ -132,8 +132,8 @@ def _final_values(call: Any, outcome: Outcome) -> tuple[tuple[float, ...] | None
     if outcome.status in (Status.REJECTED, Status.CRASHED) or not values:
         return None, f"{outcome.label}: drawn at home"
     if isinstance(call, IkCall) and outcome.status is Status.FAILED:
-        return values, "no solution: last iterate"
-    return values, ""
+        return tuple(values), "no solution: last iterate"
+    return tuple(values), ""
 
 
 def _command(call: Any, joint_names: Sequence[str]) -> tuple[float, ...] | None:

@@ -145,7 +145,7 @@ def trajectory(outcome: Outcome, target: str, dof: int) -> tuple[Trajectory | No
     )
 
 
-def _text(value: tuple[float, ...] | None) -> str:
+def _text(value: Sequence[float] | None) -> str:
     if value is None:
         return "-"
     if len(value) > 8:

@@ -5,7 +5,7 @@ One new ``MoveGroup(model)`` per run; the steps run in order. A step that raises
 leaves the group unchanged on error); any other exception is ``CRASHED`` and ends it.
 Each target executes its *own* last plan, as a user's script would.
 
-Per-step ``Outcome.values`` (tuples of floats):
+Per-step ``Outcome.values`` (read-only sequences of floats, ``records.Floats``):
 
 * ``joint_values`` after every step (rad, m);
 * ``position`` (m) and ``orientation`` (x, y, z, w) after ``/go`` and ``/execute``;
@@ -31,12 +31,12 @@ a plan ``in_effect.plan_last`` (the executed plan's last point).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
 
-from fuzzer.execution.records import Outcome, Status, floats
+from fuzzer.execution.records import Floats, Outcome, Status, floats
 from fuzzer.scenario.nudge import Axis, Moved, Nudge, shifted_goal, shifted_state
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
@@ -48,15 +48,15 @@ DEFAULT_EEF_STEP = 0.01
 DEFAULT_JUMP_THRESHOLD = 0.0
 """jump_threshold of ``/cartesian_path`` until a ``/jump_threshold`` step sets another."""
 
-Values = dict[str, tuple[float, ...]]
+Values = dict[str, Sequence[float]]
 
 _PLANS = frozenset({"plan", "go", "execute", "cartesian_path"})
 _POSED = frozenset({"go", "execute"})
 
 
-def _floats(values: Any) -> tuple[float, ...]:
-    """Any array-like of reals as a flat tuple of Python floats (row-major) that keeps its
-    array for the oracle (``fuzzer.execution.records.floats``)."""
+def _floats(values: Any) -> Floats:
+    """Any array-like of reals as a flat, read-only float64 sequence (row-major;
+    ``fuzzer.execution.records.floats``)."""
     return floats(values)
 
 

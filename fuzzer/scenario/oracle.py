@@ -42,7 +42,7 @@ from dataclasses import replace
 import numpy as np
 
 from fuzzer.execution import oracle
-from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
+from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array, floats
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario import oracle_switch
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
@@ -142,14 +142,14 @@ def end_knife_edge(a: Outcome, b: Outcome, dof: int) -> tuple[Outcome, Outcome]:
     if t.size < 2 or not 0.0 < t[-1] - t[-2] < TIME_TOLERANCE:
         return a, b
     outcome = (a, b)[longer]
-    values = {**outcome.values, TIMES: tuple(np.delete(t, -2).tolist())}
+    values = {**outcome.values, TIMES: floats(np.delete(t, -2))}
     for key in SAMPLED:
         if key not in values:
             continue
         rows = as_array(values[key])
         if rows.size != t.size * dof:
             return a, b  # malformed: compared (and reported) as it is
-        values[key] = tuple(np.delete(rows.reshape(t.size, dof), -2, axis=0).reshape(-1).tolist())
+        values[key] = floats(np.delete(rows.reshape(t.size, dof), -2, axis=0))
     trimmed = replace(outcome, values=values)
     return (trimmed, b) if longer == 0 else (a, trimmed)
 

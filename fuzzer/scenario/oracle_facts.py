@@ -174,7 +174,7 @@ def _last_row(outcome: Outcome, dof: int) -> tuple[float, ...] | None:
 def advance(ctx: Context, step: Step, outcome: Outcome, dof: int) -> Context:
     """What is in effect after ``step`` ended with ``outcome`` on one target."""
     state = outcome.values.get("joint_values")
-    after = replace(ctx, state=state) if state is not None else ctx
+    after = replace(ctx, state=tuple(state)) if state is not None else ctx
     if outcome.status is not Status.OK:
         return after
     kind, msg = step.kind, step.message
@@ -188,7 +188,8 @@ def advance(ctx: Context, step: Step, outcome: Outcome, dof: int) -> Context:
     if kind == "eef_step" and number is not None:
         return replace(after, eef_step=number)
     if kind in ("joint_target", "named_target"):
-        return replace(after, joint_goal=outcome.values.get("joint_target"), pose_goal=None)
+        goal = outcome.values.get("joint_target")
+        return replace(after, joint_goal=None if goal is None else tuple(goal), pose_goal=None)
     if kind == "pose_target":
         return replace(after, pose_goal=PoseGoal(_link(msg), _orientation(msg), _point(msg, kind)))
     if kind == "position_target":
