@@ -40,6 +40,11 @@ from fuzzer.selection.state import Pool, Sources, Stats
 
 SNAPSHOT_SECONDS = 5.0
 DECODE_CACHE = 4096
+"""Decoded test cases kept (libFuzzer's parents repeat), the most recently used ones..."""
+DECODE_BYTES = 4 << 20
+"""...while their encoded sizes add up to no more than this: a decoded scenario takes about 6
+times its JSON, and 4,096 of them held 45-47 MB in a 10-minute campaign, where the count alone
+bounds ``fk`` and ``move`` (about 1.5 MB of inputs; BENCHMARKS.md, "Memory")."""
 
 
 class DivergenceFound(Exception):
@@ -87,6 +92,7 @@ class Harness(MutationStep):
     _last: tuple[bytes, TestCase] | None = None
     _credit: bytes | None = None
     _decoded: OrderedDict[bytes, TestCase] = field(default_factory=OrderedDict)
+    _decoded_bytes: int = 0
     _next_snapshot: float = 0.0
 
     # -- TestOneInput ------------------------------------------------------------------------
@@ -240,10 +246,13 @@ class Harness(MutationStep):
         return case, False
 
     def _remember(self, data: bytes, case: TestCase) -> None:
-        """Cache a test case that passed validation."""
-        self._decoded[data] = case
-        if len(self._decoded) > DECODE_CACHE:
-            self._decoded.popitem(last=False)
+        """Cache a test case that passed validation (``DECODE_CACHE``, ``DECODE_BYTES``)."""
+        cache = self._decoded
+        if data not in cache:
+            self._decoded_bytes += len(data)
+        cache[data] = case
+        while len(cache) > 1 and (len(cache) > DECODE_CACHE or self._decoded_bytes > DECODE_BYTES):
+            self._decoded_bytes -= len(cache.popitem(last=False)[0])
 
     def _record(self, case: TestCase, data: bytes, ev: Evaluation) -> None:
         stats = self.stats

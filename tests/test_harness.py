@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from fuzzer import harness as harness_module
 from fuzzer.artifacts.divlog import CampaignLog, read_lines
 from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import ArtifactStore, ArtifactsUnwritable, load_sidecar
@@ -88,6 +89,33 @@ def test_inputs_are_counted_by_verdict(tmp_path: Path) -> None:
     h.test_one_input(h.seeds[0].encode())
     s = h.stats
     assert (s.execs, s.malformed, s.filtered, s.divergences) == (4, 2, 1, 0)
+
+
+def test_the_decode_cache_is_bounded_in_bytes_and_in_count(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    h = make_harness(tmp_path)
+    cases = [
+        TestCase(h.seeds[0].msg_type, dict(h.seeds[0].message, position=[0.01 * i] * 6)) for i in range(12)
+    ]
+    datas = [c.encode() for c in cases]
+    size = max(map(len, datas))
+    monkeypatch.setattr(harness_module, "DECODE_BYTES", 3 * size)
+    for data in datas[:5]:
+        h.test_one_input(data)
+    h.test_one_input(datas[4])  # seen again: counted once
+    assert list(h._decoded) == datas[2:5] and h._decoded_bytes == sum(map(len, datas[2:5]))
+    assert h._decode(datas[2]) == (cases[2], True) and h._decode(datas[0])[1] is False
+    monkeypatch.setattr(harness_module, "DECODE_BYTES", 100 * size)
+    monkeypatch.setattr(harness_module, "DECODE_CACHE", 4)
+    for data in datas[5:]:
+        h.test_one_input(data)
+    assert list(h._decoded) == datas[-4:] and h._decoded_bytes == sum(map(len, datas[-4:]))
+    monkeypatch.setattr(
+        harness_module, "DECODE_BYTES", 1
+    )  # one input larger than the bound: the newest stays
+    h.test_one_input(datas[0])
+    assert list(h._decoded) == [datas[0]] and h._decoded_bytes == len(datas[0])
 
 
 def test_no_filter_evaluates_non_finite_inputs(tmp_path: Path) -> None:
