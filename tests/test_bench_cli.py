@@ -16,6 +16,7 @@ from benchmarks import (
     bench_deep,
     bench_engine,
     bench_evaluate,
+    bench_memory,
     bench_native_cov,
     bench_scenario,
     bench_targets,
@@ -24,6 +25,9 @@ from benchmarks import (
     probe_ik_stall,
     profile,
 )
+
+ROOT = str(Path(__file__).resolve().parents[1])
+"""This tree (an arm of ``bench_memory``)."""
 
 BASELINE = ["uniform", "--seconds", "1", "--artifacts", "a"]
 """A baseline run's options (the folder relative to the test's own)."""
@@ -84,6 +88,21 @@ CASES: list[tuple[Callable[[], object], list[str], str]] = [
     (bench_targets.main, ["--robot", "a-file"], "--robot a-file:"),
     (bench_scenario.main, ["--render", "a-file"], "a-file: not a bench_scenario result (JSONDecodeError"),
     (bench_scenario.main, ["--render", "."], ".: not a bench_scenario result (IsADirectoryError"),
+    (
+        bench_memory.main,
+        ["--arm", "a", ROOT, "--out", "m.jsonl", "--seconds", "0"],
+        "--seconds must be a finite",
+    ),
+    (bench_memory.main, ["--out", "m.jsonl"], "one or two --arm NAME DIR and --out FILE are needed"),
+    (bench_memory.main, ["--arm", "a", ".", "--out", "m.jsonl"], "--arm a: . is not an RROSFuzz tree"),
+    (
+        bench_memory.main,
+        ["--arm", "a", ROOT, "--arm", "a", ROOT, "--out", "m"],
+        "the arms need different names",
+    ),
+    (bench_memory.main, ["--arm", "a", ROOT, "--out", "a-file"], "--out a-file exists: name a new file"),
+    (bench_memory.main, ["--from-json", "a-file"], "--from-json a-file: not a file of this benchmark"),
+    (bench_memory.main, ["--from-json", "."], "--from-json .: not a file of this benchmark"),
     (baselines.main, [*BASELINE, "--seconds", "0"], "--seconds must be a finite number above 0, not 0.0"),
     (baselines.main, [*BASELINE, "--targets", "native"], "--targets takes two targets, as in native,python"),
     (baselines.main, [*BASELINE, "--robot", "nosuch"], "--robot: robot 'nosuch' is neither a URDF file"),
