@@ -118,6 +118,10 @@ def test_floats_is_a_tuple_in_every_way_that_counts() -> None:
     with pytest.raises(ValueError, match="read-only"):
         as_array(made)[0] = 1.0
     assert np.signbit(as_array(made)[1])  # -0.0 kept as it is
+    assert np.asarray(made) is made.array and np.asarray(made, dtype=np.float32).dtype == np.float32
+    copied = np.array(made)  # numpy's copy: a new array, writeable
+    copied[0] = 5.0
+    assert made[0] == 0.1
 
 
 def test_a_long_trajectory_is_kept_without_a_python_float_per_value() -> None:

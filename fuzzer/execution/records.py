@@ -57,7 +57,11 @@ class Floats(Sequence[float]):
         return iter(self.array.tolist())
 
     def __array__(self, dtype: Any = None, copy: bool | None = None) -> np.ndarray:
-        return self.array if dtype is None else self.array.astype(dtype)
+        # numpy's protocol: ``copy`` True asks for a new (writeable) array; None or False may
+        # share the read-only one, unless another dtype is asked for
+        if copy or (dtype is not None and np.dtype(dtype) != self.array.dtype):
+            return self.array.astype(dtype if dtype is not None else self.array.dtype)
+        return self.array
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, Floats | tuple):
