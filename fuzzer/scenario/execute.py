@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.execution.records import Floats, Outcome, Status, floats
+from fuzzer.execution.records import Outcome, Status, floats
 from fuzzer.scenario.nudge import Axis, Moved, Nudge, shifted_goal, shifted_state
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
@@ -54,17 +54,11 @@ _PLANS = frozenset({"plan", "go", "execute", "cartesian_path"})
 _POSED = frozenset({"go", "execute"})
 
 
-def _floats(values: Any) -> Floats:
-    """Any array-like of reals as a flat, read-only float64 sequence (row-major;
-    ``fuzzer.execution.records.floats``)."""
-    return floats(values)
-
-
 def _trajectory(values: Values, trajectory: Any) -> None:
-    values["trajectory.time_from_start"] = _floats(trajectory.time_from_start)
-    values["trajectory.positions"] = _floats(trajectory.positions)
-    values["trajectory.velocities"] = _floats(trajectory.velocities)
-    values["trajectory.accelerations"] = _floats(trajectory.accelerations)
+    values["trajectory.time_from_start"] = floats(trajectory.time_from_start)
+    values["trajectory.positions"] = floats(trajectory.positions)
+    values["trajectory.velocities"] = floats(trajectory.velocities)
+    values["trajectory.accelerations"] = floats(trajectory.accelerations)
 
 
 def _pose(values: Values, pose: Any) -> None:
@@ -144,11 +138,11 @@ class _Run:
             else:
                 group.set_joint_value_target(list(msg["position"]))
             self.pose_goal = False
-            values["joint_target"] = _floats(group.get_joint_value_target())
+            values["joint_target"] = floats(group.get_joint_value_target())
         elif kind == "named_target":
             group.set_named_target(msg["data"])
             self.pose_goal = False
-            values["joint_target"] = _floats(group.get_joint_value_target())
+            values["joint_target"] = floats(group.get_joint_value_target())
         elif kind == "pose_target":
             group.set_pose_target(_pose_tuple(msg["pose"]), msg["header"]["frame_id"] or None)
             self.pose_goal, self.goal_step = True, step
@@ -181,7 +175,7 @@ class _Run:
             group.stop()
         elif kind == "plan" or kind == "go":
             if not self.pose_goal:
-                values["in_effect.joint_goal"] = _floats(group.get_joint_value_target())
+                values["in_effect.joint_goal"] = floats(group.get_joint_value_target())
             status = self._plan(values) if kind == "plan" else self._go(values)
         elif kind == "execute":
             status = self._execute(values)
@@ -193,7 +187,7 @@ class _Run:
             _trajectory(values, trajectory)
         else:
             raise ValueError(f"unknown step kind {kind!r}")
-        values["joint_values"] = _floats(group.get_current_joint_values())
+        values["joint_values"] = floats(group.get_current_joint_values())
         if kind in _POSED:
             _pose(values, group.get_current_pose())
             self._named(values, self.remembered)
@@ -232,7 +226,7 @@ class _Run:
 
     def final(self) -> Values:
         """The state at the end: joint values and the end effector's pose."""
-        values: Values = {"joint_values": _floats(self.group.get_current_joint_values())}
+        values: Values = {"joint_values": floats(self.group.get_current_joint_values())}
         _pose(values, self.group.get_current_pose())
         return values
 
