@@ -12,7 +12,7 @@ from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.evaluate import Evaluator
 from fuzzer.execution.session import Session
-from fuzzer.generation.sweep import Sweep
+from fuzzer.generation.sweep import SWEEP_OPS, Sweep
 from fuzzer.harness import Harness
 from fuzzer.input.testcase import TestCase
 from fuzzer.mutation import mutators
@@ -50,10 +50,10 @@ def sweep(session: Session, mutator: str, seed: int, first_rows: int = 0) -> Swe
     """A dry run's sweeps for a campaign with ``--mutator mutator``, uniform rows seeded with
     ``seed``, the first of ``first_rows`` rows (0: ``ROWS``), never due on their own
     (``evaluate`` runs them); None but for the full engine's ``fk`` in process on a chain with
-    joints (as the campaign's sweeps)."""
+    joints (as the campaign's sweeps), and ``move``'s (the FK of its goals)."""
     config = session.config
     limits = session.reference.joint_limits
-    if mutator != "rrosfuzz" or config.op != "fk" or config.transport != "inprocess" or not limits:
+    if mutator != "rrosfuzz" or config.op not in SWEEP_OPS or config.transport != "inprocess" or not limits:
         return None
     lower, upper = [lim.lower for lim in limits], [lim.upper for lim in limits]
     tolerance = config.tolerance

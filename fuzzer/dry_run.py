@@ -69,11 +69,12 @@ from fuzzer.generation.dry_run_plan import (
     IN_PROCESS_FIRST,
     LATE,
     LEAD,
+    LEADING_SWEEP_OPS,
     LITERALS,
     SCRIPTS,
     SECOND_STAGE_OPS,
     SWEEP_SEED,
-    SWEEPS,
+    TOTAL_SWEEPS,
     UNIFORM,
 )
 from fuzzer.generation.sweep import Sweep
@@ -138,9 +139,9 @@ class Stages:
     or ``LEAD`` configurations (``move``; ``LITERALS`` configurations at the targets' compared
     numbers after the first ``HEAD`` of them), ``ALIGNED`` aligned configurations, the boundary
     probes (then the literal configurations of the other ops), then the rest of ``EARLY``'s
-    configurations (``fk``: ``LATE`` more sweeps); a scenario's: the tutorial scripts, then
+    configurations (``fk`` and ``move``: ``LATE`` more sweeps); a scenario's: the tutorial scripts, then
     ``SCRIPTS`` uniform scripts, the first ``LITERALS`` of them from literal configurations. The
-    second starts once they exist: the seeds, then the rest of the uniform work (``SWEEPS``,
+    second starts once they exist: the seeds, then the rest of the uniform work (``TOTAL_SWEEPS``,
     ``UNIFORM``); a scenario has none (``SECOND_STAGE_OPS``). On one CPU the campaign waits
     for each child before it goes on (``launch``); on two, the children run while the campaign
     starts up.
@@ -273,11 +274,17 @@ class Stages:
         return seeds + uniform_cases(self.session, count, self.seed + SWEEP_SEED + 1, first)
 
     def _first_sweeps(self) -> tuple[int, int]:
-        """The first stage's sweeps of ``ROWS`` (``fk``): before its probes (``EARLY``) and after
-        them (``LATE``), together at most ``SWEEPS``."""
+        """The first stage's sweeps of ``ROWS``: before its probes (``EARLY``, ``fk``) and after
+        them (``LATE``), together at most the op's ``TOTAL_SWEEPS``."""
         op = self.session.config.op
-        early = min(EARLY.get(op, 0), SWEEPS)
-        return early, min(LATE.get(op, 0), SWEEPS - early)
+        total = TOTAL_SWEEPS.get(op, 0)
+        early = min(EARLY.get(op, 0), total) if op in LEADING_SWEEP_OPS else 0
+        return early, min(LATE.get(op, 0), total - early)
+
+    def _first_rows(self) -> int:
+        """Rows of the first stage's first sweep: ``FIRST_ROWS`` where it leads the stage, else
+        a full sweep's (0)."""
+        return FIRST_ROWS if self.session.config.op in LEADING_SWEEP_OPS else 0
 
     def first(self) -> None:
         """Start the first stage. Its child makes its inputs (6-7 ms for ``fk``): its sweeps
@@ -289,14 +296,15 @@ class Stages:
 
         def work() -> None:
             if here is None:
-                made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
+                made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED, self._first_rows())
                 harness = self.make_harness(self._base(), made)
                 parts: Parts = self._first_parts(literals=True)
                 rest: list[TestCase] = []
             else:  # the first input was evaluated before the fork
                 made, harness, parts, rest = here
                 harness.maybe_snapshot(force=True)  # this process's first snapshot, which counts it
-            for _ in range(early + 1 if made is not None else 0):  # FIRST_ROWS rows, then early sweeps
+            leading = made is not None and self.session.config.op in LEADING_SWEEP_OPS
+            for _ in range(early + 1 if leading else 0):  # FIRST_ROWS rows, then early sweeps
                 harness.run_sweep()
             evaluate(harness, rest, snapshot=False)  # the rest of the first input's part
             for _, part in parts:  # the literals made here: off the start-up
@@ -327,7 +335,7 @@ class Stages:
             return None
         if threading.current_thread() is not threading.main_thread():
             return None  # the hang guard needs signals, which only the main thread may set
-        made = sweep(session, self.mutator, self.seed + SWEEP_SEED, FIRST_ROWS)
+        made = sweep(session, self.mutator, self.seed + SWEEP_SEED, self._first_rows())
         harness = self.make_harness(self._base(), made)
         harness.hold_snapshots()  # the child logs the first (a snapshot names its process)
         parts = self._first_parts(literals=True)
@@ -359,7 +367,7 @@ class Stages:
         outside ``SECOND_STAGE_OPS``)."""
         if self.session.config.op not in SECOND_STAGE_OPS:
             return
-        rest = SWEEPS - sum(self._first_sweeps())
+        rest = TOTAL_SWEEPS.get(self.session.config.op, 0) - sum(self._first_sweeps())
 
         def work() -> None:
             made = sweep(self.session, self.mutator, self.seed + SWEEP_SEED + 1)

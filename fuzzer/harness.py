@@ -188,6 +188,8 @@ class Harness(MutationStep):
             return None
         if isinstance(message.get("header"), dict):  # the sweep's link (a JointState's frame_id)
             message["header"]["frame_id"] = (self.sweep.link if self.sweep is not None else None) or ""
+        if self.evaluator.op == "move" and "velocity" in message:  # MoveIt's default scaling
+            message["velocity"], message["effort"] = [], []  # (a seed's may make a 60,000-point plan)
         return base.child(message, row.label)
 
     def hold_snapshots(self) -> None:

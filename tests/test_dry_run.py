@@ -93,7 +93,7 @@ def test_the_dry_run_files_what_the_seeds_show_before_libfuzzer_runs_them(tmp_pa
     assert ran[BOUNDARY] > 0, "the boundary probes"
     # benchmarks/zoo/bugs.py compares against 3.0 and 1.0: the zoo arm's joints that hold them
     assert 0 < ran[LITERAL] <= dry_run.LITERALS, "configurations at the target's compared numbers"
-    rest = dry_run.SWEEPS - early - late
+    rest = dry_run.TOTAL_SWEEPS["fk"] - early - late
     assert rest > 0, "the second stage keeps sweeps of its own"
     assert last[second]["executed_by_strategy"] == {"seed": 32, SWEPT: rest * CONFIRM}
     assert [last[pid]["sweep"]["compared"] for pid in (first, second)] == [

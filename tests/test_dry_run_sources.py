@@ -21,6 +21,7 @@ from fuzzer.generation.scripts import uniform_script
 from fuzzer.generation.spacefill import Uniform
 from fuzzer.generation.sweep import ROWS, Sweep
 from fuzzer.harness import Harness
+from fuzzer.input.mapping import MoveCall
 from fuzzer.input.testcase import TestCase, decode
 from fuzzer.scenario import steps as scenario_steps
 from fuzzer.selection.state import ALIGNED, BOUNDARY, SPACEFILL, UNIFORM
@@ -58,10 +59,37 @@ def test_a_sweep_names_its_source_in_the_lineage_and_rejects_an_unknown_one() ->
 
 @pytest.mark.parametrize(
     ("op", "mutator", "transport"),
-    [("move", "rrosfuzz", "inprocess"), ("ik", "rrosfuzz", "inprocess"), ("fk", "libfuzzer", "inprocess")],
+    [
+        ("scenario", "rrosfuzz", "inprocess"),
+        ("ik", "rrosfuzz", "inprocess"),
+        ("fk", "libfuzzer", "inprocess"),
+        ("move", "weights", "inprocess"),
+    ],
 )
-def test_only_the_full_engine_sweeps_in_an_fk_dry_run(op: str, mutator: str, transport: str) -> None:
+def test_only_the_full_engine_sweeps_in_an_fk_or_move_dry_run(op: str, mutator: str, transport: str) -> None:
     assert dry_harness.sweep(Session.open(RunConfig(op=op, transport=transport)), mutator, seed=1) is None
+
+
+def test_a_move_dry_run_sweep_files_a_goal_fk_fault_as_a_move_at_default_scaling(tmp_path: Path) -> None:
+    """``narrow_band`` (FK wrong in a band 0.1% of joint 2's range) through ``move``: a sweep's
+    flagged row becomes a move to that configuration, its scaling MoveIt's default even where
+    the Harness's seed (the message the rows go into) asks for a 0.001 velocity scaling."""
+    h = make_harness(tmp_path, targets=("native", "benchmarks.zoo.deep:narrow_band"), op="move")
+    session = Session.open(RunConfig(op="move"))
+    h.sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
+    h.joint_names = tuple(session.reference.joint_names)
+    base = h.seeds[0]
+    h.seeds = [base.child({**base.message, "velocity": [0.001], "effort": [0.5]}, "seed")]
+    dry_harness.evaluate(h, [], before=dry_run.TOTAL_SWEEPS["move"])
+    assert h.sweep is not None and h.sweep.compared == dry_run.TOTAL_SWEEPS["move"] * ROWS
+    assert h.stats.signatures and h.sweep.unconfirmed == 0
+    crash = next(p for p in (tmp_path / "artifacts").glob("crash-*") if p.suffix != ".json")
+    case = decode(crash.read_bytes())
+    assert case.strategy == "sweep:uniform"
+    assert case.message["velocity"] == [] and case.message["effort"] == []
+    call = h.evaluator.mapping(case.message)
+    assert isinstance(call, MoveCall) and call.velocity_scaling is None
+    assert h.evaluator.evaluate(case).divergent
 
 
 def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_crash(tmp_path: Path) -> None:
@@ -71,8 +99,8 @@ def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_cra
     session = Session.open(RunConfig(op="fk"))
     h.sweep = dry_harness.sweep(session, "rrosfuzz", seed=1)
     h.joint_names = tuple(session.reference.joint_names)
-    dry_harness.evaluate(h, [], before=dry_run.SWEEPS)
-    assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
+    dry_harness.evaluate(h, [], before=dry_run.TOTAL_SWEEPS["fk"])
+    assert h.sweep is not None and h.sweep.compared == dry_run.TOTAL_SWEEPS["fk"] * ROWS
     assert h.stats.signatures and h.sweep.unconfirmed == 0
     assert h.stats.first_input is not None
     crash = next(p for p in (tmp_path / "artifacts").glob("crash-*") if p.suffix != ".json")
@@ -86,8 +114,8 @@ def test_an_fk_dry_run_sweep_finds_a_narrow_band_and_files_it_as_an_ordinary_cra
 def test_no_dry_run_sweep_reports_between_correct_targets(tmp_path: Path) -> None:
     h = make_harness(tmp_path, op="fk")
     h.sweep = dry_harness.sweep(Session.open(RunConfig(op="fk")), "rrosfuzz", seed=2)
-    dry_harness.evaluate(h, [], before=dry_run.SWEEPS)
-    assert h.sweep is not None and h.sweep.compared == dry_run.SWEEPS * ROWS
+    dry_harness.evaluate(h, [], before=dry_run.TOTAL_SWEEPS["fk"])
+    assert h.sweep is not None and h.sweep.compared == dry_run.TOTAL_SWEEPS["fk"] * ROWS
     assert h.sweep.flagged == 0 and not h.stats.signatures
 
 
@@ -327,7 +355,11 @@ def test_the_first_stage_evaluates_its_first_input_before_it_makes_the_rest(
         end = events.index("snapshot")  # the child's last event
         assert events[end - late : end] == ["sweep"] * late
         assert "sweep" not in events[early + 1 : end - late], "the probes between them"
-    if op == "move":
+    if op == "move":  # its sweeps last only: its first inputs are configurations
+        late = dry_run.LATE["move"]
+        end = events.index("snapshot")
+        assert late > 0 and events[end - late : end] == ["sweep"] * late
+        assert "sweep" not in events[: end - late]
         assert literals.literal_cases(), "per_joint_band's module compares against numbers"
         assert isinstance(events[0], TestCase) and events[0].lineage == (UNIFORM,), events[:2]
         assert events.index("aligned made") > 1, "made after the first input"

@@ -123,6 +123,25 @@ def test_a_sweep_is_due_every_few_single_inputs_whatever_the_clock() -> None:
     assert not any(Sweep(lower, upper, Tolerance(), every=0).due() for _ in range(10)), "0: never due"
 
 
+@pytest.mark.parametrize("op", ["fk", "move", "ik", "scenario"])
+def test_the_full_engine_sweeps_fk_and_move_campaigns_each_at_its_own_pace(op: str) -> None:
+    """``fk`` and ``move`` in process get sweeps (a move's: the FK of its goals), due every
+    ``EVERY_OP[op]`` single inputs; ``ik`` and ``scenario`` none, nor a baseline."""
+    from fuzzer.execution.session import RunConfig, Session
+    from fuzzer.generation.sweep import EVERY_OP
+    from fuzzer.selection.guidance import Features
+    from fuzzer.selection.search import search_parts
+
+    session = Session.open(RunConfig(op=op))
+    sweep = search_parts(session, "rrosfuzz", 1, Features(enabled=False)).get("sweep")
+    assert "sweep" not in search_parts(session, "weights", 1, Features(enabled=False))
+    if op not in ("fk", "move"):
+        assert sweep is None
+        return
+    assert isinstance(sweep, Sweep) and sweep.source == "sobol" and sweep.every == EVERY_OP[op]
+    assert EVERY_OP["move"] > EVERY_OP["fk"] > 1, "a move input costs several fk ones"
+
+
 def test_a_failing_batch_path_switches_the_sweep_off() -> None:
     class Broken:
         def forward_kinematics_batch(self, q: object, link: object = None) -> object:

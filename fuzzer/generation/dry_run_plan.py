@@ -49,6 +49,14 @@ SWEEPS = 32
 robot): a band 1e-4 of one joint's range wide is met with probability 0.96, one 1e-5 wide with
 0.28 (the campaign's Sobol sweeps go on from there)."""
 
+TOTAL_SWEEPS = {"fk": SWEEPS, "move": 8}
+"""Sweeps of ``ROWS`` a dry run evaluates in all, per op (``move``: ``LATE``'s in the first
+stage, the rest after the seeds; the campaign's own sweeps come every 32 inputs,
+``fuzzer.generation.sweep.EVERY_OP``)."""
+LEADING_SWEEP_OPS = frozenset({"fk"})
+"""Ops whose first stage starts with its sweeps (one of ``FIRST_ROWS`` rows, then ``EARLY``'s):
+``fk``, which has no single-call configurations there. A ``move`` campaign's first inputs are
+its uniform configurations, whose one-call bugs would wait for a sweep."""
 FIRST_ROWS = 64
 """Rows of the first stage's first sweep (``fk``), before its ``EARLY`` sweeps of ``ROWS``: what
 most configurations show is reported after 64 rows (about 0.8 ms on the first call) instead of
@@ -63,9 +71,12 @@ EARLY = {"fk": 4, "move": 128}
 (``move``; ``LEAD`` of them before the aligned configurations and the boundary probes, the rest
 after them)."""
 
-LATE = {"fk": 12}
-"""Sweeps (``fk``) the first stage evaluates last, after its probes and literal configurations
-(about 2 ms each); the second stage has the rest of ``SWEEPS``. With only ``EARLY``'s, a fault
+LATE = {"fk": 12, "move": 4}
+"""Sweeps the first stage evaluates last, after its probes and literal configurations
+(about 2 ms each); the second stage has the rest of ``TOTAL_SWEEPS``. ``move``'s (since the
+sixty-sixth session) are its only ones in the first stage: a fault in the FK of a move's goal
+that 1e-3 of uniform configurations show (``gated_band``) is met in 4,096 rows with
+probability 0.98, and in the stage's 128 configurations with 0.12. With only ``EARLY``'s, a fault
 that 2.7e-4 of uniform rows show (``joint_relation``: two joints in a relation) was missed by
 the first stage in about a third of the trials and waited about 0.2 s more, for Hypothesis'
 import, the seeds and their evaluation; after 16 sweeps it is missed with odds 0.013. On one

@@ -58,6 +58,15 @@ single ``fk`` inputs on the default arm (``stats.jsonl``'s ``sweep.seconds`` aga
 campaign's), so this gives the sweeps about half of the time, as the clock-shared schedule
 before 2026-12-03 did (``SHARE`` then: 0.5)."""
 
+EVERY_OP = {"fk": EVERY, "move": 32}
+"""Single inputs per sweep, per op (``SWEEP_OPS``). A ``move`` input costs several ``fk`` ones
+(a plan, its execution, FK of the end), and a sweep finds only what the FK of a move's goal
+shows (a ``move`` row becomes a move to that configuration at default scaling), not what the
+plan or its execution get wrong: 32 gives its sweeps about a tenth of a ``move`` campaign."""
+
+SWEEP_OPS = frozenset(EVERY_OP)
+"""Ops whose full-engine campaigns sweep, in process (``fuzzer.selection.search``)."""
+
 SCALES = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
 """Pattern-search steps, as fractions of each joint's range."""
 

@@ -3,7 +3,7 @@ sources and mutators with their fresh-input makers (``fuzzer.selection.state.Sou
 ``ik`` the joint-space walk of goals, ``fuzzer.generation.walk``), the
 float-comparison tracer (``fuzzer.selection.floatcmp``) with the thresholds it learns for the
 ``compared`` mutator (``fuzzer.selection.compared``), the queue of new inputs for that mutator
-(``fuzzer.selection.i2s``) and, for ``fk`` in process, the batched sweeps
+(``fuzzer.selection.i2s``) and, for ``fk`` and ``move`` in process, the batched sweeps
 (``fuzzer.generation.sweep``). ``fuzzer.campaign`` hands them to the Harness."""
 
 from __future__ import annotations
@@ -73,14 +73,15 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
         "float_tracer": tracer,
         "i2s": I2SQueue(arm, compared.is_unsolved),
     }
-    if config.op == "fk" and config.transport == "inprocess" and all(map(batches, config.targets)):
-        from fuzzer.generation.sweep import Sweep
+    from fuzzer.generation.sweep import EVERY_OP, SWEEP_OPS, Sweep
 
+    if config.op in SWEEP_OPS and config.transport == "inprocess" and all(map(batches, config.targets)):
         search["sweep"] = Sweep(
             [lim.lower for lim in limits],
             [lim.upper for lim in limits],
             config.tolerance,
             seed=seed + SWEEP_SEED,
+            every=EVERY_OP[config.op],
         )
     return search
 
