@@ -51,7 +51,7 @@ robot): a band 1e-4 of one joint's range wide is met with probability 0.96, one 
 
 TOTAL_SWEEPS = {"fk": SWEEPS, "move": 8}
 """Sweeps of ``ROWS`` a dry run evaluates in all, per op (``move``: ``LATE``'s in the first
-stage, the rest after the seeds; the campaign's own sweeps come every 32 inputs,
+stage, the rest after the seeds; the campaign's own sweeps come every 64 inputs,
 ``fuzzer.generation.sweep.EVERY_OP``)."""
 LEADING_SWEEP_OPS = frozenset({"fk"})
 """Ops whose first stage starts with its sweeps (one of ``FIRST_ROWS`` rows, then ``EARLY``'s):
