@@ -561,15 +561,17 @@ def test_a_jobs_campaign_on_a_full_artifacts_folder_exits_74_saying_so(tmp_path:
 
 
 def test_a_full_artifacts_folder_stops_the_campaign_and_loses_no_divergence(tmp_path: Path) -> None:
-    # A full disk, made by a file size limit (RLIMIT_FSIZE: writes past 3 KB fail with EFBIG, as
-    # ENOSPC would; a sidecar is larger). Before: Atheris' "Uncaught Python exception", exit 77
+    # A full disk, made by a file size limit (RLIMIT_FSIZE: writes past 2 KB fail with EFBIG, as
+    # ENOSPC would; a sidecar is larger, about 2.9 KB, so the first divergence's fails, before the
+    # logs fill up; at 3 KB the stats lines of a move campaign's dry run, longer since its sweeps,
+    # could fill stats.jsonl first). Before: Atheris' "Uncaught Python exception", exit 77
     # ("a target died"), an empty crash file from libFuzzer, and the divergence's input nowhere
     import resource
 
     from tests.support import fuzz as fuzz_with
 
     def small_files() -> None:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (3072, 3072))
+        resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048))
 
     corpus, artifacts = tmp_path / "corpus", tmp_path / "artifacts"
     # no -handle_xfsz=0 given: the campaign passes it (libFuzzer's SIGXFSZ handler made the limit

@@ -139,6 +139,9 @@ def test_the_full_engine_sweeps_fk_and_move_campaigns_each_at_its_own_pace(op: s
         assert sweep is None
         return
     assert isinstance(sweep, Sweep) and sweep.source == "sobol" and sweep.every == EVERY_OP[op]
+    # its Sobol engine (scipy.stats, up to 1.1 s) made now, not in the first sweep's input, where
+    # a -fork worker lost a Ctrl-C (tests/test_engine_cli.py, test_ctrl_c_ends_jobs...)
+    assert sweep._stream._sobol is not None  # type: ignore[union-attr]
     assert EVERY_OP["move"] > EVERY_OP["fk"] > 1, "a move input costs several fk ones"
 
 

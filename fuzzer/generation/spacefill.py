@@ -84,6 +84,11 @@ class SpaceFill:
             self._sobol = qmc.Sobol(d=len(self._lo), scramble=True, seed=np.random.default_rng(self.seed))
         return self._sobol
 
+    def ready(self) -> None:
+        """Make the Sobol engine now, not at the first point drawn (``Sweep.prime``)."""
+        if self._engine is None:
+            raise RuntimeError("no Sobol engine")
+
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) as arrays, infinite bounds replaced by -pi / pi."""
         return self._lo.copy(), self._hi.copy()

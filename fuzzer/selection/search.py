@@ -83,6 +83,7 @@ def search_parts(session: Session, mutator: str, seed: int, features: Any, seede
             seed=seed + SWEEP_SEED,
             every=EVERY_OP[config.op],
         )
+        search["sweep"].prime()  # before libFuzzer runs, not in an input
     return search
 
 
