@@ -6,8 +6,9 @@
 For each op, runs ``fuzz_diff.py`` (default targets native vs python, default
 robot, python_impl and the oracle instrumented by Atheris) for ``--seconds``
 per seed on a fresh corpus, and reads the engine's own summary (executions
-and fuzzing time, startup excluded) and, for ``fk``, the batched sweeps' rows
-compared (``stats.jsonl``; half of an ``fk`` campaign's time goes to them). Then
+and fuzzing time, startup excluded) and, for ``fk`` and ``move``, the batched sweeps'
+rows compared (``stats.jsonl``; half of an ``fk`` campaign's time goes to them, about a
+tenth of a ``move`` one's). Then
 runs the paper's experiment size, 15,246 executions of ``move``
 (``-runs=15246``), and reports the wall time of the whole command, startup
 included. Medians over the seeds. Before and after, the machine's speed at that moment
