@@ -32,7 +32,7 @@ from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.execute import NUDGE_FAILED, scenario_outcome
 from fuzzer.scenario.nudge import Explainers, Moved, Nudge, Retry
 from fuzzer.scenario.oracle import ik_answer_changed
-from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, state_gap
+from fuzzer.scenario.oracle_ik import EXTENT_FIELDS, extent_changed, split_on_ik, state_gap
 from fuzzer.scenario.steps import ScenarioCall
 
 if TYPE_CHECKING:
@@ -85,7 +85,8 @@ class IkRerun:
         targets then agree at that step (their answers, and the scenario oracle finds no counted
         divergence: a path timed differently from the same answers is not the dead zone's), the
         documented dead zone is the whole difference, ``known_limitation``; before that, an
-        ok-vs-failed step whose one IK call meets KDL's half turn on the twin's replayed
+        ok-vs-failed step, or a plan failed on both with ``NO_IK_SOLUTION`` on one only
+        (``oracle_ik.split_on_ik``), whose one IK call meets KDL's half turn on the twin's replayed
         iterates is ``known_limitation`` too (``ik_check.step_meets_half_turn``). Every re-run stops
         after that step: only its answer is judged, and each scenario runs on a new
         ``MoveGroup``, so the steps after it cannot change it. The nudges that explained earlier
@@ -123,9 +124,9 @@ class IkRerun:
                     return replace(comparison, kind=Kind.ILL_CONDITIONED)
         if self._out_of_time(longest):
             return replace(comparison, unchecked=self._cut_short(len(tries), len(tries) + 1))
-        if comparison.kind is Kind.STATUS and ik_check.step_meets_half_turn(
-            runners, self.replay, call, step, scenario_outcome
-        ):
+        steps = [o.steps[step] for o in outcomes[:2] if step < len(o.steps)]
+        split = comparison.kind is Kind.STATUS or (len(steps) == 2 and split_on_ik(comparison, *steps))
+        if split and ik_check.step_meets_half_turn(runners, self.replay, call, step, scenario_outcome):
             return replace(comparison, kind=Kind.KNOWN_LIMITATION)  # KDL's half turn, met on the way
         with twin_with_kdl_dead_zone() as swapped:  # KDL's documented dead zone in the twin
             again = self.run_both(call, runners=runners) if swapped else ()

@@ -39,11 +39,12 @@ every joint it names is continuous and on each target that joint's last point is
 from its first within the campaign tolerance: the short way round is then either way, and
 a start a rounding error either side of the boundary picks it (``_either_way_round``).
 
-A status divergence (ok vs failed) of ``go``/``plan`` with a pose target is
-``known_limitation`` when the requested orientation is within ``DEAD_ZONE`` of a half turn
-from the orientation the state before the step gives the link (``fuzzer.execution.evaluate``'s rule
-for single IK calls). Other IK divergences go to the evaluator's nudge check
-(``ik_answer_changed``).
+A status divergence (ok vs failed) of ``go``/``plan`` with a pose target, or a ``plan`` that
+failed on both with ``NO_IK_SOLUTION`` on one only (``split_on_ik``: the other's IK answered and
+its plan failed after it), is ``known_limitation`` when the requested orientation is within
+``DEAD_ZONE`` of a half turn from the orientation the state before the step gives the link
+(``fuzzer.execution.evaluate``'s rule for single IK calls). Other IK divergences go to the
+evaluator's nudge check (``ik_answer_changed``).
 """
 
 from __future__ import annotations
@@ -61,6 +62,7 @@ from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
 from fuzzer.scenario.oracle_switch import ACCELERATION_TOLERANCE
 from fuzzer.scenario.oracle_timing import phase_knife_edge, timed_as_contract
 from fuzzer.scenario.steps import ScenarioCall
+from robot_api.records import MoveItErrorCode
 
 FRACTION_TOLERANCE = 1e-9
 """Cartesian path fraction."""
@@ -73,6 +75,8 @@ KNIFE_EDGE = 1e-9
 """Relative distance of ``d / eef_step`` to an integer within which its floor is rounding."""
 DEAD_ZONE = 1e-6
 """KDL's rotation dead zone at a half turn (rad; ``fuzzer.execution.ik_check.DEAD_ZONE``)."""
+NO_IK = (float(MoveItErrorCode.NO_IK_SOLUTION),)
+"""A step's ``error_code`` when its IK found no solution."""
 DERIVED = (
     "trajectory.points",
     "trajectory.time_from_start",
@@ -203,7 +207,7 @@ def classify(
         return replace(c, kind=Kind.KNOWN_LIMITATION)
     ik = solves_ik(call, i, before[0])
     kind = call.steps[i].kind
-    if c.kind is Kind.STATUS:
+    if c.kind is Kind.STATUS or split_on_ik(c, a, b):
         return _half_turn(a, b, c, before[0], facts) if ik else c
     gap = max(_gap([(before[0].state or (), before[1].state or ())]), _goal_gap(kind, before, tol))
     if ik:
@@ -233,6 +237,19 @@ def classify(
         return c
     own = all(timed_as_contract(kind, o, ctx, facts) for o, ctx in zip((a, b), before, strict=True))
     return replace(c, kind=Kind.KNOWN_LIMITATION) if own else c
+
+
+def split_on_ik(c: Comparison, a: Outcome, b: Outcome) -> bool:
+    """Whether a divergence of a step's ``error_code`` is its IK answering on one target only:
+    both steps failed, one with ``NO_IK_SOLUTION`` and the other after its IK answered (a plan
+    that would last longer than ``MAX_TRAJECTORY_DURATION`` fails with ``PLANNING_FAILED``).
+    That is a status divergence of the IK call inside the step, as ok vs failed is of the step:
+    the rules for those apply to it (``_half_turn`` here, ``ik_check.step_meets_half_turn``
+    after the re-runs)."""
+    if not c.field.endswith(".error_code") or a.status is not Status.FAILED or b.status is not Status.FAILED:
+        return False
+    codes = [tuple(o.values.get("error_code", ())) for o in (a, b)]
+    return (codes[0] == NO_IK) != (codes[1] == NO_IK)
 
 
 def _goal_gap(kind: str, before: tuple[Context, Context], tol: Tolerance) -> float:
