@@ -24,7 +24,7 @@ from fuzzer.artifacts.divlog import CampaignLog
 from fuzzer.artifacts.sidecar_record import build_sidecar
 from fuzzer.artifacts.store import WRITE_FAILED_EXIT, ArtifactStore, ArtifactsUnwritable
 from fuzzer.campaign_end import USAGE_EXIT, CampaignEnd
-from fuzzer.execution import guard, heap
+from fuzzer.execution import guard
 from fuzzer.execution.session import RunConfig, Session, tip_hint, versions
 from fuzzer.generation.corpus import prescan, write_bag_seeds
 from fuzzer.generation.initial import initial_seeds
@@ -103,8 +103,6 @@ def run(config: RunConfig, options: CampaignOptions) -> int:
     if deadline is not None and time.time() >= deadline:
         os._exit(0)  # a -fork job or merge started after the budget: nothing left to do
     started = time.time()  # crash files since then are this run's (the dry run's included)
-    if config.op == "scenario":
-        heap.give_back_large_blocks()  # long plans' arrays back to the system when freed
     # the targets load before Atheris (for fuzzer.dry_run); ``instrument`` rewrites them in place
     session = Session.open(config)
     if options.drawn_note:
