@@ -30,7 +30,7 @@ from fuzzer.scenario.oracle import TIMES, compare_step
 from fuzzer.scenario.oracle_facts import Context, JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import apart_rows, joints_apart, pairs_apart
 from fuzzer.scenario.oracle_timing import limits_of, reference_duration
-from python_impl.trajectory import time_parameterize
+from python_impl.trajectory import plan_trajectory, time_parameterize
 
 TOL = Tolerance(metres=1e-5, radians=1e-6)
 SPECS = {
@@ -186,6 +186,25 @@ def test_reference_duration_is_remembered_by_the_bits_of_its_inputs() -> None:
     assert reference_duration("cartesian_path", rows, Context(velocity_scaling=0.0), facts) is None
     assert reference_duration("cartesian_path", rows, Context(velocity_scaling=0.0), facts) is None
     assert oracle_timing._duration.cache_info().misses == 3
+
+
+def test_a_plans_reference_duration_is_remembered_by_its_two_ends() -> None:
+    """A plan's duration is that of its first and last points (``plan_trajectory``): its key keeps
+    only those, so a long plan leaves no megabytes in the cache, and plans that part only in
+    between share the answer."""
+    facts = ScenarioFacts((SPECS["revolute"], SPECS["continuous"]))
+    before = Context(velocity_scaling=0.5, acceleration_scaling=0.25)
+    long = np.linspace([0.0, 0.0], [0.7, -0.2], 60_001)
+    oracle_timing._duration.cache_clear()
+    first = reference_duration("plan", long, before, facts)
+    reference = plan_trajectory(limits_of(facts), [0.0, 0.0], [0.7, -0.2], 0.5, 0.25)
+    assert first == float(reference.time_from_start[-1])
+    bent = long.copy()
+    bent[1:-1] += 0.01
+    assert reference_duration("plan", bent, before, facts) == first
+    assert reference_duration("plan", long[[0, -1]], before, facts) == first
+    info = oracle_timing._duration.cache_info()
+    assert (info.hits, info.misses) == (2, 1)
 
 
 POSE_PARTS = {"joint_values": 3, "position": 3, "orientation": 4}
