@@ -59,35 +59,29 @@ SPLIT_POSE = Pose(
 )
 
 
-def _replay(monkeypatch: pytest.MonkeyPatch, path: Path = FALSE_POSITIVE) -> tuple[Result, str]:
+def _replay(monkeypatch: pytest.MonkeyPatch, path: Path) -> tuple[Result, str]:
     monkeypatch.chdir(ROOT)
     done = replay_file(path, RunConfig(), {}, trust=True)  # the project's own file
     kind = done.evaluation.comparison.kind.value if done.evaluation is not None else ""
     return done.result, kind
 
 
-def test_the_make_run_false_positive_is_kdls_half_turn(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert ik_check.pose_meets_half_turn(RobotModel(str(URDF)), POSE, SEED, None)
-    result, kind = _replay(monkeypatch)
+@pytest.mark.parametrize(
+    ("path", "seed", "pose", "without_rule"),
+    [(FALSE_POSITIVE, SEED, POSE, "status"), (ERROR_CODE_SPLIT, SPLIT_SEED, SPLIT_POSE, "value")],
+    ids=["make-run-go-status", "plan-error-code"],
+)
+def test_a_scenario_ik_split_at_kdls_half_turn_is_explained(
+    path: Path, seed: tuple[float, ...], pose: Pose, without_rule: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    assert ik_check.pose_meets_half_turn(RobotModel(str(URDF)), pose, seed, None)
+    result, kind = _replay(monkeypatch, path)
     if result is Result.AGREES:  # as the other IK splits' tests: rounding is the CPU's
         pytest.skip("the scenario does not split the targets on this CPU")
     assert (result, kind) == (Result.EXPLAINED, "known_limitation")
     monkeypatch.setattr(ik_check, "step_meets_half_turn", lambda *args: False)
-    result, kind = _replay(monkeypatch)
-    assert (result, kind) == (Result.SAME, "status"), "only the half-turn rule explains it"
-
-
-def test_a_plan_failed_on_both_whose_ik_split_at_kdls_half_turn_is_explained(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    assert ik_check.pose_meets_half_turn(RobotModel(str(URDF)), SPLIT_POSE, SPLIT_SEED, None)
-    result, kind = _replay(monkeypatch, ERROR_CODE_SPLIT)
-    if result is Result.AGREES:  # rounding is the CPU's
-        pytest.skip("the scenario does not split the targets on this CPU")
-    assert (result, kind) == (Result.EXPLAINED, "known_limitation")
-    monkeypatch.setattr(ik_check, "step_meets_half_turn", lambda *args: False)
-    result, kind = _replay(monkeypatch, ERROR_CODE_SPLIT)
-    assert (result, kind) == (Result.SAME, "value"), "only the half-turn rule explains it"
+    result, kind = _replay(monkeypatch, path)
+    assert (result, kind) == (Result.SAME, without_rule), "only the half-turn rule explains it"
 
 
 def _failed(code: float) -> Outcome:
