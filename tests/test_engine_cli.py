@@ -475,6 +475,31 @@ def test_a_msg_path_that_cannot_matter_is_said_and_not_recorded(tmp_path: Path) 
     assert written and all(data["config"]["msg_path"] == [] for data in written)
 
 
+def test_a_new_corpus_folder_is_checked_and_recorded_without_the_sidecar_reader(tmp_path: Path) -> None:
+    """A campaign checks its corpus folders for a manifest before its first input; a new folder has
+    none, and raising or catching ``SidecarError`` there loaded ``fuzzer.artifacts.sidecar``
+    (0.45 ms of the full engine's start-up). A manifest that exists is still read through it."""
+    from tests.support import python
+
+    corpus = tmp_path / "corpus"
+    program = (
+        "import sys\n"
+        "from pathlib import Path\n"
+        "from fuzzer.artifacts import travel\n"
+        "from fuzzer.execution.session import RunConfig\n"
+        f"corpus = Path({str(corpus)!r})\n"
+        "corpus.mkdir()\n"
+        "travel.check_manifests([corpus], RunConfig())\n"
+        "travel.record_corpus([corpus], RunConfig())\n"
+        "assert (corpus / '.rrosfuzz' / 'manifest.json').is_file()\n"
+        "assert 'fuzzer.artifacts.sidecar' not in sys.modules, 'loaded for a new corpus folder'\n"
+        "travel.check_manifests([corpus], RunConfig())\n"
+        "assert 'fuzzer.artifacts.sidecar' in sys.modules, 'a manifest read without its validator'\n"
+    )
+    done = python(program)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
 def test_fork_mode_reexecutes_the_script(tmp_path: Path) -> None:
     artifacts = tmp_path / "artifacts"
     run = fuzz(

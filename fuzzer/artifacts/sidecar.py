@@ -18,10 +18,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from fuzzer.artifacts.manifest import SidecarError as SidecarError  # re-exported: where readers look for it
 from fuzzer.artifacts.shorten import MAX_SIDECAR_BYTES
 from fuzzer.artifacts.store import sidecar_path
 from fuzzer.execution.records import Status
-from fuzzer.execution.session import ConfigError
 from fuzzer.input import untrusted_json
 from fuzzer.input.mapping import OPS
 
@@ -41,10 +41,6 @@ CONFIG_FIELDS: dict[str, type | tuple[type, ...]] = {
     "msg_path": list,
     "filtering": bool,
 }
-
-
-class SidecarError(ConfigError):
-    """A sidecar (or manifest) that cannot be used as it is; the message names file and field."""
 
 
 Fail = Callable[[str, str], SidecarError]

@@ -78,7 +78,7 @@ def adopt_sidecar(args: argparse.Namespace, files: Sequence[Path]) -> bool:
 
     Raises
     ------
-    fuzzer.artifacts.sidecar.SidecarError
+    fuzzer.artifacts.manifest.SidecarError
         A damaged sidecar, or one naming targets that may not be imported.
     """
     for path in files:
@@ -115,7 +115,7 @@ def adopt_manifest(args: argparse.Namespace, folders: Sequence[Path]) -> None:
 
     Raises
     ------
-    fuzzer.artifacts.sidecar.SidecarError
+    fuzzer.artifacts.manifest.SidecarError
         A damaged manifest, or an unusable robot in it.
     """
     for folder in folders:
@@ -142,7 +142,7 @@ def check_manifests(folders: Sequence[Path], config: RunConfig) -> None:
 
     Raises
     ------
-    fuzzer.artifacts.sidecar.SidecarError
+    fuzzer.artifacts.manifest.SidecarError
         Saying what the corpus was made for.
     """
     for folder in folders:
@@ -157,13 +157,11 @@ def record_corpus(corpus: Sequence[Path], config: RunConfig) -> None:
     so a configuration that cannot run is never recorded); a corpus without one is adopted."""
     folders = [p for p in corpus if p.is_dir()]
     if folders:
-        from fuzzer.artifacts.sidecar import SidecarError
-
         try:
             manifest.write(folders[0], config)
         except OSError as exc:
             reporting.warn(f"cannot write the corpus manifest of {folders[0]}: {exc.strerror or exc}")
-        except SidecarError as exc:  # a link made since the manifest was read
+        except manifest.SidecarError as exc:  # a link made since the manifest was read
             reporting.warn(f"the corpus manifest is not written: {exc}")
 
 
