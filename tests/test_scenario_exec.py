@@ -13,6 +13,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
 import pytest
 
 import python_impl
@@ -21,7 +22,7 @@ from fuzzer.execution.session import ConfigError, RunConfig, Session
 from fuzzer.execution.targets import Runner
 from fuzzer.input.mapping import CallError, call_from_json, call_to_json, mapping_for
 from fuzzer.input.msgdef import MessageRegistry
-from fuzzer.scenario.execute import NUDGE_FAILED, run_scenario
+from fuzzer.scenario.execute import NUDGE_FAILED, _same_bits, run_scenario
 from fuzzer.scenario.nudge import Moved, Nudge
 from fuzzer.scenario.steps import MAX_STEPS, MSG_TYPE, TOPICS, ScenarioCall, to_call, validate
 from robot_api import robots
@@ -212,6 +213,28 @@ def test_fixed_script_runs_and_both_targets_agree_step_by_step(runners: tuple[Ru
         assert x.values.keys() == y.values.keys(), i
         for key in x.values:
             assert_close(x.values[key], y.values[key], TOL, f"step {i} {key}")
+
+
+def test_a_repeated_plan_is_recorded_once(runners: tuple[Runner, Runner]) -> None:
+    """A plan with the same bits as the last one is recorded as that record again, not a copy
+    (a script of many slow, repeated plans held a copy per step), and a new plan is its own."""
+    home = list(runners[1].model.home_values)
+    steps = [joint_target(Q1), number("/acceleration_scaling", 0.01), empty("/plan"), empty("/plan")]
+    other = [joint_target(home), empty("/plan"), joint_target(Q1), empty("/plan")]
+    call = to_call({"steps": [*steps, *other]})
+    keys = [f"trajectory.{name}" for name in ("time_from_start", "positions", "velocities", "accelerations")]
+    for runner in runners:
+        outcome = runner.run(call)
+        assert [s.label for s in outcome.steps] == ["ok"] * len(call.steps)
+        first, again, to_home, later = (outcome.steps[i].values for i in (2, 3, 5, 7))
+        alone = runner.run(to_call({"steps": steps[:3]})).steps[2].values
+        for key in keys:
+            assert len(first[key]) > 100 * len(home), key  # long enough to matter
+            assert again[key] is first[key] and first[key] == alone[key], key
+            assert to_home[key] is not first[key] and to_home[key] != first[key], key
+            assert later[key] is not first[key] and later[key] == first[key], key  # only the last is kept
+    assert not _same_bits(np.array([0.0]), np.array([-0.0]))
+    assert _same_bits(np.array([np.nan]), np.array([np.nan]))
 
 
 def test_rejected_steps_go_on(runners: tuple[Runner, Runner]) -> None:

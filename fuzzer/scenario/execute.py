@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from fuzzer.execution.records import Outcome, Status, floats
+from fuzzer.execution.records import Floats, Outcome, Status, floats
 from fuzzer.scenario.nudge import Axis, Moved, Nudge, shifted_goal, shifted_state
 from fuzzer.scenario.steps import ScenarioCall, Step
 from robot_api.constants import GOAL_JOINT_TOLERANCE
@@ -54,11 +54,12 @@ _PLANS = frozenset({"plan", "go", "execute", "cartesian_path"})
 _POSED = frozenset({"go", "execute"})
 
 
-def _trajectory(values: Values, trajectory: Any) -> None:
-    values["trajectory.time_from_start"] = floats(trajectory.time_from_start)
-    values["trajectory.positions"] = floats(trajectory.positions)
-    values["trajectory.velocities"] = floats(trajectory.velocities)
-    values["trajectory.accelerations"] = floats(trajectory.accelerations)
+_TRAJECTORY = ("time_from_start", "positions", "velocities", "accelerations")
+
+
+def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two flat float64 arrays hold the same bits (NaN payloads and -0.0 included)."""
+    return a.shape == b.shape and bool(np.array_equal(a.view(np.uint64), b.view(np.uint64)))
 
 
 def _pose(values: Values, pose: Any) -> None:
@@ -88,6 +89,8 @@ class _Run:
         self.last_plan: Any = None
         self.remembered: dict[str, None] = {}
         """Names a ``/remember`` of this run stored, in order."""
+        self.kept: dict[str, Floats] = {}
+        """The last trajectory's arrays as recorded, by value name (see ``_trajectory``)."""
         self._joint_names: tuple[str, ...] | None = None
 
     @property
@@ -95,6 +98,20 @@ class _Run:
         if self._joint_names is None:
             self._joint_names = tuple(self.runner.model.joint_names)
         return self._joint_names
+
+    def _trajectory(self, values: Values, trajectory: Any) -> None:
+        """Record a plan's ``trajectory.*`` values. An array with the same bits as the last
+        recorded one of its name is that record again, not a copy: a script that plans the same
+        path again and again (a tiny acceleration scaling makes each 10,000-60,000 points) kept
+        a copy per step until the whole script was compared (BENCHMARKS.md, "Memory")."""
+        for name in _TRAJECTORY:
+            key = f"trajectory.{name}"
+            array = np.ascontiguousarray(getattr(trajectory, name), dtype=np.float64).ravel()
+            old = self.kept.get(key)
+            if old is not None and _same_bits(old.array, array):
+                values[key] = old
+            else:
+                values[key] = self.kept[key] = floats(array)
 
     def nudge(self, shift: float) -> None:
         """Move the current state by ``shift`` on every joint with a one-point trajectory."""
@@ -184,7 +201,7 @@ class _Run:
             trajectory, fraction = group.compute_cartesian_path(poses, self.eef_step, self.jump_threshold)
             self.last_plan = trajectory
             values["fraction"] = (float(fraction),)
-            _trajectory(values, trajectory)
+            self._trajectory(values, trajectory)
         else:
             raise ValueError(f"unknown step kind {kind!r}")
         values["joint_values"] = floats(group.get_current_joint_values())
@@ -205,7 +222,7 @@ class _Run:
             self.last_plan = result.trajectory
         values["success"] = (1.0 if success else 0.0,)
         values["error_code"] = (float(int(result.error_code)),)
-        _trajectory(values, result.trajectory)
+        self._trajectory(values, result.trajectory)
         return Status.OK if success else Status.FAILED
 
     def _go(self, values: Values) -> Status:
