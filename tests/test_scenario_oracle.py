@@ -442,8 +442,8 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
 
     facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, origin)
-    three = trajectory([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)])
-    four = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)])
+    three = timed([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)], path=True)
+    four = timed([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)], path=True)
     edge = scenario("cartesian_path")  # d / eef_step = 0.3 / 0.01 = 29.999999999999996
     assert judge(edge, run(three), run(four), facts).kind is Kind.KNOWN_LIMITATION
     off = ScenarioCall(
@@ -461,7 +461,7 @@ def test_a_cartesian_step_count_on_the_knife_edge_is_a_known_limitation() -> Non
     def planar(q: Any, link: str | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
         return (q[0], q[1], 0.0), (0.0, 0.0, 0.0, 1.0)  # the home state (0, 0) at the origin
 
-    moved = trajectory([(0.0, 0.0), (0.101, 0.0), (0.2, 0.0), (0.3, 0.0)])
+    moved = timed([(0.0, 0.0), (0.101, 0.0), (0.2, 0.0), (0.3, 0.0)], path=True)
     planar_facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)
     assert judge(edge, run(three), run(moved), planar_facts).kind is Kind.VALUE
     assert judge(edge, run(three), run(four), planar_facts).kind is Kind.KNOWN_LIMITATION
@@ -506,8 +506,8 @@ def test_steps_after_a_known_limitation_of_a_path_are_still_compared() -> None:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
 
     facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, origin)
-    three = trajectory([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)])
-    four = trajectory([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)])
+    three = timed([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)], path=True)
+    four = timed([(0.0, 0.0), (0.075, 0.0), (0.15, 0.0), (0.225, 0.0), (0.3, 0.0)], path=True)
     still, moved = ok(joint_values=(0.0, 0.0)), ok(joint_values=(0.1, 0.0))
     later = judge(
         scenario("cartesian_path", "remember", "remember"),
@@ -624,6 +624,54 @@ def test_timing_that_does_not_follow_a_targets_own_points_is_not_explained_by_th
     assert judge(call, right, run(set_, set_, set_, timed(answer, scaling=1.0))).kind is Kind.VALUE
 
 
+def test_a_plan_to_ik_answers_apart_at_one_pose_must_follow_the_contract_on_each_target() -> None:
+    """A 7-joint arm's two IK solvers answer one pose with configurations far apart (the xArm7
+    control campaign of 2026-12-07: plans 68 points apart). That explains plans of different
+    lengths and positions, not a target that times or shapes its own plan wrongly: that target
+    breaks a property of its own at the step."""
+    facts = ScenarioFacts(FACTS.joints, NAMES, FACTS.home, planar)
+    goal = planar_goal(0.4).steps[0]
+    call = ScenarioCall(
+        (
+            Step("velocity_scaling", {"data": 0.5}),
+            Step("acceleration_scaling", {"data": 0.5}),
+            goal,
+            Step("plan", {}),
+        )
+    )
+    set_ = ok(joint_values=(0.0, 0.0))
+    one, other = [(0.0, 0.0), (0.4, 0.1)], [(0.0, 0.0), (0.4, 0.9)]  # joint 1 does not move the link
+    right = run(set_, set_, set_, timed(one, scaling=0.5))
+
+    def verdict(b: Outcome, c: ScenarioCall = call, a: Outcome = right) -> tuple[Kind, int | None, str, str]:
+        v = judge(c, a, b, facts)
+        return v.kind, v.step, v.field, v.target
+
+    assert verdict(run(set_, set_, set_, timed(other, scaling=0.5)))[:3] == (
+        Kind.KNOWN_LIMITATION,
+        3,
+        "plan.trajectory.points",
+    )
+    # timed at a quarter of the speed in effect: within every limit, so no other property sees it
+    slow = run(set_, set_, set_, timed(other, scaling=0.25))
+    assert verdict(slow) == (Kind.PROPERTY, 3, "plan.timing", "python")
+    assert verdict(right, a=slow) == (Kind.PROPERTY, 3, "plan.timing", "native")
+    plan = timed(other, scaling=0.5)
+    rows = np.array(plan.values["trajectory.positions"]).reshape(-1, 2)
+    rows[1:-1, 1] = -rows[1:-1, 1]  # the continuous joint the long way round, timed alike
+    detour = with_value(plan, "trajectory.positions", tuple(rows.ravel().tolist()))
+    assert verdict(run(set_, set_, set_, detour)) == (Kind.PROPERTY, 3, "plan.profile", "python")
+    speeds = np.array(plan.values["trajectory.velocities"]) * 0.5
+    wrong_speed = with_value(plan, "trajectory.velocities", tuple(speeds.tolist()))
+    assert verdict(run(set_, set_, set_, wrong_speed)) == (Kind.PROPERTY, 3, "plan.profile", "python")
+    path = run(set_, set_, timed(one, path=True, scaling=0.5))  # a path's timing as well
+    path_call = ScenarioCall((*call.steps[:2], Step("cartesian_path", MESSAGES["cartesian_path"])))
+    apart = run(set_, set_, timed(other, path=True, scaling=0.5))
+    assert verdict(apart, path_call, path)[0] is Kind.KNOWN_LIMITATION
+    slow_path = run(set_, set_, timed(other, path=True, scaling=0.25))
+    assert verdict(slow_path, path_call, path) == (Kind.PROPERTY, 2, "cartesian_path.timing", "python")
+
+
 def test_a_path_point_on_the_switch_of_a_triangular_profile_may_take_either_phase() -> None:
     """A control campaign's false positive (PROBOT Anno, 2026-11-26): a path of equal segments
     puts its middle point at half its length, where a triangular profile switches from
@@ -692,8 +740,8 @@ def test_a_continuous_joint_a_half_turn_from_its_goal_may_go_either_way_round() 
     call = scenario("go", "plan")
     e = 1e-11  # the two starts: a rounding error either side of the +-pi boundary
     up, down = ok(joint_values=(0.0, math.pi - e)), ok(joint_values=(0.0, -math.pi + 2 * e))
-    a = trajectory([(0.0, math.pi - e), (0.0, math.pi / 2), (0.0, 0.0)])
-    b = trajectory([(0.0, -math.pi + 2 * e), (0.0, -math.pi / 2), (0.0, 0.0)])
+    a = timed([(0.0, math.pi - e), (0.0, 0.0)])  # down through pi / 2
+    b = timed([(0.0, -math.pi + 2 * e), (0.0, 0.0)])  # up through -pi / 2
     c = judge(call, run(up, a), run(down, b), FACTS_ANY_GOAL)
     assert (c.kind, c.field, c.joints) == (Kind.KNOWN_LIMITATION, "plan.trajectory.positions", (1,))
     assert c.step == 1
@@ -702,7 +750,9 @@ def test_a_continuous_joint_a_half_turn_from_its_goal_may_go_either_way_round() 
     long = trajectory([(0.0, -math.pi + 2 * e), (0.0, -1.0), (0.0, 1.0)])
     assert judge(call, run(up, short), run(down, long), FACTS_ANY_GOAL).kind is Kind.VALUE
     # a revolute joint diverging as well is not explained
-    wide = trajectory([(0.0, -math.pi + 2 * e), (0.1, -math.pi / 2), (0.0, 0.0)])
+    rows = np.array(b.values["trajectory.positions"]).reshape(-1, 2)
+    rows[1:-1, 0] = 0.1
+    wide = with_value(b, "trajectory.positions", tuple(rows.ravel().tolist()))
     c = judge(call, run(up, a), run(down, wide), FACTS_ANY_GOAL)
     assert (c.kind, c.joints) == (Kind.VALUE, (0, 1))
 

@@ -56,7 +56,7 @@ from fuzzer.scenario.ik_rerun import IkRerun
 from fuzzer.scenario.nudge import Explainers, Nudge
 from fuzzer.scenario.oracle import compare_scenario, prefer, solves_ik
 from fuzzer.scenario.oracle_facts import ScenarioFacts, contexts
-from fuzzer.scenario.oracle_properties import first_property
+from fuzzer.scenario.oracle_properties import violation_at
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.records import JointType
 
@@ -265,7 +265,7 @@ class Evaluator(IkRerun):
                 call, pair, comparison, facts, self.tolerance, rerun, self._out_of_time
             )
             if split.kind is Kind.KNOWN_LIMITATION:  # the arms began the step apart: that explains it
-                return prefer(split, first_property(call, pair, facts)), outcomes
+                return prefer(split, violation_at(call, pair, split, facts, self.tolerance)), outcomes
             if self._at_ik_step(call, outcomes, comparison):
                 if live_key in self._checked:
                     return replace(comparison, unchecked=f"{SEEN_BEFORE} ({live_key})"), outcomes
@@ -274,7 +274,9 @@ class Evaluator(IkRerun):
                     self._checked.add(live_key)
                 if judged.kind in (Kind.ILL_CONDITIONED, Kind.KNOWN_LIMITATION):
                     pair = (outcomes[0], outcomes[1])
-                    judged = prefer(judged, first_property(call, pair, self.scenario_facts))
+                    judged = prefer(
+                        judged, violation_at(call, pair, judged, self.scenario_facts, self.tolerance)
+                    )
                 return judged, outcomes
             return comparison, outcomes
         if (

@@ -56,7 +56,7 @@ from fuzzer.scenario.oracle_ik import (
     solves_ik,
     value_divergence,
 )
-from fuzzer.scenario.oracle_properties import first_property
+from fuzzer.scenario.oracle_properties import violation_at
 from fuzzer.scenario.oracle_switch import ACCELERATION_TOLERANCE
 from fuzzer.scenario.steps import ScenarioCall
 
@@ -346,8 +346,7 @@ def compare_scenario(
         With ``step``/``step_kind`` of the reported step; ``target`` for a property violation.
     """
     differential = first_differential(call, a, b, tol, facts)
-    violation = first_property(call, (a, b), facts)
-    return prefer(differential, violation)
+    return prefer(differential, violation_at(call, (a, b), differential, facts, tol))
 
 
 def prefer(differential: Comparison, violation: Comparison | None) -> Comparison:

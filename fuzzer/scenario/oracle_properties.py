@@ -25,6 +25,11 @@ plan.pose_goal           goal's position (and orientation) in the state after it
 execute.last_point       /execute of a plan: the state after it is its last point    rad (m)
 =======================  ==========================================================  ============
 
+At a ``/plan`` or ``/cartesian_path`` step where the two targets diverge and the oracle does not
+count it, each target's trajectory is also checked against the contract's making of its own
+answer (``violation_at``, ``check_own_timing``): ``<kind>.timing`` (s or points) and
+``plan.profile`` (rad or m).
+
 Velocity and acceleration bounds get a relative slack of ``RELATIVE_SLACK`` plus
 ``ABSOLUTE_SLACK``; the start, goal and last-point checks allow the goal tolerance (``execute``
 clamps a last point up to that far past a limit) plus the same slack; continuous joints
@@ -41,7 +46,9 @@ import numpy as np
 
 from fuzzer.execution import oracle
 from fuzzer.execution.records import Comparison, Kind, Outcome, Status, as_array
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts, contexts
+from fuzzer.scenario.oracle_timing import profile_gap, timing_gap
 from fuzzer.scenario.steps import ScenarioCall
 from robot_api.constants import ACCELERATION_LIMIT, IK_EPS
 
@@ -266,3 +273,57 @@ def first_property(
                 found.append(replace(c, step=i, step_kind=step.kind))
                 break
     return min(found, key=lambda c: c.step if c.step is not None else 0, default=None)
+
+
+def check_own_timing(
+    kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts, tol: Tolerance, target: str
+) -> Comparison | None:
+    """Whether one target's ``/plan`` or ``/cartesian_path`` is what the contract makes of its
+    own answer: timed as the contract times its own positions (``<kind>.timing``, s or points;
+    ``oracle_timing.timing_gap``), and a plan's positions and velocities those of the contract's
+    plan between its own ends (``plan.profile``, rad or m; ``oracle_timing.profile_gap``)."""
+    if outcome.status is not Status.OK or kind not in ("plan", "cartesian_path"):
+        return None
+    timing = timing_gap(kind, outcome, before, facts)
+    if timing is not None:
+        return _violation(target, f"{kind}.timing", *timing)
+    if kind != "plan":
+        return None
+    excess, joints = profile_gap(outcome, before, facts, tol)
+    return _violation(target, "plan.profile", excess, _unit("rad", facts, joints), joints) if joints else None
+
+
+def violation_at(
+    call: ScenarioCall,
+    outcomes: tuple[Outcome, Outcome],
+    differential: Comparison,
+    facts: ScenarioFacts,
+    tol: Tolerance,
+) -> Comparison | None:
+    """``first_property``, and, where ``differential`` is a divergence the oracle does not count
+    (``known_limitation``, ``ill_conditioned``) at a ``/plan`` or ``/cartesian_path`` step
+    before any property violation, whether each target's trajectory there is what the contract
+    makes of its own answer (``check_own_timing``, the first target first).
+
+    The rules that explain such a divergence (IK answers apart at one pose, a timing that follows
+    inputs a rounding apart, a nudge that moves an IK answer) explain why the two trajectories
+    differ, not a target that times or shapes its own wrongly. The check is not run at every step:
+    re-deriving a 2,201-point plan costs about 2 ms, and where the two targets agree one of them
+    checks the other."""
+    found = first_property(call, outcomes, facts)
+    step = differential.step
+    if (
+        not differential.divergent
+        or differential.kind not in (Kind.KNOWN_LIMITATION, Kind.ILL_CONDITIONED)
+        or step is None
+        or (found is not None and found.step is not None and found.step <= step)
+    ):
+        return found
+    kind = call.steps[step].kind
+    for target, outcome in zip(facts.targets, outcomes, strict=True):
+        if step < len(outcome.steps):
+            before = contexts(call, outcome, facts)[step]
+            own = check_own_timing(kind, outcome.steps[step], before, facts, tol, target)
+            if own is not None:
+                return replace(own, step=step, step_kind=kind)
+    return found

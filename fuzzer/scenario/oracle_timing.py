@@ -17,6 +17,11 @@ would make the correct target's timing fail this check, so it can only keep a di
 explain one away. The duration is compared, not every time: it is a sum and a square root of
 sums (well conditioned), while times in the deceleration phase take a square root of a
 difference that cancels (an absolute rounding of about 1e-8 s).
+
+``fuzzer.scenario.oracle_properties.violation_at`` asks the same of each target (``timing_gap``),
+and of a plan its positions and velocities (``profile_gap``), as a property at a step where the
+two targets diverge and the oracle does not count it: a fault in the reference would be reported
+there against a correct target, but only where the targets already diverge.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import math
 import numpy as np
 
 from fuzzer.execution.records import Outcome, as_array
+from fuzzer.execution.tolerance import Tolerance
 from fuzzer.scenario.oracle_facts import Context, ScenarioFacts
 from robot_api.constants import ACCELERATION_LIMIT, TRAJECTORY_DT
 from robot_api.errors import RobotAPIError
@@ -99,25 +105,79 @@ def plan_points(duration: float) -> int:
 
 def timed_as_contract(kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts) -> bool:
     """Whether ``outcome`` (one target's ``plan`` or ``cartesian_path`` step) lasts what the
-    contract's timing of its own positions gives, within ``RETIME_TOLERANCE`` (relative), and,
-    for a plan, has as many points as a plan of a duration within that tolerance has (a sample
+    contract's timing of its own positions gives (``timing_gap`` is None)."""
+    return kind in ("plan", "cartesian_path") and timing_gap(kind, outcome, before, facts) is None
+
+
+def timing_gap(
+    kind: str, outcome: Outcome, before: Context, facts: ScenarioFacts
+) -> tuple[float, str] | None:
+    """How far one target's ``plan`` or ``cartesian_path`` is from lasting what the contract's
+    timing of its own positions gives, as ``(difference, unit)``, or None when it does: its
+    duration within ``RETIME_TOLERANCE`` (relative) of the reference's (else the gap in s; inf
+    when its points are not finite or the contract would refuse them) and, for a plan, as many
+    points as a plan of a duration within that tolerance has (else the gap in points: a sample
     more or fewer at the same duration, e.g. the start repeated at t = 0, is not the contract's
     timing; a duration near a multiple of ``TRAJECTORY_DT`` allows either count)."""
-    if kind not in ("plan", "cartesian_path"):
-        return False
     dof = len(facts.joints)
     times = as_array(outcome.values.get("trajectory.time_from_start", ()))
     flat = as_array(outcome.values.get("trajectory.positions", ()))
     if not dof or times.size == 0 or flat.size != times.size * dof or not np.isfinite(flat).all():
-        return False
+        return math.inf, "s"
     expected = reference_duration(kind, flat.reshape(-1, dof), before, facts)
-    if expected is None:
-        return False
     actual = float(times[-1])
+    if expected is None or not math.isfinite(actual):
+        return math.inf, "s"
     slack = RETIME_TOLERANCE * max(abs(actual), abs(expected)) + RETIME_ABSOLUTE
-    if not (math.isfinite(actual) and abs(actual - expected) <= slack):
-        return False
-    return kind != "plan" or plan_points(expected - slack) <= times.size <= plan_points(expected + slack)
+    if abs(actual - expected) > slack:
+        return abs(actual - expected), "s"
+    if kind != "plan":
+        return None
+    fewest, most = plan_points(expected - slack), plan_points(expected + slack)
+    if fewest <= times.size <= most:
+        return None
+    return float(fewest - times.size if times.size < fewest else times.size - most), "points"
+
+
+def profile_gap(
+    outcome: Outcome, before: Context, facts: ScenarioFacts, tol: Tolerance
+) -> tuple[float, list[int]]:
+    """How far one target's ``plan`` (timed as the contract: ``timing_gap`` is None) is from the
+    contract's plan between its own first and last points: the largest difference of its
+    positions and velocities from the reference's (``python_impl.trajectory.plan_trajectory``),
+    sample by sample, beyond the campaign tolerance (``tol``; metres for a prismatic joint), and
+    the joints beyond it; ``(0.0, [])`` when none is. With a sample more or fewer near a multiple
+    of ``TRAJECTORY_DT`` the samples both have are compared, then the ends. Continuous joints
+    compare modulo 2pi; one whose plan ends a half turn from its start within the tolerance is
+    not compared (the short way round is either way)."""
+    from python_impl.trajectory import plan_trajectory
+
+    dof = len(facts.joints)
+    rows = as_array(outcome.values.get("trajectory.positions", ())).reshape(-1, dof)
+    speeds = as_array(outcome.values.get("trajectory.velocities", ())).reshape(-1, dof)
+    try:
+        ref = plan_trajectory(
+            limits_of(facts),
+            rows[0].tolist(),
+            rows[-1].tolist(),
+            before.velocity_scaling,
+            before.acceleration_scaling,
+        )
+    except (RobotAPIError, ArithmeticError, ValueError):
+        return math.inf, []
+    keep = np.r_[0 : min(len(rows), len(ref.positions)) - 1, -1]
+    continuous = np.array(facts.continuous, dtype=bool)
+    gap = np.abs(rows[keep] - np.asarray(ref.positions)[keep])
+    gap[:, continuous] = np.abs(np.remainder(gap[:, continuous] + math.pi, 2.0 * math.pi) - math.pi)
+    with np.errstate(invalid="ignore"):  # inf - inf
+        speed_gap = np.abs(speeds[keep] - np.asarray(ref.velocities)[keep])
+    speed_gap[np.isnan(speed_gap)] = math.inf  # a velocity that is not a number: beyond any limit
+    gap = np.maximum(gap, speed_gap)
+    turn = np.abs(np.remainder(rows[-1] - rows[0] + math.pi, 2.0 * math.pi) - math.pi)
+    gap[:, continuous & (math.pi - turn <= tol.radians)] = 0.0
+    limit = np.where(np.array(facts.prismatic, dtype=bool), tol.metres, tol.radians)
+    beyond = (gap > limit).any(axis=0)
+    return (float(gap.max()) if beyond.any() else 0.0), np.flatnonzero(beyond).tolist()
 
 
 PHASE_EDGE = 1e-9
