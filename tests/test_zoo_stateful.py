@@ -12,12 +12,14 @@ import numpy as np
 import pytest
 
 import native
+import python_impl
 from benchmarks.zoo import BY_NAME, CONTROLS, STATEFUL, ZOO
 from fuzzer.execution.oracle import compare
 from fuzzer.execution.records import Kind
 from fuzzer.execution.targets import Runner, load_target
 from fuzzer.execution.tolerance import Tolerance
 from fuzzer.input.mapping import MoveCall
+from python_impl.trajectory import plan_trajectory
 from robot_api.constants import ACCELERATION_LIMIT
 from robot_api.records import JointType
 from robot_api.robots import resolve
@@ -132,6 +134,29 @@ def show_remember_aliases_state(ref: Any, bad: Any) -> None:
     assert gap(bad.get_joint_value_target(), TARGET) < GAP  # the "remembered" state moved along
 
 
+def show_pose_goal_scaled_twice(ref: Any, bad: Any) -> None:
+    urdf = resolve(BY_NAME["pose_goal_scaled_twice"].robot)
+    model = python_impl.RobotModel(urdf)
+    goal = model.forward_kinematics([1.5, 0.2, 0.0, 0.5, 0.0, 0.3, 0.0], None)
+    plans = []
+    for g in (ref, bad):  # long enough a move to reach cruise speed: its velocity bound counts
+        g.set_max_velocity_scaling_factor(0.5)
+        g.set_pose_target((tuple(goal.position), tuple(goal.orientation)))
+        plans.append(g.plan().trajectory)
+
+    def lasts(plan: Any, scaling: float) -> float:  # the contract's plan between its ends
+        ends = [np.asarray(plan.positions[k]).tolist() for k in (0, -1)]
+        return float(plan_trajectory(model.joint_limits, *ends, scaling, 1.0).time_from_start[-1])
+
+    for plan in plans:  # each reaches the pose
+        reached = model.forward_kinematics(np.asarray(plan.positions[-1]).tolist(), None)
+        assert gap(reached.position, goal.position) < 1e-5
+    assert plans[0].time_from_start[-1] == pytest.approx(lasts(plans[0], 0.5), rel=1e-9)
+    assert plans[1].time_from_start[-1] == pytest.approx(lasts(plans[1], 0.25), rel=1e-9)
+    assert plans[1].time_from_start[-1] > 1.2 * lasts(plans[1], 0.5)  # slower than asked
+    assert np.abs(plans[1].velocities).max() <= 3.14 * 0.5  # within the scaled limit
+
+
 SHOW: dict[str, Callable[[Any, Any], None]] = {
     "continuous_accumulates": show_continuous_accumulates,
     "start_state_home": show_start_state_home,
@@ -140,6 +165,7 @@ SHOW: dict[str, Callable[[Any, Any], None]] = {
     "acceleration_scaling_ignored": show_acceleration_scaling_ignored,
     "duplicate_start_point": show_duplicate_start_point,
     "execute_stops_short": show_execute_stops_short,
+    "pose_goal_scaled_twice": show_pose_goal_scaled_twice,
     "remember_aliases_state": show_remember_aliases_state,
 }
 
@@ -180,6 +206,14 @@ def move_calls(robot: str) -> list[MoveCall]:
         MoveCall(None, (5.0, 0.0, 0.0, 0.0, 0.0, 0.0)),  # out of bounds (probot) / wraps (kinova)
         MoveCall(("joint_2",), (0.7,), 0.5),
     ]
+    if robot == "xarm7":  # seven joints, named joint1..joint7
+        calls = [
+            MoveCall(None, (*TARGET, 0.3)),
+            MoveCall(None, (*SECOND, 0.8), 0.3, 0.2),
+            MoveCall(None, (*TARGET, 0.3), 1.0, 1e-7),
+            MoveCall(None, (0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0)),  # joint2 out of bounds
+            MoveCall(("joint2",), (0.7,), 0.5),
+        ]
     if robot == "kinova":
         home = list(native.RobotModel(resolve(robot)).home_values)
         calls = [
@@ -224,7 +258,7 @@ def test_sweeps_run_stateful_bugs_with_the_scenario_op_and_ops_mode_runs_both() 
     }  # every engine, the baselines included (benchmarks.baselines has --op scenario)
     mode = bench_zoo.MODES["ops"]
     controls = tuple(c.name for c in CONTROLS if c.op == "scenario")  # the false positives beside
-    assert mode.bugs == (*names, *controls) and len(controls) == 3
+    assert mode.bugs == (*names, *controls) and len(controls) == 4  # Kinova, PROBOT Anno, UR5, xArm7
     jobs = bench_zoo.plan_jobs(mode.bugs, mode.engines, 2, mode.ops)
     assert len(jobs) == len(mode.bugs) * 2 * 2
     assert {(bug.name, bug.op) for bug, _, _ in jobs} == {

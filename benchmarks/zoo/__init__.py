@@ -190,6 +190,14 @@ STATEFUL: tuple[Bug, ...] = (
         op="scenario",
         module="stateful",
     ),
+    Bug(
+        "pose_goal_scaled_twice",
+        "a plan to a pose or position goal applies the velocity scaling twice: same end, within every limit, too slow",
+        "https://github.com/NVlabs/curobo/issues/251 ('velocity_scale is applied twice reducing the velocity limits by a factor of (velocity_scale)^2'); https://github.com/IvoD1998/Staubli_ROS2/issues/8 ('Velocity scaling performed twice', seen in pose tracking)",
+        op="scenario",
+        robot="xarm7",
+        module="stateful",
+    ),
 )
 """Bugs that need a live group: a second call, or a look at a planned or executed trajectory.
 ``--op move`` (one call on a fresh group) is expected to miss them; ``--op scenario`` to find them."""
