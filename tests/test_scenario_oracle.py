@@ -20,7 +20,13 @@ from fuzzer.input.testcase import TestCase
 from fuzzer.scenario.oracle import compare_scenario, compare_step, ik_answer_changed
 from fuzzer.scenario.oracle_facts import Context, JointSpec, ScenarioFacts
 from fuzzer.scenario.oracle_ik import absolute, extent_changed
-from fuzzer.scenario.oracle_timing import limits_of, phase_knife_edge, plan_points, timed_as_contract
+from fuzzer.scenario.oracle_timing import (
+    limits_of,
+    phase_knife_edge,
+    plan_points,
+    profile_gap,
+    timed_as_contract,
+)
 from fuzzer.scenario.steps import ScenarioCall, Step, to_call
 from python_impl.trajectory import plan_trajectory, time_parameterize
 from robot_api import robots
@@ -670,6 +676,26 @@ def test_a_plan_to_ik_answers_apart_at_one_pose_must_follow_the_contract_on_each
     assert verdict(apart, path_call, path)[0] is Kind.KNOWN_LIMITATION
     slow_path = run(set_, set_, timed(other, path=True, scaling=0.25))
     assert verdict(slow_path, path_call, path) == (Kind.PROPERTY, 2, "cartesian_path.timing", "python")
+
+
+def test_a_plans_profile_is_compared_per_joint_in_its_own_unit() -> None:
+    limits = limits_of(FACTS_LINEAR)
+    t = plan_trajectory(limits, [0.0, 0.0], [0.5, 0.2], 1.0, 1.0)
+    plan = ok(
+        trajectory__time_from_start=tuple(t.time_from_start.tolist()),
+        trajectory__positions=tuple(t.positions.ravel().tolist()),
+        trajectory__velocities=tuple(t.velocities.ravel().tolist()),
+    )
+    assert profile_gap(plan, Context(), FACTS_LINEAR, TOL) == (0.0, [])
+    speeds = t.velocities.copy()
+    speeds[1:-1, 1] += 2e-6  # the prismatic joint's speed, m/s
+    off = with_value(plan, "trajectory.velocities", tuple(speeds.ravel().tolist()))
+    excess, joints = profile_gap(off, Context(), FACTS_LINEAR, TOL)
+    assert joints == [1] and excess == pytest.approx(2e-6)
+    loose = Tolerance(metres=1e-5, radians=1e-6)
+    assert profile_gap(off, Context(), FACTS_LINEAR, loose) == (0.0, [])
+    never = Context(velocity_scaling=5e-324)  # the contract would refuse to plan it
+    assert profile_gap(plan, never, FACTS_LINEAR, TOL) == (math.inf, [0, 1])
 
 
 def test_a_path_point_on_the_switch_of_a_triangular_profile_may_take_either_phase() -> None:

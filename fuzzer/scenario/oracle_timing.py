@@ -146,7 +146,8 @@ def profile_gap(
     contract's plan between its own first and last points: the largest difference of its
     positions and velocities from the reference's (``python_impl.trajectory.plan_trajectory``),
     sample by sample, beyond the campaign tolerance (``tol``; metres for a prismatic joint), and
-    the joints beyond it; ``(0.0, [])`` when none is. With a sample more or fewer near a multiple
+    the joints beyond it; ``(0.0, [])`` when none is, every joint when the contract would refuse
+    its ends (``timing_gap`` reports that first). With a sample more or fewer near a multiple
     of ``TRAJECTORY_DT`` the samples both have are compared, then the ends. Continuous joints
     compare modulo 2pi; one whose plan ends a half turn from its start within the tolerance is
     not compared (the short way round is either way)."""
@@ -163,8 +164,8 @@ def profile_gap(
             before.velocity_scaling,
             before.acceleration_scaling,
         )
-    except (RobotAPIError, ArithmeticError, ValueError):
-        return math.inf, []
+    except (RobotAPIError, ArithmeticError, ValueError):  # the contract would refuse its ends
+        return math.inf, list(range(dof))
     keep = np.r_[0 : min(len(rows), len(ref.positions)) - 1, -1]
     continuous = np.array(facts.continuous, dtype=bool)
     gap = np.abs(rows[keep] - np.asarray(ref.positions)[keep])
