@@ -415,7 +415,7 @@ def test_an_earlier_results_file_is_tabulated_again(tmp_path) -> None:  # type: 
 
 
 def test_the_zoo_mode_runs_the_shallow_zoo_and_marks_what_has_no_scenario_op(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    """``--mode zoo``: the 22 shallow zoo bugs in the zoo's order, with a section of its own; a
+    """``--mode zoo``: the 23 shallow zoo bugs in the zoo's order, with a section of its own; a
     scenario bug's row says 'n/a' for the engines without a scenario op, and the plot copes."""
     mode = bench_deep.MODES["zoo"]
     assert mode.bugs == tuple(b.name for b in ZOO) and (mode.trials, mode.budget) == (10, 10.0)
