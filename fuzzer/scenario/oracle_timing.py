@@ -151,6 +151,7 @@ def profile_gap(
     of ``TRAJECTORY_DT`` the samples both have are compared, then the ends. Continuous joints
     compare modulo 2pi; one whose plan ends a half turn from its start within the tolerance is
     not compared (the short way round is either way)."""
+    from python_impl.angles import normalize_angles
     from python_impl.trajectory import plan_trajectory
 
     dof = len(facts.joints)
@@ -168,13 +169,13 @@ def profile_gap(
         return math.inf, list(range(dof))
     keep = np.r_[0 : min(len(rows), len(ref.positions)) - 1, -1]
     continuous = np.array(facts.continuous, dtype=bool)
-    gap = np.abs(rows[keep] - np.asarray(ref.positions)[keep])
-    gap[:, continuous] = np.abs(np.remainder(gap[:, continuous] + math.pi, 2.0 * math.pi) - math.pi)
+    apart = rows[keep] - np.asarray(ref.positions)[keep]
+    gap = np.abs(np.where(continuous, normalize_angles(apart), apart))
     with np.errstate(invalid="ignore"):  # inf - inf
         speed_gap = np.abs(speeds[keep] - np.asarray(ref.velocities)[keep])
     speed_gap[np.isnan(speed_gap)] = math.inf  # a velocity that is not a number: beyond any limit
     gap = np.maximum(gap, speed_gap)
-    turn = np.abs(np.remainder(rows[-1] - rows[0] + math.pi, 2.0 * math.pi) - math.pi)
+    turn = np.abs(normalize_angles(rows[-1] - rows[0]))
     gap[:, continuous & (math.pi - turn <= tol.radians)] = 0.0
     limit = np.where(np.array(facts.prismatic, dtype=bool), tol.metres, tol.radians)
     beyond = (gap > limit).any(axis=0)
