@@ -413,9 +413,11 @@ def _scenario_mutators(session: Session) -> dict[str, Any]:
     from fuzzer.generation.spacefill import finite_box
     from fuzzer.scenario import dispatch
 
-    limits = session.reference.joint_limits
-    box = finite_box([lim.lower for lim in limits], [lim.upper for lim in limits])
-    mutate_message, crossover_message = dispatch.for_registry(session.registry, session.config.max_steps, box)
+    facts = session.facts()
+    box = finite_box(facts.lower, facts.upper)
+    mutate_message, crossover_message = dispatch.for_registry(
+        session.registry, session.config.max_steps, box, facts.reachable, facts.joint_names
+    )
     return {"mutate_message": mutate_message, "crossover_message": crossover_message}
 
 

@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 
 import python_impl
+from fuzzer import campaign
 from fuzzer.artifacts.store import ArtifactStore
 from fuzzer.execution.session import RunConfig, Session
 from fuzzer.harness import Harness
@@ -31,7 +32,17 @@ from fuzzer.triage.minimize import Minimizer, joints_that_matter
 
 REGISTRY = MessageRegistry()
 MAX = 12
-MUTATE, CROSSOVER = for_registry(REGISTRY, MAX)
+NAMES = tuple(f"joint_{i}" for i in range(1, 7))
+"""The joints of the test scenarios' six-value joint targets."""
+
+
+def toy_fk(q: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A stand-in for the campaign's FK: the tip at the first three joint values, turned by the
+    fourth about z (m; unit quaternion x, y, z, w)."""
+    return (q[0], q[1], q[2]), (0.0, 0.0, math.sin(q[3] / 2), math.cos(q[3] / 2))
+
+
+MUTATE, CROSSOVER = for_registry(REGISTRY, MAX, None, toy_fk, NAMES)
 SEEDS = range(40)
 INTERESTING = (3.1416, -2.0071)
 ZOO_CARTESIAN = "benchmarks.zoo.stateful:cartesian_ignores_scaling"
@@ -159,6 +170,12 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
             assert len(changed) == 1 and new[changed[0]]["topic"] == old[changed[0]]["topic"]
         elif name == "seq_motion":
             assert motion_at(old, new) is not None
+        elif name == "seq_pose_goal":
+            changed = [i for i in range(len(old)) if old[i] != new[i]]
+            assert len(new) == len(old) and len(changed) == 1 and old[changed[0]]["topic"] == "/joint_target"
+            assert goal_of(new[changed[0]]) == goal_at(
+                old[changed[0]]["msg"]["position"], new[changed[0]]["topic"]
+            )
         elif name == "seq_observe":
             at = [i for i in range(len(old)) if old[i] == GO and new[i : i + 2] == [PLAN, EXECUTE]]
             assert any([*new[:i], GO, *new[i + 2 :]] == old for i in at)
@@ -363,6 +380,84 @@ def test_with_the_limits_a_move_starts_anywhere_inside_them() -> None:
     assert 60 <= len(inside) <= 140
     assert len({tuple(p) for p in inside}) == len(inside)  # drawn, not a fixed point
     assert min(p[1] for p in inside) < -1.5 and max(p[1] for p in inside) > 1.5
+
+
+def goal_of(step: dict[str, Any]) -> tuple[float, ...]:
+    """A pose target's position and quaternion, or a position target's point, as one tuple."""
+    if step["topic"] == "/position_target":
+        return tuple(step["msg"]["point"][k] for k in "xyz")
+    pose = step["msg"]["pose"]
+    return (*(pose["position"][k] for k in "xyz"), *(pose["orientation"][k] for k in "xyzw"))
+
+
+def goal_at(position: list[float], topic: str) -> tuple[float, ...]:
+    """What ``goal_of`` gives for the goal ``seq_pose_goal`` makes of a joint target (``toy_fk``)."""
+    point, quaternion = toy_fk(tuple(position))
+    return point if topic == "/position_target" else (*point, *quaternion)
+
+
+def test_a_joint_target_becomes_the_tips_pose_or_position_there() -> None:
+    """``seq_pose_goal`` replaces one joint target of every joint, in order and finite, by the
+    tip's pose at it (the campaign's FK), a quarter of the time by its position only; it leaves
+    the other steps, and the joint targets it cannot read as a configuration, as they were."""
+    partial = step("/joint_target", name=["joint_2"], position=[0.4])  # one joint, by name
+    reordered = step("/joint_target", name=list(reversed(NAMES)), position=[0.1] * 6)
+    unfinite = joint_target(0.1, math.nan, 0.3, 0.4, 0.5, 0.6)
+    short = joint_target(0.1, 0.2, 0.3)
+    named = step("/joint_target", name=list(NAMES), position=[0.5, -0.5, 0.25, 1.0, 0.0, 0.0])
+    parent = {
+        "steps": [
+            partial,
+            joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6),
+            reordered,
+            GO,
+            unfinite,
+            short,
+            named,
+            PLAN,
+        ]
+    }
+    topics: dict[str, int] = {}
+    chosen = set()
+    for seed in range(400):
+        child, name = MUTATE(parent, context(seed), "seq_pose_goal")
+        assert name == "seq_pose_goal"
+        validate(child, REGISTRY, MAX)
+        [at] = [i for i, (a, b) in enumerate(zip(parent["steps"], child["steps"], strict=True)) if a != b]
+        new = child["steps"][at]
+        chosen.add(at)
+        topics[new["topic"]] = topics.get(new["topic"], 0) + 1
+        assert goal_of(new) == goal_at(parent["steps"][at]["msg"]["position"], new["topic"])
+        assert new["msg"]["header"]["frame_id"] == ""  # the goal of the tip
+    assert chosen == {1, 6}  # every joint in order (unnamed, or named in order) and finite
+    assert set(topics) == {"/pose_target", "/position_target"}
+    assert 0.18 <= topics["/position_target"] / 400 <= 0.32
+    # nothing to give as a pose, or no FK: another mutator
+    assert (
+        MUTATE({"steps": [partial, unfinite, short, GO]}, context(0), "seq_pose_goal")[1] != "seq_pose_goal"
+    )
+    without_fk, _ = for_registry(REGISTRY, MAX)
+    assert without_fk(base_scenario(), context(0), "seq_pose_goal")[1] != "seq_pose_goal"
+
+
+def test_a_campaign_gives_the_sequence_mutators_its_robots_forward_kinematics(twin: Session) -> None:
+    """The campaign's scenario mutator gives a joint target as the pose the reference's FK puts
+    the tip at, for the robot the campaign runs on."""
+    mutate = campaign._scenario_mutators(twin)["mutate_message"]
+    q = [0.1 * (i + 1) for i in range(len(twin.reference.joint_names))]
+    parent = {"steps": [step("/joint_target", position=q), PLAN]}
+    topics = set()
+    for seed in range(20):
+        child, name = mutate(parent, context(seed), "seq_pose_goal")
+        assert name == "seq_pose_goal" and child["steps"][1] == PLAN
+        tip = twin.reference.forward_kinematics(q)
+        goal = child["steps"][0]
+        topics.add(goal["topic"])
+        expected = (
+            (*tip.position, *tip.orientation) if goal["topic"] == "/pose_target" else tuple(tip.position)
+        )
+        assert goal_of(goal) == pytest.approx(expected, abs=1e-12)
+    assert topics == {"/pose_target", "/position_target"}
 
 
 def test_field_types_cover_arrays_of_messages() -> None:

@@ -12,7 +12,7 @@ from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.mutation import mutators
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
-from fuzzer.scenario.fresh import SequenceContext, Steps, Tables, field_types
+from fuzzer.scenario.fresh import Reachable, SequenceContext, Steps, Tables, field_types
 from fuzzer.scenario.mutate import SEQ_MUTATORS, SEQ_STEP, SEQ_WEIGHTS, SPLICE, splice_steps
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
 
@@ -93,6 +93,8 @@ def for_registry(
     registry: MessageRegistry,
     max_steps: int = MAX_STEPS,
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
+    reachable: Reachable | None = None,
+    joint_names: tuple[str, ...] = (),
 ) -> tuple[SequenceMutator, SequenceCrossover]:
     """The scenario mutator and crossover for messages known to ``registry``.
 
@@ -105,6 +107,12 @@ def for_registry(
     box : tuple of two tuples of float, optional
         The robot's joint limits (lower, upper), each of shape (n_joints,), finite (rad, m):
         a fresh joint target in a scenario without one is then drawn uniformly inside them.
+    reachable : callable, optional
+        The robot's FK: a configuration, shape (n_joints,) in rad and m, -> the tip's position
+        (3,) in m and unit quaternion (4,) as (x, y, z, w); with ``joint_names`` (the robot's
+        joints in order) it lets ``seq_pose_goal`` give a joint target as the tip's pose.
+    joint_names : tuple of str, optional
+        The robot's joints in the order ``reachable`` takes them.
 
     Returns
     -------
@@ -121,5 +129,5 @@ def for_registry(
         raise ValueError(f"max_steps must be an integer in 1..{MAX_STEPS_LIMIT}, not {max_steps!r}")
     types = {topic: spec.msg_type for topic, spec in TOPICS.items()}
     fields = {msg_type: field_types(registry, msg_type) for msg_type in sorted(set(types.values()))}
-    tables = Tables(registry, types, fields, box=box)
+    tables = Tables(registry, types, fields, box=box, reachable=reachable, joint_names=tuple(joint_names))
     return SequenceMutator(tables, max_steps), SequenceCrossover(max_steps)

@@ -10,7 +10,7 @@ the injected ``ctx.rng``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from random import Random
 from typing import Any, Final
@@ -23,6 +23,7 @@ from fuzzer.mutation.mutators import MutationContext, NotApplicable
 
 StepDict = dict[str, Any]
 Steps = list[StepDict]
+Reachable = Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
 
 COPY_PROBABILITY: Final = 0.5
 """``seq_insert``: chance of copying an existing step (when there is one) rather than a fresh one."""
@@ -54,6 +55,11 @@ class Tables:
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
     """The robot's joint limits (lower, upper; rad, m; finite: a continuous joint's are -pi, pi),
     for a fresh joint target in a scenario that has none to recombine; None: no such target."""
+    reachable: Reachable | None = None
+    """The robot's FK: a configuration, shape (n_joints,) in rad and m, -> the tip's position (m)
+    and unit quaternion (x, y, z, w), for a goal given as the tip's pose; None: no such goal."""
+    joint_names: tuple[str, ...] = ()
+    """The robot's joints in order (what ``reachable`` takes)."""
 
     def default(self, topic: str) -> dict[str, Any]:
         """The zero message of ``topic``'s type, unit quaternions instead of zero ones."""

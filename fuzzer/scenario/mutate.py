@@ -19,6 +19,9 @@ Mutators
   then often followed by ``/named_target X`` and a move back.
 * ``seq_observe``: one ``/go`` replaced by ``/plan`` and ``/execute``, the same move with its
   trajectory in the outputs.
+* ``seq_pose_goal``: one joint target (every joint, in order) replaced by the tip's pose at that
+  configuration (``/pose_target``), a quarter of the time its position (``/position_target``):
+  the same destination through MoveIt's pose-goal path (needs the campaign's FK).
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -38,6 +41,7 @@ registry defaults, and values change through the type-safe value mutators.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from random import Random
 from typing import Any, Final
@@ -72,6 +76,9 @@ SETTING_PROBABILITY: Final = 0.5
 MOVE_SETTINGS: Final = ("/velocity_scaling", "/acceleration_scaling")
 """What a script sets just before a move (MoveIt's tutorials slow a move down this way)."""
 SPLICE_ATTEMPTS: Final = 8
+POSITION_PROBABILITY: Final = 0.25
+"""``seq_pose_goal``: chance that the goal is the tip's position only (``set_position_target``)
+rather than its pose."""
 OBSERVE: Final = "observe"
 """Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed."""
 OBSERVE_PROBABILITY: Final = 1.0
@@ -177,6 +184,45 @@ def seq_observe(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
 def _observe(steps: Steps, at: int) -> None:
     """Replace the ``/go`` at ``at`` by ``/plan`` and ``/execute`` (the caller checks for room)."""
     steps[at : at + 1] = [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
+
+
+@register("seq_pose_goal", weight=1.0)
+def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
+    """Give one joint target as a goal for the tip: its pose at that configuration
+    (``/pose_target``, the campaign's FK) or, with probability :data:`POSITION_PROBABILITY`,
+    only its position (``/position_target``). The move still heads where the joint target
+    led, but through MoveIt's other goal path: IK seeded with the state the scenario stands in
+    (which may answer another configuration), then the plan to that answer. The tutorials
+    move to pose goals as often as to joint goals; the seed scripts and ``seq_motion`` mostly
+    set joint targets, and a fault of the pose-goal path (its timing, its IK seed) shows only
+    behind one. Applies to a joint target of every joint in order (``name`` empty or the
+    robot's joints), finite, when the campaign gave its FK (``Tables.reachable``)."""
+    fk, names = ctx.tables.reachable, list(ctx.tables.joint_names)
+    if fk is None or not names:
+        raise NotApplicable("no forward kinematics to give a goal as a pose")
+    targets = [
+        i for i, s in enumerate(steps) if s["topic"] == "/joint_target" and _every_joint(s["msg"], names)
+    ]
+    if not targets:
+        raise NotApplicable("no joint target of every joint, in order, to give as a pose")
+    at = ctx.rng.choice(targets)
+    position, orientation = fk(tuple(steps[at]["msg"]["position"]))
+    point = dict(zip("xyz", map(float, position), strict=True))
+    quaternion = dict(zip("xyzw", map(float, orientation), strict=True))
+    fields: dict[str, Any] = {"pose": {"position": point, "orientation": quaternion}}
+    topic = "/pose_target"
+    if ctx.rng.random() < POSITION_PROBABILITY:
+        topic, fields = "/position_target", {"point": point}
+    steps[at] = {"topic": topic, "msg": {**ctx.tables.default(topic), **fields}}
+    return steps, "seq_pose_goal"
+
+
+def _every_joint(msg: dict[str, Any], names: list[str]) -> bool:
+    """Whether a JointState sets every joint of ``names``, in order, to a finite value."""
+    position = msg.get("position")
+    if not isinstance(position, list) or len(position) != len(names) or msg.get("name") not in ([], names):
+        return False
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in position)
 
 
 @register("seq_delete", weight=1.0)
