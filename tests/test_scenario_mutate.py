@@ -171,6 +171,10 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
         elif name == "seq_motion":
             assert motion_at(old, new) is not None
         elif name == "seq_pose_goal":
+            if reported == "seq_pose_goal:observe":  # the /go to the new goal observed
+                at = [i for i in range(len(new) - 1) if new[i : i + 2] == [PLAN, EXECUTE] and old[i] == GO]
+                assert at and new[at[0] + 2 :] == old[at[0] + 1 :]
+                new = [*new[: at[0]], GO, *new[at[0] + 2 :]]
             changed = [i for i in range(len(old)) if old[i] != new[i]]
             assert len(new) == len(old) and len(changed) == 1 and old[changed[0]]["topic"] == "/joint_target"
             assert goal_of(new[changed[0]]) == goal_at(
@@ -196,6 +200,8 @@ def test_each_mutator_is_seeded_bounded_valid_and_leaves_its_inputs(name: str) -
         assert len(used) > 3 and all(u.split(":")[1] in mutators.MUTATORS for u in used)
     elif name == "seq_compared":
         assert used == {f"{name}:observe"}  # each float step lies before the /go, observed every time
+    elif name == "seq_pose_goal":
+        assert used == {name, f"{name}:observe"}  # the second joint target's move is a /go
     else:
         assert used == {name}
 
@@ -399,7 +405,8 @@ def goal_at(position: list[float], topic: str) -> tuple[float, ...]:
 def test_a_joint_target_becomes_the_tips_pose_or_position_there() -> None:
     """``seq_pose_goal`` replaces one joint target of every joint, in order and finite, by the
     tip's pose at it (the campaign's FK), a quarter of the time by its position only; it leaves
-    the other steps, and the joint targets it cannot read as a configuration, as they were."""
+    the other steps, and the joint targets it cannot read as a configuration, as they were,
+    except the ``/go`` to the new goal, which becomes ``/plan`` + ``/execute``."""
     partial = step("/joint_target", name=["joint_2"], position=[0.4])  # one joint, by name
     reordered = step("/joint_target", name=list(reversed(NAMES)), position=[0.1] * 6)
     unfinite = joint_target(0.1, math.nan, 0.3, 0.4, 0.5, 0.6)
@@ -432,6 +439,20 @@ def test_a_joint_target_becomes_the_tips_pose_or_position_there() -> None:
     assert chosen == {1, 6}  # every joint in order (unnamed, or named in order) and finite
     assert set(topics) == {"/pose_target", "/position_target"}
     assert 0.18 <= topics["/position_target"] / 400 <= 0.32
+    # the move to the new goal, when a /go, becomes /plan + /execute (room permitting)
+    stop, home = step("/stop"), step("/named_target", data="home")
+    for rest, after, observed in (
+        ([stop, GO, GO], [stop, PLAN, EXECUTE, GO], True),
+        ([PLAN, GO], [PLAN, GO], False),  # a /plan shows its trajectory already
+        ([home, GO], [home, GO], False),  # that /go moves to another goal
+        ([GO] * (MAX - 1), [GO] * (MAX - 1), False),  # no room
+    ):
+        child, name = MUTATE(
+            {"steps": [joint_target(0.1, 0.2, 0.3, 0.4, 0.5, 0.6), *rest]}, context(0), "seq_pose_goal"
+        )
+        assert child["steps"][0]["topic"] in ("/pose_target", "/position_target")
+        assert child["steps"][1:] == after
+        assert name == ("seq_pose_goal:observe" if observed else "seq_pose_goal")
     # nothing to give as a pose, or no FK: another mutator
     assert (
         MUTATE({"steps": [partial, unfinite, short, GO]}, context(0), "seq_pose_goal")[1] != "seq_pose_goal"

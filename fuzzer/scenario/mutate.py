@@ -21,7 +21,8 @@ Mutators
   trajectory in the outputs.
 * ``seq_pose_goal``: one joint target (every joint, in order) replaced by the tip's pose at that
   configuration (``/pose_target``), a quarter of the time its position (``/position_target``):
-  the same destination through MoveIt's pose-goal path (needs the campaign's FK).
+  the same destination through MoveIt's pose-goal path (needs the campaign's FK); a ``/go``
+  to it becomes ``/plan`` + ``/execute`` when there is room (``seq_pose_goal:observe``).
 * ``seq_delete``, ``seq_duplicate`` (a copy next to the original), ``seq_swap`` (two steps
   that differ), ``seq_move`` (one step elsewhere; the order always changes).
 * ``seq_step``: one step's message mutated by the value mutators of :func:`fuzzer.mutation.mutators.mutate`
@@ -65,6 +66,7 @@ SPLICE: Final = "seq_splice"
 """Lineage name of the crossover."""
 SEQ_STEP: Final = "seq_step"
 SEQ_COMPARED: Final = "seq_compared"
+POSE_GOAL: Final = "seq_pose_goal"
 AFTER_REMEMBER_PROBABILITY: Final = 0.5
 """``seq_motion``: chance that the move goes right after a ``/remember`` (when there is one)."""
 RETURN_PROBABILITY: Final = 0.5
@@ -186,7 +188,7 @@ def _observe(steps: Steps, at: int) -> None:
     steps[at : at + 1] = [{"topic": "/plan", "msg": {}}, {"topic": "/execute", "msg": {}}]
 
 
-@register("seq_pose_goal", weight=1.0)
+@register(POSE_GOAL, weight=1.0)
 def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     """Give one joint target as a goal for the tip: its pose at that configuration
     (``/pose_target``, the campaign's FK) or, with probability :data:`POSITION_PROBABILITY`,
@@ -196,7 +198,12 @@ def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     move to pose goals as often as to joint goals; the seed scripts and ``seq_motion`` mostly
     set joint targets, and a fault of the pose-goal path (its timing, its IK seed) shows only
     behind one. Applies to a joint target of every joint in order (``name`` empty or the
-    robot's joints), finite, when the campaign gave its FK (``Tables.reachable``)."""
+    robot's joints), finite, when the campaign gave its FK (``Tables.reachable``).
+
+    When the move to that goal is a ``/go`` and ``max_steps`` leaves room, it becomes ``/plan`` +
+    ``/execute`` (lineage ``seq_pose_goal:observe``), as ``seq_compared`` observes the moves
+    after the value it changes: the new goal changes that move, and a ``/go`` shows the oracle
+    where it ended, not its trajectory (how it was timed, the way it took)."""
     fk, names = ctx.tables.reachable, list(ctx.tables.joint_names)
     if fk is None or not names:
         raise NotApplicable("no forward kinematics to give a goal as a pose")
@@ -214,7 +221,26 @@ def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     if ctx.rng.random() < POSITION_PROBABILITY:
         topic, fields = "/position_target", {"point": point}
     steps[at] = {"topic": topic, "msg": {**ctx.tables.default(topic), **fields}}
-    return steps, "seq_pose_goal"
+    move = _move_to(steps, at)
+    if move is not None and steps[move]["topic"] == "/go" and len(steps) < ctx.max_steps:
+        _observe(steps, move)
+        return steps, f"{POSE_GOAL}:{OBSERVE}"
+    return steps, POSE_GOAL
+
+
+GOALS: Final = ("/joint_target", "/pose_target", "/position_target", "/named_target")
+"""Steps that set the goal of the next move."""
+
+
+def _move_to(steps: Steps, at: int) -> int | None:
+    """The index of the move (``/go`` or ``/plan``) to the goal ``steps[at]`` sets: the first
+    after it, unless another goal is set first; None without one."""
+    for i in range(at + 1, len(steps)):
+        if steps[i]["topic"] in GOALS:
+            return None
+        if steps[i]["topic"] in ("/go", "/plan"):
+            return i
+    return None
 
 
 def _every_joint(msg: dict[str, Any], names: list[str]) -> bool:
