@@ -82,7 +82,8 @@ POSITION_PROBABILITY: Final = 0.25
 """``seq_pose_goal``: chance that the goal is the tip's position only (``set_position_target``)
 rather than its pose."""
 OBSERVE: Final = "observe"
-"""Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed."""
+"""Lineage suffix of a ``seq_compared`` child whose later ``/go`` steps were also observed, and
+of a ``seq_pose_goal`` child whose ``/go`` to the new goal was."""
 OBSERVE_PROBABILITY: Final = 1.0
 """``seq_compared``: chance that each ``/go`` after the changed step becomes ``/plan`` +
 ``/execute`` (when there is one; the earlier ones while there is room). 0.5 until 2026-11-28:
@@ -208,7 +209,7 @@ def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     if fk is None or not names:
         raise NotApplicable("no forward kinematics to give a goal as a pose")
     targets = [
-        i for i, s in enumerate(steps) if s["topic"] == "/joint_target" and _every_joint(s["msg"], names)
+        i for i, s in enumerate(steps) if s["topic"] == "/joint_target" and _every_joint(s, names, ctx)
     ]
     if not targets:
         raise NotApplicable("no joint target of every joint, in order, to give as a pose")
@@ -243,8 +244,11 @@ def _move_to(steps: Steps, at: int) -> int | None:
     return None
 
 
-def _every_joint(msg: dict[str, Any], names: list[str]) -> bool:
-    """Whether a JointState sets every joint of ``names``, in order, to a finite value."""
+def _every_joint(step: StepDict, names: list[str], ctx: SequenceContext) -> bool:
+    """Whether a well-formed JointState step sets every joint of ``names``, in order, to a finite value."""
+    if msg_type_of(step, ctx) != "sensor_msgs/JointState":
+        return False
+    msg = step["msg"]
     position = msg.get("position")
     if not isinstance(position, list) or len(position) != len(names) or msg.get("name") not in ([], names):
         return False
