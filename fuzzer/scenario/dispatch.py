@@ -8,11 +8,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from fuzzer.generation.spacefill import Reachable
 from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.mutation import mutators
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
-from fuzzer.scenario.fresh import Reachable, SequenceContext, Steps, Tables, field_types
+from fuzzer.scenario.fresh import SequenceContext, Steps, Tables, field_types
 from fuzzer.scenario.mutate import SEQ_MUTATORS, SEQ_STEP, SEQ_WEIGHTS, SPLICE, splice_steps
 from fuzzer.scenario.steps import MAX_STEPS, MAX_STEPS_LIMIT, TOPICS
 

@@ -10,11 +10,12 @@ the injected ``ctx.rng``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from random import Random
 from typing import Any, Final
 
+from fuzzer.generation.spacefill import Reachable
 from fuzzer.input.mapping import FOCUS
 from fuzzer.input.msgdef import MessageRegistry
 from fuzzer.mutation import fields
@@ -23,7 +24,6 @@ from fuzzer.mutation.mutators import MutationContext, NotApplicable
 
 StepDict = dict[str, Any]
 Steps = list[StepDict]
-Reachable = Callable[[tuple[float, ...]], tuple[tuple[float, ...], tuple[float, ...]]]
 
 COPY_PROBABILITY: Final = 0.5
 """``seq_insert``: chance of copying an existing step (when there is one) rather than a fresh one."""

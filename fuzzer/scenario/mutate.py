@@ -47,6 +47,7 @@ from collections.abc import Callable
 from random import Random
 from typing import Any, Final
 
+from fuzzer.generation.spacefill import configuration_message
 from fuzzer.mutation import mutators
 from fuzzer.mutation.fields import clone
 from fuzzer.mutation.mutators import NOOP, MutationContext, NotApplicable
@@ -214,14 +215,18 @@ def seq_pose_goal(steps: Steps, ctx: SequenceContext) -> tuple[Steps, str]:
     if not targets:
         raise NotApplicable("no joint target of every joint, in order, to give as a pose")
     at = ctx.rng.choice(targets)
-    position, orientation = fk(tuple(steps[at]["msg"]["position"]))
-    point = dict(zip("xyz", map(float, position), strict=True))
-    quaternion = dict(zip("xyzw", map(float, orientation), strict=True))
-    fields: dict[str, Any] = {"pose": {"position": point, "orientation": quaternion}}
+    values = tuple(steps[at]["msg"]["position"])
+    goal = configuration_message(
+        "geometry_msgs/PoseStamped", ctx.tables.default("/pose_target"), values, (), fk
+    )
+    assert goal is not None  # a PoseStamped always carries a pose
     topic = "/pose_target"
     if ctx.rng.random() < POSITION_PROBABILITY:
-        topic, fields = "/position_target", {"point": point}
-    steps[at] = {"topic": topic, "msg": {**ctx.tables.default(topic), **fields}}
+        topic, goal = (
+            "/position_target",
+            {**ctx.tables.default("/position_target"), "point": goal["pose"]["position"]},
+        )
+    steps[at] = {"topic": topic, "msg": goal}
     move = _move_to(steps, at)
     if move is not None and steps[move]["topic"] == "/go" and len(steps) < ctx.max_steps:
         _observe(steps, move)
