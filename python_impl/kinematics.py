@@ -24,7 +24,6 @@ import struct
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
-from functools import reduce
 
 import numpy as np
 from numpy.typing import NDArray
@@ -61,10 +60,18 @@ def segment_transforms(chain: Chain, q: Array, link: int) -> Array:
 
 
 def fk(chain: Chain, q: Array, link: int) -> Array:
-    """Transform (4, 4) of link ``link`` (index into ``chain.link_names``) for q of shape (dof,)."""
+    """Transform (4, 4) of link ``link`` (index into ``chain.link_names``) for q of shape (dof,).
+
+    The segment transforms multiplied from the root, each product a 4x4 ``ndarray.dot`` (the
+    same bits as ``@``, which costs twice as much a call on arrays this small).
+    """
     if link == 0:
         return np.eye(4)
-    return reduce(np.matmul, segment_transforms(chain, q, link))
+    m = segment_transforms(chain, q, link)
+    t: Array = m[0]
+    for s in range(1, link):
+        t = t.dot(m[s])
+    return t
 
 
 def fk_batch(chain: Chain, q: Array, link: int) -> Array:
@@ -104,19 +111,30 @@ class Movable:
     """(k,) bool: it is revolute (else prismatic)."""
     origins: Array
     """(k', 4, 4) the joint frames (``chain.origin``) of the movable segments after segment 0."""
+    all_revolute: bool
+    """Every movable segment is revolute (most arms): the Jacobian needs no per-column choice."""
+    in_order: bool
+    """The movable segments drive variables 0, 1, ..., k - 1, one each (no mimic joint)."""
 
 
 def movable_segments(chain: Chain, link: int) -> Movable:
     """The movable segments before link ``link`` (once per IK call, not per iteration)."""
     variable = chain.variable[:link]
     index = np.flatnonzero(variable >= 0)
+    revolute = chain.kind[index] == REVOLUTE
     return Movable(
         tuple(v >= 0 for v in variable.tolist()),
         variable[index],
         chain.axis[index][:, :, None],
-        chain.kind[index] == REVOLUTE,
+        revolute,
         chain.origin[index[index > 0]],
+        bool(revolute.all()),
+        variable[index].tolist() == list(range(index.size)),
     )
+
+
+_NEXT = np.array([1, 2, 0])
+_AFTER = np.array([2, 0, 1])
 
 
 def jacobian(chain: Chain, q: Array, link: int, nvars: int) -> Array:
@@ -139,40 +157,47 @@ def fk_and_jacobian(
     once: ``(z x (p_tip - p_joint), z)`` for a revolute joint with world axis ``z``, ``(z, 0)``
     for a prismatic one. ``movable``: ``movable_segments(chain, link)``, if the caller has it.
     """
-    jac = np.zeros((6, nvars))
     if link == 0:
-        return np.eye(4), jac
+        return np.eye(4), np.zeros((6, nvars))
     m = segment_transforms(chain, q, link)
     if movable is None:
         movable = movable_segments(chain, link)
     # a movable segment's joint frame: the running product before it times its origin (the
     # products of all of them in one call); segment 0's origin is in the root frame already
     before: list[Array] = []
-    t = m[0]
+    mask = movable.mask
+    t: Array = m[0]
     for s in range(1, link):
-        if movable.mask[s]:
+        if mask[s]:
             before.append(t)
-        t = t @ m[s]
+        t = t.dot(m[s])  # fk's products, in fk's order
     if not movable.columns.size:
-        return t, jac
+        return t, np.zeros((6, nvars))
     f = np.matmul(np.array(before), movable.origins) if before else movable.origins  # (k', 4, 4)
-    if movable.mask[0]:
+    if mask[0]:
         f = np.concatenate((chain.origin[:1], f))  # (k, 4, 4)
     z = np.matmul(f[:, :3, :3], movable.axes)[:, :, 0]  # (k, 3): world axis of each movable joint
     r = t[:3, 3] - f[:, :3, 3]
-    z0, z1, z2 = z[:, 0], z[:, 1], z[:, 2]
-    r0, r1, r2 = r[:, 0], r[:, 1], r[:, 2]
-    # z x r written out: np.cross's own arithmetic (a1*b2 - a2*b1, ...), without its per-call overhead
-    cross = np.array([z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0])  # (3, k)
-    jac[:3, movable.columns] = np.where(movable.revolute, cross, z.T)
-    jac[3:, movable.columns] = np.where(movable.revolute, z.T, 0.0)
+    # z x r: np.cross's own arithmetic (z1*r2 - z2*r1, z2*r0 - z0*r2, z0*r1 - z1*r0) on columns
+    # rolled into place, without its per-call overhead
+    cross = (z[:, _NEXT] * r[:, _AFTER] - z[:, _AFTER] * r[:, _NEXT]).T  # (3, k)
+    if movable.all_revolute and movable.in_order and nvars == movable.columns.size:
+        return t, np.concatenate((cross, z.T))  # every column filled, in order
+    jac = np.zeros((6, nvars))
+    if movable.all_revolute:
+        jac[:3, movable.columns] = cross
+        jac[3:, movable.columns] = z.T
+    else:
+        jac[:3, movable.columns] = np.where(movable.revolute, cross, z.T)
+        jac[3:, movable.columns] = np.where(movable.revolute, z.T, 0.0)
     return t, jac
 
 
 def error_twist(current: Array, target: Array) -> Array:
     """(target position - position, rotation vector of ``R^T R_target`` in the root frame)."""
     rot = current[:3, :3]
-    return np.concatenate([target[:3, 3] - current[:3, 3], rot @ rotation_vector(rot.T @ target[:3, :3])])
+    spin = rot.dot(rotation_vector(rot.T.dot(target[:3, :3])))
+    return np.concatenate((target[:3, 3] - current[:3, 3], spin))
 
 
 _ERROR_TWIST = error_twist
@@ -190,9 +215,9 @@ def is_small(twist: Array) -> bool:
 def pinv_step(jac: Array, twist: Array) -> Array:
     """``J^+ twist`` with singular values below ``IK_PINV_EPS`` treated as zero."""
     u, s, vt = np.linalg.svd(jac, full_matrices=False)
-    ut_twist = (u.T @ twist).tolist()
+    ut_twist = u.T.dot(twist).tolist()
     inv = [0.0 if abs(v) < IK_PINV_EPS else w / v for v, w in zip(s.tolist(), ut_twist, strict=True)]
-    step: Array = vt.T @ np.array(inv)
+    step: Array = vt.T.dot(inv)
     return step
 
 
@@ -297,18 +322,42 @@ def ik(
     return answer
 
 
+_SETUPS: dict[tuple[bytes, int, int], tuple[Movable, Array, Array]] = {}
+"""``_setup``'s answers by (``Chain.key``, link, number of variables)."""
+_MAX_SETUPS = 256
+
+
+def _setup(chain: Chain, link: int, nvars: int) -> tuple[Movable, Array, Array]:
+    """What every IK problem of this chain, link and number of variables shares: the movable
+    segments and the lower and upper limits of the variables solved for, shape (nvars,). A
+    chain's arrays are read-only (``Chain``), so these are made once per process (a bounded
+    table: at most :data:`_MAX_SETUPS` kept, all forgotten when it is full)."""
+    key = (chain.key, link, nvars)
+    setup = _SETUPS.get(key)
+    if setup is None:
+        lower = np.array([lim.lower for lim in chain.limits[:nvars]])
+        upper = np.array([lim.upper for lim in chain.limits[:nvars]])
+        setup = (movable_segments(chain, link), lower, upper)
+        for array in (*setup[1:], setup[0].columns, setup[0].axes, setup[0].revolute, setup[0].origins):
+            array.flags.writeable = False
+        if len(_SETUPS) >= _MAX_SETUPS:
+            _SETUPS.clear()
+        _SETUPS[key] = setup
+    return setup
+
+
 def _ik(
     chain: Chain, target: Array, seed: list[float], link: int, nvars: int, trace: list[float] | None
 ) -> tuple[bool, list[float], float, float]:
-    lower = np.array([lim.lower for lim in chain.limits[:nvars]])
-    upper = np.array([lim.upper for lim in chain.limits[:nvars]])
     q = np.array(seed, dtype=np.float64)
     converged = False
+    reached: Array | None = None  # fk at the last iterate, when the loop computed it
     if nvars == 0:
         converged = is_small(error_twist(fk(chain, q, link), target))
     else:
         start = q.copy()
-        movable = movable_segments(chain, link)
+        movable, lower, upper = _setup(chain, link, nvars)
+        whole = nvars == q.size  # every variable is solved for: no slice of q to take
         # iterates so far (their bytes) and where each first came: an iterate seen before means
         # the rest is a cycle, whose end the loop would reach step by step (see _cycle_end)
         seen: dict[bytes, int] = {}
@@ -326,20 +375,26 @@ def _ik(
             if trace is not None:
                 trace.append(float(np.linalg.norm(twist[3:])))
             if is_small(twist):
-                converged = True
+                converged, reached = True, current
                 break
             if not (np.isfinite(twist).all() and np.isfinite(jac).all()):
                 q = start  # a non-finite iterate (absurd target): keep the clamped seed
                 break
-            q[:nvars] += pinv_step(jac, twist)
-            q[:nvars] = np.minimum(np.maximum(q[:nvars], lower), upper)
+            if whole:
+                q += pinv_step(jac, twist)
+                np.minimum(np.maximum(q, lower), upper, out=q)
+            else:
+                q[:nvars] += pinv_step(jac, twist)
+                q[:nvars] = np.minimum(np.maximum(q[:nvars], lower), upper)
         if not np.isfinite(q).all():
             q, converged = start, False
     values = q.tolist()
     for i, lim in enumerate(chain.limits[:nvars]):
         if lim.type == "continuous":
             values[i] = normalize_angle(values[i])
-    reached = fk(chain, np.array(values), link)
+    at = np.array(values)
+    if reached is None or at.tobytes() != q.tobytes():  # else the loop's transform is fk's at q
+        reached = fk(chain, at, link)
     d = reached[:3, 3] - target[:3, 3]
     position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
     orientation_error = rotation_angle(reached[:3, :3].T @ target[:3, :3])

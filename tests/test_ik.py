@@ -213,6 +213,55 @@ def test_twin_jacobian_is_the_derivative_of_its_fk(robot: str) -> None:
                 np.testing.assert_allclose(jac[3:, v], angular, atol=1e-7)
 
 
+@pytest.mark.parametrize("robot", ["zoo_arm", "ur5", "double_pendulum_continuous"])
+def test_the_twins_ik_errors_are_those_of_fk_at_its_answer(robot: str) -> None:
+    """``_ik`` measures its answer's position and orientation errors on the loop's own transform
+    when the loop ended there (converged, no continuous joint wrapped), else on a fresh ``fk``:
+    either way they are exactly those of ``fk`` at the values it returns. Reached and unreachable
+    targets are both among these, and the double pendulum's continuous joints start up to two
+    turns out, so that some answers wrap."""
+    from python_impl import kinematics
+    from python_impl.transforms import rotation_angle
+
+    path = ROOT / "benchmarks" / "robots" / "zoo_arm.urdf" if robot == "zoo_arm" else robot_path(robot)
+    chain = python_impl.RobotModel(path).chain
+    tip = len(chain.link_names) - 1
+    nvars = int(np.count_nonzero(chain.variable[:tip] >= 0))
+    lower = np.array([max(lim.lower, -2 * math.pi) for lim in chain.limits])
+    upper = np.array([min(lim.upper, 2 * math.pi) for lim in chain.limits])
+    rng = np.random.default_rng(5)
+    outcomes = set()
+    for i in range(60):
+        q = rng.uniform(lower, upper)
+        target = kinematics.fk(chain, q, tip).copy()
+        if i % 4 == 0:
+            target[:3, 3] *= 3.0  # out of reach
+        seed = np.clip(q + rng.normal(0.0, 0.2, q.shape), lower, upper).tolist()
+        converged, values, position_error, orientation_error = kinematics._ik(
+            chain, target, seed, tip, nvars, None
+        )
+        reached = kinematics.fk(chain, np.array(values), tip)
+        d = reached[:3, 3] - target[:3, 3]
+        assert position_error == math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+        assert orientation_error == rotation_angle(reached[:3, :3].T @ target[:3, :3])
+        outcomes.add(converged)
+    assert outcomes == {True, False}
+
+
+def test_the_twins_ik_setup_is_read_only() -> None:
+    """What IK problems of one chain share (``kinematics._setup``: the movable segments, the
+    limits) is made once and kept, so none of its arrays can be written."""
+    from python_impl import kinematics
+
+    chain = python_impl.RobotModel(robot_path("ur5")).chain
+    tip = len(chain.link_names) - 1
+    movable, lower, upper = kinematics._setup(chain, tip, chain.dof)
+    assert kinematics._setup(chain, tip, chain.dof)[0] is movable
+    for array in (lower, upper, movable.columns, movable.axes, movable.revolute, movable.origins):
+        with pytest.raises(ValueError):
+            array[...] = 0
+
+
 def test_the_twins_iterate_replay_follows_inverse_kinematics() -> None:
     """``ik_rotation_errors`` (the oracle's replay of Newton-Raphson, not part of the protocol)
     starts at the seed's rotation error, ends where IK stops, and has one entry per iterate."""
