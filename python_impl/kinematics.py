@@ -392,9 +392,9 @@ def _ik(
     for i, lim in enumerate(chain.limits[:nvars]):
         if lim.type == "continuous":
             values[i] = normalize_angle(values[i])
-    at = np.array(values)
-    if reached is None or at.tobytes() != q.tobytes():  # else the loop's transform is fk's at q
-        reached = fk(chain, at, link)
+            reached = None  # the answer may differ from the last iterate
+    if reached is None:  # else it is the last iterate, whose transform the loop has: fk's
+        reached = fk(chain, np.array(values), link)
     d = reached[:3, 3] - target[:3, 3]
     position_error = math.sqrt(float(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
     orientation_error = rotation_angle(reached[:3, :3].T @ target[:3, :3])
