@@ -216,7 +216,8 @@ def test_twin_jacobian_is_the_derivative_of_its_fk(robot: str) -> None:
 @pytest.mark.parametrize("robot", ["zoo_arm", "ur5", "double_pendulum_continuous"])
 def test_the_twins_ik_errors_are_those_of_fk_at_its_answer(robot: str) -> None:
     """``_ik`` measures its answer's position and orientation errors on the loop's own transform
-    when the loop ended there (converged, no continuous joint wrapped), else on a fresh ``fk``:
+    when the loop ended there (converged, and no continuous joint solved for, whose normalized
+    value may differ from the iterate's), else on a fresh ``fk``:
     either way they are exactly those of ``fk`` at the values it returns. Reached and unreachable
     targets are both among these, and the double pendulum's continuous joints start up to two
     turns out, so that some answers wrap."""
