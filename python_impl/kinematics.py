@@ -184,12 +184,8 @@ def fk_and_jacobian(
     if movable.all_revolute and movable.in_order and nvars == movable.columns.size:
         return t, np.concatenate((cross, z.T))  # every column filled, in order
     jac = np.zeros((6, nvars))
-    if movable.all_revolute:
-        jac[:3, movable.columns] = cross
-        jac[3:, movable.columns] = z.T
-    else:
-        jac[:3, movable.columns] = np.where(movable.revolute, cross, z.T)
-        jac[3:, movable.columns] = np.where(movable.revolute, z.T, 0.0)
+    jac[:3, movable.columns] = np.where(movable.revolute, cross, z.T)
+    jac[3:, movable.columns] = np.where(movable.revolute, z.T, 0.0)
     return t, jac
 
 
